@@ -1,0 +1,371 @@
+//! Contact coefficients derived from the inputs (reference: MFIX-DEM model §3).
+
+use super::{ContactLaw, NormalModel};
+use crate::error::EngineError;
+use crate::material::{Phase, WallMaterial};
+
+/// Contact inputs for one phase pair or one phase–wall-material pair.
+///
+/// Which fields are used depends on the normal model: LSD uses `kn`, `kt_fac`, `etat_fac`
+/// and `en`; Hertz uses `en`, `et` and the phases' E and ν. Both use `mu` and `mu_roll`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactParams {
+    /// Normal spring stiffness k_n, N/m (LSD: MFIX `KN` / `KN_W`).
+    pub kn: Option<f64>,
+    /// Tangential to normal stiffness ratio κ, in [0, 1] (LSD: `KT_FAC` / `KT_W_FAC`, default 2/7).
+    pub kt_fac: f64,
+    /// Tangential to normal damping ratio, in [0, 1] (LSD: `DES_ETAT_FAC` / `DES_ETAT_W_FAC`,
+    /// default 1/2).
+    pub etat_fac: f64,
+    /// Normal coefficient of restitution e_n, in (0, 1] (`DES_EN_INPUT` / `DES_EN_WALL_INPUT`).
+    pub en: f64,
+    /// Tangential coefficient of restitution e_t, in (0, 1] (Hertz: `DES_ET_INPUT` /
+    /// `DES_ET_WALL_INPUT`).
+    pub et: Option<f64>,
+    /// Coulomb friction coefficient μ ≥ 0 (`MEW` / `MEW_W`).
+    pub mu: f64,
+    /// Rolling friction μ_r ≥ 0, m (`MEW_R` / `MEW_RW`): torque −μ_r·|F_n,elastic|·ω̂.
+    pub mu_roll: f64,
+}
+
+impl Default for ContactParams {
+    /// MFIX's defaults; `kn`, `et` unset, e_n = 1, μ = 0.
+    fn default() -> Self {
+        ContactParams {
+            kn: None,
+            kt_fac: 2.0 / 7.0,
+            etat_fac: 0.5,
+            en: 1.0,
+            et: None,
+            mu: 0.0,
+            mu_roll: 0.0,
+        }
+    }
+}
+
+/// Derived coefficients of one contact type, as used in the force loop.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactCoeffs {
+    /// Normal stiffness: k_n (N/m, LSD) or K_n = (4/3)·E*·√R* (N/m^1.5, Hertz).
+    pub kn: f64,
+    /// Tangential stiffness: k_t = κ·k_n (N/m, LSD) or K_t = 8·G*·√R* (N/m^1.5, Hertz).
+    pub kt: f64,
+    /// Normal damping η_n.
+    pub eta_n: f64,
+    /// Tangential damping η_t.
+    pub eta_t: f64,
+    /// Coulomb friction coefficient.
+    pub mu: f64,
+    /// Rolling friction length, m.
+    pub mu_roll: f64,
+    /// Effective mass used for the damping, kg.
+    pub m_eff: f64,
+}
+
+/// η(K, M, e) = 2·√(K·M)·|ln e|/√(π² + (ln e)²) for 0 < e ≤ 1, and 2·√(K·M) for e = 0.
+pub fn damping_coefficient(k: f64, m: f64, e: f64) -> f64 {
+    if e <= 0.0 {
+        return 2.0 * (k * m).sqrt();
+    }
+    let l = e.ln();
+    2.0 * (k * m).sqrt() * l.abs() / (std::f64::consts::PI.powi(2) + l * l).sqrt()
+}
+
+/// Coefficients for every phase pair and every phase–wall-material pair.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoeffTable {
+    n_phases: usize,
+    n_wall_materials: usize,
+    pairs: Vec<ContactCoeffs>,
+    walls: Vec<ContactCoeffs>,
+}
+
+/// Index of phase pair (m, l), m ≤ l, in MFIX's upper-triangle order 1-1, 1-2, …, 1-M, 2-2, …
+pub fn upper_triangle_index(m: usize, l: usize, n: usize) -> usize {
+    let (a, b) = if m <= l { (m, l) } else { (l, m) };
+    a * n - a * (a + 1) / 2 + b
+}
+
+impl CoeffTable {
+    /// Derives the coefficients.
+    ///
+    /// `pair_params` are in upper-triangle order (see [`upper_triangle_index`]),
+    /// `wall_params[p * n_wall_materials + w]` is phase p against wall material w.
+    pub fn build(
+        law: &ContactLaw,
+        phases: &[Phase],
+        wall_materials: &[WallMaterial],
+        pair_params: &[ContactParams],
+        wall_params: &[ContactParams],
+    ) -> Result<Self, EngineError> {
+        let n = phases.len();
+        let nw = wall_materials.len();
+        if pair_params.len() != n * (n + 1) / 2 {
+            return Err(EngineError::BadReference(format!(
+                "{} phase-pair parameter sets given for {n} phases; {} are needed",
+                pair_params.len(),
+                n * (n + 1) / 2
+            )));
+        }
+        if wall_params.len() != n * nw {
+            return Err(EngineError::BadReference(format!(
+                "{} phase-wall parameter sets given for {n} phases and {nw} wall materials; {} are needed",
+                wall_params.len(),
+                n * nw
+            )));
+        }
+        let mut pairs = vec![ContactCoeffs::default(); n * n];
+        for m in 0..n {
+            for l in m..n {
+                let p = &pair_params[upper_triangle_index(m, l, n)];
+                let what = format!("contact '{}'-'{}'", phases[m].name, phases[l].name);
+                let (ma, mb) = (phases[m].mass(), phases[l].mass());
+                let m_eff = ma * mb / (ma + mb);
+                let elastic = match law.normal {
+                    NormalModel::LinearSpringDashpot => None,
+                    NormalModel::Hertz => {
+                        let (ea, na) = elastic_of(
+                            &phases[m].name,
+                            phases[m].youngs_modulus,
+                            phases[m].poisson_ratio,
+                            "phase",
+                        )?;
+                        let (eb, nb) = elastic_of(
+                            &phases[l].name,
+                            phases[l].youngs_modulus,
+                            phases[l].poisson_ratio,
+                            "phase",
+                        )?;
+                        let (ra, rb) = (phases[m].radius(), phases[l].radius());
+                        Some(HertzInputs {
+                            e1: ea,
+                            nu1: na,
+                            e2: eb,
+                            nu2: nb,
+                            r_star: ra * rb / (ra + rb),
+                        })
+                    }
+                };
+                let c = derive(law, &what, p, m_eff, elastic)?;
+                pairs[m * n + l] = c;
+                pairs[l * n + m] = c;
+            }
+        }
+        let mut walls = vec![ContactCoeffs::default(); n * nw];
+        for m in 0..n {
+            for w in 0..nw {
+                let p = &wall_params[m * nw + w];
+                let what = format!(
+                    "contact '{}'-wall '{}'",
+                    phases[m].name, wall_materials[w].name
+                );
+                let elastic = match law.normal {
+                    NormalModel::LinearSpringDashpot => None,
+                    NormalModel::Hertz => {
+                        let (ea, na) = elastic_of(
+                            &phases[m].name,
+                            phases[m].youngs_modulus,
+                            phases[m].poisson_ratio,
+                            "phase",
+                        )?;
+                        let wm = &wall_materials[w];
+                        let (eb, nb) = elastic_of(
+                            &wm.name,
+                            wm.youngs_modulus,
+                            wm.poisson_ratio,
+                            "wall material",
+                        )?;
+                        Some(HertzInputs {
+                            e1: ea,
+                            nu1: na,
+                            e2: eb,
+                            nu2: nb,
+                            r_star: phases[m].radius(),
+                        })
+                    }
+                };
+                walls[m * nw + w] = derive(law, &what, p, phases[m].mass(), elastic)?;
+            }
+        }
+        Ok(CoeffTable {
+            n_phases: n,
+            n_wall_materials: nw,
+            pairs,
+            walls,
+        })
+    }
+
+    /// Coefficients of the phase pair (a, b).
+    #[inline(always)]
+    pub fn pair(&self, a: usize, b: usize) -> &ContactCoeffs {
+        &self.pairs[a * self.n_phases + b]
+    }
+
+    /// Coefficients of phase `a` against wall material `w`.
+    #[inline(always)]
+    pub fn wall(&self, a: usize, w: usize) -> &ContactCoeffs {
+        &self.walls[a * self.n_wall_materials + w]
+    }
+
+    /// Number of phases.
+    pub fn n_phases(&self) -> usize {
+        self.n_phases
+    }
+}
+
+struct HertzInputs {
+    e1: f64,
+    nu1: f64,
+    e2: f64,
+    nu2: f64,
+    r_star: f64,
+}
+
+fn elastic_of(
+    name: &str,
+    e: Option<f64>,
+    nu: Option<f64>,
+    kind: &str,
+) -> Result<(f64, f64), EngineError> {
+    let e = e.ok_or_else(|| EngineError::MissingParameter {
+        what: format!("{kind} '{name}' youngs_modulus"),
+        model: "hertz".into(),
+    })?;
+    let nu = nu.ok_or_else(|| EngineError::MissingParameter {
+        what: format!("{kind} '{name}' poisson_ratio"),
+        model: "hertz".into(),
+    })?;
+    Ok((e, nu))
+}
+
+fn check_range(
+    what: &str,
+    key: &str,
+    v: f64,
+    lo: f64,
+    lo_open: bool,
+    hi: f64,
+    valid: &str,
+) -> Result<(), EngineError> {
+    let above = if lo_open { v > lo } else { v >= lo };
+    if !(v.is_finite() && above && v <= hi) {
+        return Err(EngineError::invalid(format!("{what} {key}"), v, valid));
+    }
+    Ok(())
+}
+
+fn derive(
+    law: &ContactLaw,
+    what: &str,
+    p: &ContactParams,
+    m_eff: f64,
+    hertz: Option<HertzInputs>,
+) -> Result<ContactCoeffs, EngineError> {
+    check_range(
+        what,
+        "en",
+        p.en,
+        0.0,
+        true,
+        1.0,
+        "the normal restitution coefficient must lie in (0, 1]",
+    )?;
+    check_range(
+        what,
+        "mu",
+        p.mu,
+        0.0,
+        false,
+        f64::MAX,
+        "a friction coefficient must be >= 0",
+    )?;
+    check_range(
+        what,
+        "mu_roll",
+        p.mu_roll,
+        0.0,
+        false,
+        f64::MAX,
+        "rolling friction must be >= 0 (m)",
+    )?;
+    match (law.normal, hertz) {
+        (NormalModel::LinearSpringDashpot, _) => {
+            check_range(
+                what,
+                "kt_fac",
+                p.kt_fac,
+                0.0,
+                false,
+                1.0,
+                "KT_FAC must lie in [0, 1]",
+            )?;
+            check_range(
+                what,
+                "etat_fac",
+                p.etat_fac,
+                0.0,
+                false,
+                1.0,
+                "DES_ETAT_FAC must lie in [0, 1]",
+            )?;
+            let kn = p.kn.ok_or_else(|| EngineError::MissingParameter {
+                what: format!("{what} kn (normal stiffness, N/m)"),
+                model: "lsd".into(),
+            })?;
+            check_range(
+                what,
+                "kn",
+                kn,
+                0.0,
+                true,
+                f64::MAX,
+                "the normal stiffness must be positive, in N/m",
+            )?;
+            let eta_n = damping_coefficient(kn, m_eff, p.en);
+            Ok(ContactCoeffs {
+                kn,
+                kt: p.kt_fac * kn,
+                eta_n,
+                eta_t: p.etat_fac * eta_n,
+                mu: p.mu,
+                mu_roll: p.mu_roll,
+                m_eff,
+            })
+        }
+        (NormalModel::Hertz, Some(h)) => {
+            let et = p.et.ok_or_else(|| EngineError::MissingParameter {
+                what: format!("{what} et (tangential restitution)"),
+                model: "hertz".into(),
+            })?;
+            check_range(
+                what,
+                "et",
+                et,
+                0.0,
+                true,
+                1.0,
+                "the tangential restitution coefficient must lie in (0, 1]",
+            )?;
+            let e_star = 1.0 / ((1.0 - h.nu1 * h.nu1) / h.e1 + (1.0 - h.nu2 * h.nu2) / h.e2);
+            let g1 = h.e1 / (2.0 * (1.0 + h.nu1));
+            let g2 = h.e2 / (2.0 * (1.0 + h.nu2));
+            let g_star = 1.0 / ((2.0 - h.nu1) / g1 + (2.0 - h.nu2) / g2);
+            let sr = h.r_star.sqrt();
+            let kn = 4.0 / 3.0 * e_star * sr;
+            let kt = 8.0 * g_star * sr;
+            Ok(ContactCoeffs {
+                kn,
+                kt,
+                eta_n: damping_coefficient(kn, m_eff, p.en),
+                eta_t: damping_coefficient(kt, 2.0 / 7.0 * m_eff, et),
+                mu: p.mu,
+                mu_roll: p.mu_roll,
+                m_eff,
+            })
+        }
+        (NormalModel::Hertz, None) => Err(EngineError::MissingParameter {
+            what: format!("{what} elastic constants"),
+            model: "hertz".into(),
+        }),
+    }
+}

@@ -1,0 +1,97 @@
+//! Phases (particle materials) and wall materials.
+
+use crate::error::EngineError;
+use crate::math::sphere_mass;
+
+/// A solids phase: MFIX's `D_P0`, `RO_S0` and, for the Hertzian model, `E_YOUNG`, `V_POISSON`.
+///
+/// The reference diameter and density define the phase's reference mass, which sets the
+/// effective masses used for damping and for the time step (as in MFIX), whatever the sizes
+/// of the individual particles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Phase {
+    /// Name used in case files and messages.
+    pub name: String,
+    /// Reference diameter, m.
+    pub diameter: f64,
+    /// Material density, kg/m³.
+    pub density: f64,
+    /// Young's modulus E, Pa (Hertzian model only).
+    pub youngs_modulus: Option<f64>,
+    /// Poisson's ratio ν, dimensionless, in (−1, 0.5) (Hertzian model only).
+    pub poisson_ratio: Option<f64>,
+}
+
+impl Phase {
+    /// Reference mass (4/3)·π·(d/2)³·ρ, kg.
+    pub fn mass(&self) -> f64 {
+        sphere_mass(0.5 * self.diameter, self.density)
+    }
+
+    /// Reference radius, m.
+    pub fn radius(&self) -> f64 {
+        0.5 * self.diameter
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), EngineError> {
+        let who = format!("phase '{}'", self.name);
+        if !(self.diameter.is_finite() && self.diameter > 0.0) {
+            return Err(EngineError::invalid(
+                format!("{who} diameter"),
+                self.diameter,
+                "a diameter must be a positive length in m",
+            ));
+        }
+        if !(self.density.is_finite() && self.density > 0.0) {
+            return Err(EngineError::invalid(
+                format!("{who} density"),
+                self.density,
+                "a density must be positive, in kg/m³",
+            ));
+        }
+        validate_elastic(&who, self.youngs_modulus, self.poisson_ratio)
+    }
+}
+
+/// A wall material: MFIX's `EW_YOUNG` and `VW_POISSON`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WallMaterial {
+    /// Name used in case files and messages.
+    pub name: String,
+    /// Young's modulus E, Pa (Hertzian model only).
+    pub youngs_modulus: Option<f64>,
+    /// Poisson's ratio ν in (−1, 0.5) (Hertzian model only).
+    pub poisson_ratio: Option<f64>,
+}
+
+impl WallMaterial {
+    pub(crate) fn validate(&self) -> Result<(), EngineError> {
+        validate_elastic(
+            &format!("wall material '{}'", self.name),
+            self.youngs_modulus,
+            self.poisson_ratio,
+        )
+    }
+}
+
+fn validate_elastic(who: &str, e: Option<f64>, nu: Option<f64>) -> Result<(), EngineError> {
+    if let Some(e) = e {
+        if !(e.is_finite() && e > 0.0) {
+            return Err(EngineError::invalid(
+                format!("{who} youngs_modulus"),
+                e,
+                "Young's modulus must be positive, in Pa",
+            ));
+        }
+    }
+    if let Some(nu) = nu {
+        if !(nu > -1.0 && nu < 0.5) {
+            return Err(EngineError::invalid(
+                format!("{who} poisson_ratio"),
+                nu,
+                "Poisson's ratio must lie in (-1, 0.5)",
+            ));
+        }
+    }
+    Ok(())
+}

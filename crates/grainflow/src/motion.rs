@@ -1,0 +1,99 @@
+//! Prescribed particle motion, applied after every step (where MFIX runs its user hooks).
+//!
+//! A prescribed particle is integrated like any other, then overwritten: its velocity and
+//! angular velocity are set to zero and its position is restored — each axis either to the
+//! position it started with, or (for `Follow`) to the current position of a leader particle.
+
+use crate::error::EngineError;
+use crate::math::Vec3;
+use crate::state::Particles;
+
+/// What a prescribed particle does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MotionRule {
+    /// Held at its initial position, at rest.
+    Hold,
+    /// On each axis marked `true`, copies the leader's position; on the others, keeps its
+    /// initial position. Velocity and angular velocity are zero.
+    Follow {
+        /// Stable id of the leader.
+        leader: u32,
+        /// Axes x, y, z on which it follows.
+        axes: [bool; 3],
+    },
+}
+
+/// A rule applied to one particle, by stable id.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PrescribedMotion {
+    /// Stable id of the prescribed particle.
+    pub particle: u32,
+    /// Its rule.
+    pub rule: MotionRule,
+}
+
+/// A rule resolved to particle slots.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ResolvedMotion {
+    slot: usize,
+    leader: Option<usize>,
+    axes: [bool; 3],
+    anchor: Vec3,
+}
+
+pub(crate) fn resolve(
+    rules: &[PrescribedMotion],
+    p: &Particles,
+) -> Result<Vec<ResolvedMotion>, EngineError> {
+    let mut slot_of = std::collections::HashMap::with_capacity(p.len());
+    for (i, &id) in p.id.iter().enumerate() {
+        slot_of.insert(id, i);
+    }
+    let find = |id: u32, role: &str| {
+        slot_of.get(&id).copied().ok_or_else(|| {
+            EngineError::BadReference(format!(
+                "prescribed motion names {role} particle id {id}, which does not exist"
+            ))
+        })
+    };
+    rules
+        .iter()
+        .map(|r| {
+            let slot = find(r.particle, "a")?;
+            let (leader, axes) = match r.rule {
+                MotionRule::Hold => (None, [false; 3]),
+                MotionRule::Follow { leader, axes } => {
+                    if leader == r.particle {
+                        return Err(EngineError::BadReference(format!(
+                            "particle {leader} cannot follow itself"
+                        )));
+                    }
+                    (Some(find(leader, "a leader")?), axes)
+                }
+            };
+            Ok(ResolvedMotion {
+                slot,
+                leader,
+                axes,
+                anchor: p.position[slot],
+            })
+        })
+        .collect()
+}
+
+pub(crate) fn apply(rules: &[ResolvedMotion], p: &mut Particles) {
+    for r in rules {
+        let mut x = r.anchor.to_array();
+        if let Some(l) = r.leader {
+            let lx = p.position[l].to_array();
+            for k in 0..3 {
+                if r.axes[k] {
+                    x[k] = lx[k];
+                }
+            }
+        }
+        p.position[r.slot] = Vec3::from_array(x);
+        p.velocity[r.slot] = Vec3::ZERO;
+        p.omega[r.slot] = Vec3::ZERO;
+    }
+}

@@ -1,0 +1,278 @@
+//! Broad phase: linked cells with a skin (a Verlet list), rebuilt when any particle has moved
+//! more than half the skin since the last build.
+//!
+//! The list holds every particle pair closer than R_i + R_j + skin and every particle–wall pair
+//! closer than R + skin, so between rebuilds no contact can be missed. Each entry carries the
+//! contact's tangential history; on a rebuild, entries that persist keep it (matched by the
+//! stable ids of the particles, and the wall index), new entries start from zero.
+
+use crate::math::Vec3;
+use crate::state::Particles;
+use crate::wall::Wall;
+
+/// Counters of the neighbour search.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NeighborStats {
+    /// Number of builds so far.
+    pub builds: u64,
+    /// Distance tests made in the last build (O(N) for a bounded density).
+    pub distance_checks: u64,
+}
+
+/// The Verlet list with its contact histories.
+#[derive(Debug, Clone, Default)]
+pub struct NeighborList {
+    skin: f64,
+    /// Candidate pairs as particle slots (i, j), ordered so that id[i] < id[j], sorted by ids.
+    pub pairs: Vec<[u32; 2]>,
+    pair_keys: Vec<u64>,
+    /// Tangential history of each pair, seen from the lower-id particle.
+    pub pair_history: Vec<Vec3>,
+    /// Candidate particle–wall pairs (slot, wall index), sorted by (id, wall).
+    pub wall_pairs: Vec<[u32; 2]>,
+    wall_keys: Vec<u64>,
+    /// Tangential history of each particle–wall pair.
+    pub wall_history: Vec<Vec3>,
+    reference: Vec<Vec3>,
+    built: bool,
+    stats: NeighborStats,
+    // scratch, reused between builds
+    cell_count: Vec<u32>,
+    cell_of: Vec<u32>,
+    sorted: Vec<u32>,
+    new_pairs: Vec<(u64, [u32; 2])>,
+}
+
+const HALF_SHELL: [(i64, i64, i64); 13] = [
+    (1, 0, 0),
+    (-1, 1, 0),
+    (0, 1, 0),
+    (1, 1, 0),
+    (-1, -1, 1),
+    (0, -1, 1),
+    (1, -1, 1),
+    (-1, 0, 1),
+    (0, 0, 1),
+    (1, 0, 1),
+    (-1, 1, 1),
+    (0, 1, 1),
+    (1, 1, 1),
+];
+
+#[inline]
+fn pair_key(id_a: u32, id_b: u32) -> u64 {
+    ((id_a as u64) << 32) | id_b as u64
+}
+
+impl NeighborList {
+    /// An empty list with the given skin (m).
+    pub fn new(skin: f64) -> Self {
+        NeighborList {
+            skin,
+            ..Default::default()
+        }
+    }
+
+    /// The skin distance, m.
+    pub fn skin(&self) -> f64 {
+        self.skin
+    }
+
+    /// Counters of the search.
+    pub fn stats(&self) -> NeighborStats {
+        self.stats
+    }
+
+    /// True when the list was never built or a particle moved more than half the skin.
+    pub fn needs_rebuild(&self, positions: &[Vec3]) -> bool {
+        if !self.built || positions.len() != self.reference.len() {
+            return true;
+        }
+        let lim = 0.25 * self.skin * self.skin;
+        positions
+            .iter()
+            .zip(&self.reference)
+            .any(|(x, r)| !((*x - *r).length_squared() <= lim))
+    }
+
+    /// Rebuilds the list if [`needs_rebuild`](Self::needs_rebuild) says so.
+    pub fn update(&mut self, particles: &Particles, walls: &[Wall]) {
+        if self.needs_rebuild(&particles.position) {
+            self.build(particles, walls);
+        }
+    }
+
+    /// Rebuilds the list now, keeping the history of persisting entries.
+    pub fn build(&mut self, p: &Particles, walls: &[Wall]) {
+        self.stats.builds += 1;
+        self.stats.distance_checks = 0;
+        self.reference.clear();
+        self.reference.extend_from_slice(&p.position);
+        self.built = true;
+        self.build_pairs(p);
+        self.build_walls(p, walls);
+    }
+
+    fn build_pairs(&mut self, p: &Particles) {
+        let n = p.len();
+        self.new_pairs.clear();
+        if n >= 2 {
+            let skin = self.skin;
+            let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+            for x in &p.position {
+                if x.is_finite() {
+                    lo = lo.min(*x);
+                    hi = hi.max(*x);
+                }
+            }
+            if !lo.is_finite() {
+                lo = Vec3::ZERO;
+                hi = Vec3::ZERO;
+            }
+            let extent = hi - lo;
+            let mut cell = 2.0 * p.max_radius() + skin;
+            let max_cells = (8 * n).max(1024) as f64;
+            let count = |c: f64| {
+                let d = (extent / c).floor() + Vec3::ONE;
+                (d.x, d.y, d.z)
+            };
+            let (mut nx, mut ny, mut nz) = count(cell);
+            if nx * ny * nz > max_cells {
+                cell *= (nx * ny * nz / max_cells).cbrt();
+                (nx, ny, nz) = count(cell);
+                while nx * ny * nz > max_cells {
+                    cell *= 1.25;
+                    (nx, ny, nz) = count(cell);
+                }
+            }
+            let (nx, ny, nz) = (nx as usize, ny as usize, nz as usize);
+            let n_cells = nx * ny * nz;
+            let inv = 1.0 / cell;
+            let coord = |x: f64, l: f64, m: usize| (((x - l) * inv) as usize).min(m - 1);
+            // Counting sort of the particles by cell.
+            self.cell_count.clear();
+            self.cell_count.resize(n_cells + 1, 0);
+            self.cell_of.clear();
+            for x in &p.position {
+                let c =
+                    coord(x.x, lo.x, nx) + nx * (coord(x.y, lo.y, ny) + ny * coord(x.z, lo.z, nz));
+                self.cell_of.push(c as u32);
+                self.cell_count[c + 1] += 1;
+            }
+            for c in 0..n_cells {
+                self.cell_count[c + 1] += self.cell_count[c];
+            }
+            self.sorted.clear();
+            self.sorted.resize(n, 0);
+            {
+                let mut fill = self.cell_count.clone();
+                for (i, &c) in self.cell_of.iter().enumerate() {
+                    self.sorted[fill[c as usize] as usize] = i as u32;
+                    fill[c as usize] += 1;
+                }
+            }
+            let start = &self.cell_count;
+            let sorted = &self.sorted;
+            let mut checks = 0u64;
+            let mut consider = |i: usize, j: usize, out: &mut Vec<(u64, [u32; 2])>| {
+                checks += 1;
+                let cut = p.radius[i] + p.radius[j] + skin;
+                if (p.position[j] - p.position[i]).length_squared() < cut * cut {
+                    let (a, b) = if p.id[i] < p.id[j] { (i, j) } else { (j, i) };
+                    out.push((pair_key(p.id[a], p.id[b]), [a as u32, b as u32]));
+                }
+            };
+            for cz in 0..nz {
+                for cy in 0..ny {
+                    for cx in 0..nx {
+                        let c = cx + nx * (cy + ny * cz);
+                        let own = &sorted[start[c] as usize..start[c + 1] as usize];
+                        for (k, &i) in own.iter().enumerate() {
+                            for &j in &own[k + 1..] {
+                                consider(i as usize, j as usize, &mut self.new_pairs);
+                            }
+                        }
+                        for (dx, dy, dz) in HALF_SHELL {
+                            let (ox, oy, oz) = (cx as i64 + dx, cy as i64 + dy, cz as i64 + dz);
+                            if ox < 0
+                                || oy < 0
+                                || oz < 0
+                                || ox >= nx as i64
+                                || oy >= ny as i64
+                                || oz >= nz as i64
+                            {
+                                continue;
+                            }
+                            let o = ox as usize + nx * (oy as usize + ny * oz as usize);
+                            let other = &sorted[start[o] as usize..start[o + 1] as usize];
+                            for &i in own {
+                                for &j in other {
+                                    consider(i as usize, j as usize, &mut self.new_pairs);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            self.stats.distance_checks += checks;
+        }
+        self.new_pairs.sort_unstable_by_key(|e| e.0);
+        let (keys, hist) = merge_history(
+            &self.pair_keys,
+            &self.pair_history,
+            self.new_pairs.iter().map(|e| e.0),
+        );
+        self.pairs.clear();
+        self.pairs.extend(self.new_pairs.iter().map(|e| e.1));
+        self.pair_keys = keys;
+        self.pair_history = hist;
+    }
+
+    fn build_walls(&mut self, p: &Particles, walls: &[Wall]) {
+        self.new_pairs.clear();
+        for i in 0..p.len() {
+            for (w, wall) in walls.iter().enumerate() {
+                self.stats.distance_checks += 1;
+                let d = wall.distance(p.position[i]);
+                if d < p.radius[i] + self.skin {
+                    self.new_pairs
+                        .push((pair_key(p.id[i], w as u32), [i as u32, w as u32]));
+                }
+            }
+        }
+        self.new_pairs.sort_unstable_by_key(|e| e.0);
+        let (keys, hist) = merge_history(
+            &self.wall_keys,
+            &self.wall_history,
+            self.new_pairs.iter().map(|e| e.0),
+        );
+        self.wall_pairs.clear();
+        self.wall_pairs.extend(self.new_pairs.iter().map(|e| e.1));
+        self.wall_keys = keys;
+        self.wall_history = hist;
+    }
+}
+
+/// New keys (sorted) take the history of equal old keys (sorted), zero otherwise.
+fn merge_history(
+    old_keys: &[u64],
+    old_hist: &[Vec3],
+    new_keys: impl Iterator<Item = u64>,
+) -> (Vec<u64>, Vec<Vec3>) {
+    let mut keys = Vec::new();
+    let mut hist = Vec::new();
+    let mut k = 0;
+    for key in new_keys {
+        while k < old_keys.len() && old_keys[k] < key {
+            k += 1;
+        }
+        let h = if k < old_keys.len() && old_keys[k] == key {
+            old_hist[k]
+        } else {
+            Vec3::ZERO
+        };
+        keys.push(key);
+        hist.push(h);
+    }
+    (keys, hist)
+}

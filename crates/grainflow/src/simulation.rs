@@ -1,0 +1,440 @@
+//! The simulation: set-up from a [`SimulationConfig`] and the time loop.
+
+use crate::contact::geometry::{pair_contact, relative_velocity, wall_contact};
+use crate::contact::law::{contact_force, normal_spring_energy, rolling_torque};
+use crate::contact::{CoeffTable, ContactLaw, ContactParams, NormalModel, TangentialModel};
+use crate::error::EngineError;
+use crate::integrate::{self, Integrator};
+use crate::material::{Phase, WallMaterial};
+use crate::math::Vec3;
+use crate::motion::{self, PrescribedMotion, ResolvedMotion};
+use crate::neighbor::NeighborList;
+use crate::observe::Diagnostics;
+use crate::state::Particles;
+use crate::timestep::{self, TimeStepChoice, TimeStepRule};
+use crate::wall::Wall;
+
+/// Standard gravity, m/s² (MFIX's default, along −y).
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// Everything the engine needs besides the particles, in SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulationConfig {
+    /// Solids phases; particles refer to them by index.
+    pub phases: Vec<Phase>,
+    /// Wall materials; walls refer to them by index.
+    pub wall_materials: Vec<WallMaterial>,
+    /// Walls.
+    pub walls: Vec<Wall>,
+    /// The contact law.
+    pub law: ContactLaw,
+    /// Contact inputs per phase pair, in MFIX's upper-triangle order (1-1, 1-2, …, 2-2, …).
+    pub pair_params: Vec<ContactParams>,
+    /// Contact inputs per phase and wall material: index `phase * n_wall_materials + material`.
+    pub wall_params: Vec<ContactParams>,
+    /// Time integrator.
+    pub integrator: Integrator,
+    /// Time-step rule.
+    pub time_step: TimeStepRule,
+    /// Start time, s.
+    pub t_start: f64,
+    /// End time, s.
+    pub t_stop: f64,
+    /// Gravitational acceleration, m/s².
+    pub gravity: Vec3,
+    /// Neighbour-list skin, m; `None` takes 10 % of the largest particle diameter.
+    pub skin: Option<f64>,
+    /// Prescribed motion rules.
+    pub motion: Vec<PrescribedMotion>,
+}
+
+/// A running simulation.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    particles: Particles,
+    phases: Vec<Phase>,
+    walls: Vec<Wall>,
+    law: ContactLaw,
+    coeffs: CoeffTable,
+    integrator: Integrator,
+    time_step: TimeStepChoice,
+    gravity: Vec3,
+    t_start: f64,
+    step: u64,
+    neighbors: NeighborList,
+    motion: Vec<ResolvedMotion>,
+    history_started: bool,
+    forces_current: bool,
+}
+
+impl Simulation {
+    /// Checks the inputs, derives the coefficients and the time step, and builds the
+    /// neighbour list.
+    pub fn new(config: SimulationConfig, particles: Particles) -> Result<Self, EngineError> {
+        for ph in &config.phases {
+            ph.validate()?;
+        }
+        for wm in &config.wall_materials {
+            wm.validate()?;
+        }
+        if config.phases.is_empty() {
+            return Err(EngineError::BadReference(
+                "at least one phase is needed".into(),
+            ));
+        }
+        for w in &config.walls {
+            if w.material >= config.wall_materials.len() {
+                return Err(EngineError::BadReference(format!(
+                    "wall '{}' uses wall material {} but only {} are defined",
+                    w.name,
+                    w.material,
+                    config.wall_materials.len()
+                )));
+            }
+            if !(w.normal.is_finite() && w.point.is_finite()) {
+                return Err(EngineError::BadReference(format!(
+                    "wall '{}' needs a finite point and a non-zero normal",
+                    w.name
+                )));
+            }
+        }
+        check_particles(&particles, config.phases.len())?;
+        if !(config.t_start.is_finite()
+            && config.t_stop.is_finite()
+            && config.t_stop > config.t_start)
+        {
+            return Err(EngineError::invalid(
+                "t_stop",
+                config.t_stop,
+                format!(
+                    "the end time must be finite and after the start time {} s",
+                    config.t_start
+                ),
+            ));
+        }
+        if !config.gravity.is_finite() {
+            return Err(EngineError::BadReference(
+                "gravity must be a finite vector in m/s²".into(),
+            ));
+        }
+        let coeffs = CoeffTable::build(
+            &config.law,
+            &config.phases,
+            &config.wall_materials,
+            &config.pair_params,
+            &config.wall_params,
+        )?;
+        let time_step = timestep::choose(
+            config.time_step,
+            &config.law,
+            &config.phases,
+            &coeffs,
+            config.t_stop - config.t_start,
+        )?;
+        let skin = match config.skin {
+            Some(s) if s.is_finite() && s >= 0.0 => s,
+            Some(s) => {
+                return Err(EngineError::invalid(
+                    "skin",
+                    s,
+                    "the neighbour skin must be a length >= 0, in m",
+                ));
+            }
+            None => 0.2 * particles.max_radius(),
+        };
+        let motion = motion::resolve(&config.motion, &particles)?;
+        let mut neighbors = NeighborList::new(skin);
+        neighbors.build(&particles, &config.walls);
+        Ok(Simulation {
+            particles,
+            phases: config.phases,
+            walls: config.walls,
+            law: config.law,
+            coeffs,
+            integrator: config.integrator,
+            time_step,
+            gravity: config.gravity,
+            t_start: config.t_start,
+            step: 0,
+            neighbors,
+            motion,
+            history_started: false,
+            forces_current: false,
+        })
+    }
+
+    /// The particles.
+    pub fn particles(&self) -> &Particles {
+        &self.particles
+    }
+
+    /// The particles, for user hooks that change the state between steps.
+    pub fn particles_mut(&mut self) -> &mut Particles {
+        self.forces_current = false;
+        &mut self.particles
+    }
+
+    /// The phases.
+    pub fn phases(&self) -> &[Phase] {
+        &self.phases
+    }
+
+    /// The walls.
+    pub fn walls(&self) -> &[Wall] {
+        &self.walls
+    }
+
+    /// The contact law.
+    pub fn law(&self) -> &ContactLaw {
+        &self.law
+    }
+
+    /// The derived contact coefficients.
+    pub fn coefficients(&self) -> &CoeffTable {
+        &self.coeffs
+    }
+
+    /// The integrator.
+    pub fn integrator(&self) -> Integrator {
+        self.integrator
+    }
+
+    /// The time step, the step count and why.
+    pub fn time_step(&self) -> &TimeStepChoice {
+        &self.time_step
+    }
+
+    /// Δt, s.
+    pub fn dt(&self) -> f64 {
+        self.time_step.dt
+    }
+
+    /// Steps taken so far.
+    pub fn step_index(&self) -> u64 {
+        self.step
+    }
+
+    /// Steps of the whole run.
+    pub fn total_steps(&self) -> u64 {
+        self.time_step.steps
+    }
+
+    /// True when every step of the run has been taken.
+    pub fn finished(&self) -> bool {
+        self.step >= self.time_step.steps
+    }
+
+    /// Simulated time, s: t_0 + steps·Δt.
+    pub fn time(&self) -> f64 {
+        self.t_start + self.step as f64 * self.time_step.dt
+    }
+
+    /// The neighbour list (with the contact histories).
+    pub fn neighbors(&self) -> &NeighborList {
+        &self.neighbors
+    }
+
+    /// Advances one step: contact forces, integration, prescribed motion.
+    pub fn step(&mut self) {
+        let dt = self.time_step.dt;
+        let g = self.gravity;
+        match self.integrator {
+            Integrator::Euler => {
+                self.compute_forces();
+                integrate::euler(&mut self.particles, g, dt);
+            }
+            Integrator::AdamsBashforth => {
+                self.compute_forces();
+                integrate::adams_bashforth(&mut self.particles, g, dt, !self.history_started);
+            }
+            Integrator::VelocityVerlet => {
+                if !self.forces_current {
+                    self.compute_forces();
+                }
+                integrate::verlet_kick_drift(&mut self.particles, g, dt);
+                self.compute_forces();
+                integrate::verlet_kick(&mut self.particles, g, dt);
+                self.forces_current = true;
+            }
+        }
+        self.history_started = true;
+        motion::apply(&self.motion, &mut self.particles);
+        self.step += 1;
+    }
+
+    /// Takes up to `steps` steps (stopping at the end of the run), calling `hook` after each
+    /// one — the place for user code between steps (MFIX's UDFs).
+    pub fn run_with(&mut self, steps: u64, mut hook: impl FnMut(&mut Simulation)) {
+        for _ in 0..steps {
+            if self.finished() {
+                break;
+            }
+            self.step();
+            hook(self);
+        }
+    }
+
+    /// Runs to the end without hooks.
+    pub fn run_to_end(&mut self) {
+        while !self.finished() {
+            self.step();
+        }
+    }
+
+    /// Contact forces and torques from the current state into the accumulators.
+    pub fn compute_forces(&mut self) {
+        self.neighbors.update(&self.particles, &self.walls);
+        self.particles.clear_forces();
+        use NormalModel::*;
+        use TangentialModel::*;
+        match (self.law.normal, self.law.tangential) {
+            (LinearSpringDashpot, MfixTotal) => self.force_loop::<false, false>(),
+            (LinearSpringDashpot, IncrementalMindlin) => self.force_loop::<false, true>(),
+            (Hertz, MfixTotal) => self.force_loop::<true, false>(),
+            (Hertz, IncrementalMindlin) => self.force_loop::<true, true>(),
+        }
+    }
+
+    fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self) {
+        let dt = self.time_step.dt;
+        let frame = self.law.history;
+        let p = &mut self.particles;
+        let nl = &mut self.neighbors;
+        // Walls first, as MFIX does.
+        for (k, &[i, w]) in nl.wall_pairs.iter().enumerate() {
+            let (i, wall) = (i as usize, &self.walls[w as usize]);
+            let Some(g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal) else {
+                nl.wall_history[k] = Vec3::ZERO;
+                continue;
+            };
+            let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+            let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
+            let f =
+                contact_force::<HERTZ, INCREMENTAL>(frame, c, &g, v_r, &mut nl.wall_history[k], dt);
+            p.force[i] += f.total();
+            p.torque[i] += f.torque(g.lever_i, g.normal)
+                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
+        }
+        for (k, &[i, j]) in nl.pairs.iter().enumerate() {
+            let (i, j) = (i as usize, j as usize);
+            let Some(g) = pair_contact(p.position[i], p.position[j], p.radius[i], p.radius[j])
+            else {
+                nl.pair_history[k] = Vec3::ZERO;
+                continue;
+            };
+            let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+            let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
+            let f =
+                contact_force::<HERTZ, INCREMENTAL>(frame, c, &g, v_r, &mut nl.pair_history[k], dt);
+            let total = f.total();
+            p.force[i] += total;
+            p.force[j] -= total;
+            p.torque[i] += f.torque(g.lever_i, g.normal)
+                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
+            p.torque[j] += f.torque(g.lever_j, g.normal)
+                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[j]);
+        }
+    }
+
+    /// Energies, contacts and overlaps of the current state.
+    pub fn diagnostics(&self) -> Diagnostics {
+        let p = &self.particles;
+        let mut d = Diagnostics {
+            time: self.time(),
+            step: self.step,
+            ..Default::default()
+        };
+        for i in 0..p.len() {
+            d.kinetic_translational += 0.5 * p.mass[i] * p.velocity[i].length_squared();
+            d.kinetic_rotational += 0.5 * p.inertia[i] * p.omega[i].length_squared();
+            d.potential -= p.mass[i] * self.gravity.dot(p.position[i]);
+        }
+        let mut visit = |delta: f64, r_min: f64, energy: f64| {
+            d.contacts += 1;
+            d.elastic += energy;
+            d.max_overlap_ratio = d.max_overlap_ratio.max(delta / r_min);
+        };
+        for &[i, w] in &self.neighbors.wall_pairs {
+            let (i, wall) = (i as usize, &self.walls[w as usize]);
+            if let Some(g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal) {
+                let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+                visit(
+                    g.overlap,
+                    p.radius[i],
+                    normal_spring_energy(self.law.normal, c, g.overlap),
+                );
+            }
+        }
+        for &[i, j] in &self.neighbors.pairs {
+            let (i, j) = (i as usize, j as usize);
+            if let Some(g) = pair_contact(p.position[i], p.position[j], p.radius[i], p.radius[j]) {
+                let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+                visit(
+                    g.overlap,
+                    p.radius[i].min(p.radius[j]),
+                    normal_spring_energy(self.law.normal, c, g.overlap),
+                );
+            }
+        }
+        d
+    }
+}
+
+fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
+    let n = p.len();
+    let lens = [
+        p.phase.len(),
+        p.radius.len(),
+        p.mass.len(),
+        p.inertia.len(),
+        p.position.len(),
+        p.velocity.len(),
+        p.omega.len(),
+        p.force.len(),
+        p.torque.len(),
+        p.accel_prev.len(),
+        p.alpha_prev.len(),
+    ];
+    if lens.iter().any(|&l| l != n) {
+        return Err(EngineError::BadReference(
+            "particle arrays have different lengths".into(),
+        ));
+    }
+    let mut ids: Vec<u32> = p.id.clone();
+    ids.sort_unstable();
+    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+        return Err(EngineError::BadReference(format!(
+            "particle id {} is used twice",
+            w[0]
+        )));
+    }
+    for i in 0..n {
+        let id = p.id[i];
+        if p.phase[i] as usize >= n_phases {
+            return Err(EngineError::BadReference(format!(
+                "particle {id} has phase index {} but only {n_phases} phases are defined",
+                p.phase[i]
+            )));
+        }
+        if !(p.radius[i].is_finite() && p.radius[i] > 0.0) {
+            return Err(EngineError::invalid(
+                format!("particle {id} radius"),
+                p.radius[i],
+                "a radius must be positive, in m",
+            ));
+        }
+        if !(p.mass[i].is_finite() && p.mass[i] > 0.0) {
+            return Err(EngineError::invalid(
+                format!("particle {id} mass"),
+                p.mass[i],
+                "the density must be positive, in kg/m³",
+            ));
+        }
+        if !(p.position[i].is_finite() && p.velocity[i].is_finite() && p.omega[i].is_finite()) {
+            return Err(EngineError::BadReference(format!(
+                "particle {id} has a non-finite position, velocity or angular velocity"
+            )));
+        }
+    }
+    Ok(())
+}

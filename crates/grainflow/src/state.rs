@@ -1,0 +1,128 @@
+//! Particle state as a structure of arrays.
+//!
+//! Every per-particle field is its own `Vec`; index `i` is the particle's current slot, `id[i]`
+//! its stable identity (contact history is keyed by ids, so a future reordering of slots keeps
+//! it).
+
+use crate::math::{Vec3, sphere_inertia, sphere_mass};
+
+/// All particles of a simulation.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Particles {
+    /// Stable ids (unique).
+    pub id: Vec<u32>,
+    /// Phase index into the simulation's phase list.
+    pub phase: Vec<u32>,
+    /// Radius, m.
+    pub radius: Vec<f64>,
+    /// Mass, kg.
+    pub mass: Vec<f64>,
+    /// Moment of inertia (2/5)·m·R², kg·m².
+    pub inertia: Vec<f64>,
+    /// Centre position, m.
+    pub position: Vec<Vec3>,
+    /// Velocity, m/s.
+    pub velocity: Vec<Vec3>,
+    /// Angular velocity, rad/s.
+    pub omega: Vec<Vec3>,
+    /// Force accumulator, N.
+    pub force: Vec<Vec3>,
+    /// Torque accumulator, N·m.
+    pub torque: Vec<Vec3>,
+    /// Previous step's linear acceleration (Adams–Bashforth history), m/s².
+    pub accel_prev: Vec<Vec3>,
+    /// Previous step's angular acceleration (Adams–Bashforth history), rad/s².
+    pub alpha_prev: Vec<Vec3>,
+}
+
+/// One particle's initial data, for building [`Particles`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParticleInit {
+    /// Stable id.
+    pub id: u32,
+    /// Phase index.
+    pub phase: u32,
+    /// Radius, m.
+    pub radius: f64,
+    /// Density, kg/m³.
+    pub density: f64,
+    /// Position, m.
+    pub position: Vec3,
+    /// Velocity, m/s.
+    pub velocity: Vec3,
+    /// Angular velocity, rad/s.
+    pub omega: Vec3,
+}
+
+impl Particles {
+    /// An empty set with room for `n` particles.
+    pub fn with_capacity(n: usize) -> Self {
+        let v3 = || Vec::with_capacity(n);
+        Particles {
+            id: Vec::with_capacity(n),
+            phase: Vec::with_capacity(n),
+            radius: Vec::with_capacity(n),
+            mass: Vec::with_capacity(n),
+            inertia: Vec::with_capacity(n),
+            position: v3(),
+            velocity: v3(),
+            omega: v3(),
+            force: v3(),
+            torque: v3(),
+            accel_prev: v3(),
+            alpha_prev: v3(),
+        }
+    }
+
+    /// Builds the set from initial data; mass and inertia follow from radius and density.
+    pub fn from_init(init: &[ParticleInit]) -> Self {
+        let mut p = Particles::with_capacity(init.len());
+        for q in init {
+            p.push(q);
+        }
+        p
+    }
+
+    /// Appends one particle.
+    pub fn push(&mut self, q: &ParticleInit) {
+        let m = sphere_mass(q.radius, q.density);
+        self.id.push(q.id);
+        self.phase.push(q.phase);
+        self.radius.push(q.radius);
+        self.mass.push(m);
+        self.inertia.push(sphere_inertia(m, q.radius));
+        self.position.push(q.position);
+        self.velocity.push(q.velocity);
+        self.omega.push(q.omega);
+        self.force.push(Vec3::ZERO);
+        self.torque.push(Vec3::ZERO);
+        self.accel_prev.push(Vec3::ZERO);
+        self.alpha_prev.push(Vec3::ZERO);
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.id.len()
+    }
+
+    /// True when there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.id.is_empty()
+    }
+
+    /// Slot of the particle with stable id `id`, if present (linear search; for set-up only).
+    pub fn index_of(&self, id: u32) -> Option<usize> {
+        self.id.iter().position(|&x| x == id)
+    }
+
+    /// Largest radius, m (0 when empty).
+    pub fn max_radius(&self) -> f64 {
+        self.radius.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// Zeroes the force and torque accumulators.
+    pub fn clear_forces(&mut self) {
+        self.force.fill(Vec3::ZERO);
+        self.torque.fill(Vec3::ZERO);
+    }
+}
