@@ -92,7 +92,10 @@ impl NeighborList {
         positions
             .iter()
             .zip(&self.reference)
-            .any(|(x, r)| !((*x - *r).length_squared() <= lim))
+            .any(|(x, r)| {
+                let d2 = (*x - *r).length_squared();
+                d2 > lim || d2.is_nan()
+            })
     }
 
     /// Rebuilds the list if [`needs_rebuild`](Self::needs_rebuild) says so.
