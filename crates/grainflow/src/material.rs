@@ -1,5 +1,6 @@
 //! Phases (particle materials) and wall materials.
 
+use crate::contact::limits;
 use crate::error::EngineError;
 use crate::math::sphere_mass;
 
@@ -35,20 +36,8 @@ impl Phase {
 
     pub(crate) fn validate(&self) -> Result<(), EngineError> {
         let who = format!("phase '{}'", self.name);
-        if !(self.diameter.is_finite() && self.diameter > 0.0) {
-            return Err(EngineError::invalid(
-                format!("{who} diameter"),
-                self.diameter,
-                "a diameter must be a positive length in m",
-            ));
-        }
-        if !(self.density.is_finite() && self.density > 0.0) {
-            return Err(EngineError::invalid(
-                format!("{who} density"),
-                self.density,
-                "a density must be positive, in kg/m³",
-            ));
-        }
+        limits::DIAMETER.check(&who, "diameter", self.diameter)?;
+        limits::DENSITY.check(&who, "density", self.density)?;
         validate_elastic(&who, self.youngs_modulus, self.poisson_ratio)
     }
 }
@@ -76,22 +65,10 @@ impl WallMaterial {
 
 fn validate_elastic(who: &str, e: Option<f64>, nu: Option<f64>) -> Result<(), EngineError> {
     if let Some(e) = e {
-        if !(e.is_finite() && e > 0.0) {
-            return Err(EngineError::invalid(
-                format!("{who} youngs_modulus"),
-                e,
-                "Young's modulus must be positive, in Pa",
-            ));
-        }
+        limits::YOUNGS.check(who, "youngs_modulus", e)?;
     }
     if let Some(nu) = nu {
-        if !(nu > -1.0 && nu < 0.5) {
-            return Err(EngineError::invalid(
-                format!("{who} poisson_ratio"),
-                nu,
-                "Poisson's ratio must lie in (-1, 0.5)",
-            ));
-        }
+        limits::POISSON.check(who, "poisson_ratio", nu)?;
     }
     Ok(())
 }

@@ -89,13 +89,10 @@ impl NeighborList {
             return true;
         }
         let lim = 0.25 * self.skin * self.skin;
-        positions
-            .iter()
-            .zip(&self.reference)
-            .any(|(x, r)| {
-                let d2 = (*x - *r).length_squared();
-                d2 > lim || d2.is_nan()
-            })
+        positions.iter().zip(&self.reference).any(|(x, r)| {
+            let d2 = (*x - *r).length_squared();
+            d2 > lim || d2.is_nan()
+        })
     }
 
     /// Rebuilds the list if [`needs_rebuild`](Self::needs_rebuild) says so.

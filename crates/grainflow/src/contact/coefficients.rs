@@ -1,5 +1,6 @@
 //! Contact coefficients derived from the inputs (reference: MFIX-DEM model §3).
 
+use super::limits;
 use super::{ContactLaw, NormalModel};
 use crate::error::EngineError;
 use crate::material::{Phase, WallMaterial};
@@ -238,22 +239,6 @@ fn elastic_of(
     Ok((e, nu))
 }
 
-fn check_range(
-    what: &str,
-    key: &str,
-    v: f64,
-    lo: f64,
-    lo_open: bool,
-    hi: f64,
-    valid: &str,
-) -> Result<(), EngineError> {
-    let above = if lo_open { v > lo } else { v >= lo };
-    if !(v.is_finite() && above && v <= hi) {
-        return Err(EngineError::invalid(format!("{what} {key}"), v, valid));
-    }
-    Ok(())
-}
-
 fn derive(
     law: &ContactLaw,
     what: &str,
@@ -261,66 +246,18 @@ fn derive(
     m_eff: f64,
     hertz: Option<HertzInputs>,
 ) -> Result<ContactCoeffs, EngineError> {
-    check_range(
-        what,
-        "en",
-        p.en,
-        0.0,
-        true,
-        1.0,
-        "the normal restitution coefficient must lie in (0, 1]",
-    )?;
-    check_range(
-        what,
-        "mu",
-        p.mu,
-        0.0,
-        false,
-        f64::MAX,
-        "a friction coefficient must be >= 0",
-    )?;
-    check_range(
-        what,
-        "mu_roll",
-        p.mu_roll,
-        0.0,
-        false,
-        f64::MAX,
-        "rolling friction must be >= 0 (m)",
-    )?;
+    limits::EN.check(what, "en", p.en)?;
+    limits::MU.check(what, "mu", p.mu)?;
+    limits::MU_ROLL.check(what, "mu_roll", p.mu_roll)?;
     match (law.normal, hertz) {
         (NormalModel::LinearSpringDashpot, _) => {
-            check_range(
-                what,
-                "kt_fac",
-                p.kt_fac,
-                0.0,
-                false,
-                1.0,
-                "KT_FAC must lie in [0, 1]",
-            )?;
-            check_range(
-                what,
-                "etat_fac",
-                p.etat_fac,
-                0.0,
-                false,
-                1.0,
-                "DES_ETAT_FAC must lie in [0, 1]",
-            )?;
+            limits::KT_FAC.check(what, "kt_fac", p.kt_fac)?;
+            limits::ETAT_FAC.check(what, "etat_fac", p.etat_fac)?;
             let kn = p.kn.ok_or_else(|| EngineError::MissingParameter {
                 what: format!("{what} kn (normal stiffness, N/m)"),
                 model: "lsd".into(),
             })?;
-            check_range(
-                what,
-                "kn",
-                kn,
-                0.0,
-                true,
-                f64::MAX,
-                "the normal stiffness must be positive, in N/m",
-            )?;
+            limits::KN.check(what, "kn", kn)?;
             let eta_n = damping_coefficient(kn, m_eff, p.en);
             Ok(ContactCoeffs {
                 kn,
@@ -337,15 +274,7 @@ fn derive(
                 what: format!("{what} et (tangential restitution)"),
                 model: "hertz".into(),
             })?;
-            check_range(
-                what,
-                "et",
-                et,
-                0.0,
-                true,
-                1.0,
-                "the tangential restitution coefficient must lie in (0, 1]",
-            )?;
+            limits::ET.check(what, "et", et)?;
             let e_star = 1.0 / ((1.0 - h.nu1 * h.nu1) / h.e1 + (1.0 - h.nu2 * h.nu2) / h.e2);
             let g1 = h.e1 / (2.0 * (1.0 + h.nu1));
             let g2 = h.e2 / (2.0 * (1.0 + h.nu2));

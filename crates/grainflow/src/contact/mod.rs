@@ -11,6 +11,7 @@
 pub mod coefficients;
 pub mod geometry;
 pub mod law;
+pub mod limits;
 
 pub use coefficients::{CoeffTable, ContactCoeffs, ContactParams, damping_coefficient};
 
