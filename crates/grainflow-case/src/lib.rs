@@ -1,1 +1,16 @@
+//! Case files for grainflow: the TOML case format, particle files, and the writers of
+//! `grainflow run`'s output. The engine crate never sees TOML; this crate turns a case file
+//! into typed engine objects in one place.
+//!
+//! Two stages: [`raw`] mirrors the file (serde, unknown keys rejected); [`case`] validates it
+//! into a [`Case`] with SI values and cross-field checks.
 
+pub mod case;
+pub mod error;
+pub mod output;
+pub mod particles;
+pub mod raw;
+pub mod run;
+
+pub use case::{Case, OutputSettings, load, parse};
+pub use error::CaseError;

@@ -1,0 +1,75 @@
+//! Errors in case files and particle files. Every message names where the problem is (table
+//! and key, or file and line), the value, and what would be valid.
+
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// A problem with the user's input.
+#[derive(Debug, Error)]
+pub enum CaseError {
+    /// A file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The TOML itself is malformed, or a key is unknown or of the wrong type.
+    #[error("{0}")]
+    Syntax(String),
+    /// A required key is missing.
+    #[error("{table}: missing required key `{key}` ({hint})")]
+    Missing {
+        /// The table, e.g. `[time]`.
+        table: String,
+        /// The key.
+        key: String,
+        /// What it means and its unit.
+        hint: String,
+    },
+    /// A value is outside its valid range or not one of the accepted words.
+    #[error("{table}: `{key}` = {value} is invalid: {valid}")]
+    Invalid {
+        /// The table, e.g. `[contact.particle]`.
+        table: String,
+        /// The key.
+        key: String,
+        /// The value as written.
+        value: String,
+        /// What would be valid.
+        valid: String,
+    },
+    /// A line of a particle file is malformed.
+    #[error("{path}, line {line}: {message}")]
+    ParticleFile {
+        /// The file.
+        path: String,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong and what is expected.
+        message: String,
+    },
+    /// The engine refused the set-up.
+    #[error("{0}")]
+    Engine(#[from] grainflow::EngineError),
+}
+
+impl CaseError {
+    pub(crate) fn invalid(table: impl Into<String>, key: impl Into<String>, value: impl ToString, valid: impl Into<String>) -> Self {
+        CaseError::Invalid {
+            table: table.into(),
+            key: key.into(),
+            value: value.to_string(),
+            valid: valid.into(),
+        }
+    }
+
+    pub(crate) fn missing(table: impl Into<String>, key: impl Into<String>, hint: impl Into<String>) -> Self {
+        CaseError::Missing {
+            table: table.into(),
+            key: key.into(),
+            hint: hint.into(),
+        }
+    }
+}

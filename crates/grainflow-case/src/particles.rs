@@ -1,0 +1,174 @@
+//! Particle files: MFIX's legacy `particle_input.dat` and CSV.
+
+use crate::error::CaseError;
+use grainflow::Vec3;
+use grainflow::material::Phase;
+use grainflow::state::ParticleInit;
+
+/// Reads MFIX's legacy `particle_input.dat` (3-D): one particle per line,
+/// `x y z radius density u v w` (SI), no header. Blank lines and lines starting with `#` or `!`
+/// are skipped. The phase is found as MFIX does: the phase whose diameter and density match
+/// the particle's (relative tolerance 1e-6). Ids are the 1-based particle numbers.
+pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
+    let mut out = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') || t.starts_with('!') {
+            continue;
+        }
+        let err = |message: String| CaseError::ParticleFile {
+            path: path.to_string(),
+            line: k + 1,
+            message,
+        };
+        let fields: Vec<&str> = t.split_whitespace().collect();
+        if fields.len() != 8 {
+            return Err(err(format!(
+                "expected 8 numbers (x y z radius density u v w), found {}",
+                fields.len()
+            )));
+        }
+        let mut v = [0.0; 8];
+        for (slot, f) in v.iter_mut().zip(&fields) {
+            *slot = parse_number(f).ok_or_else(|| err(format!("'{f}' is not a number")))?;
+        }
+        let [x, y, z, r, rho, u, vv, w] = v;
+        if !(r.is_finite() && r > 0.0) {
+            return Err(err(format!("radius {r} must be positive (m)")));
+        }
+        let phase = match_phase(2.0 * r, rho, phases).ok_or_else(|| {
+            err(format!(
+                "no phase has diameter {} m and density {rho} kg/m³ (phases: {})",
+                2.0 * r,
+                describe_phases(phases)
+            ))
+        })?;
+        out.push(ParticleInit {
+            id: (out.len() + 1) as u32,
+            phase: phase as u32,
+            radius: r,
+            density: rho,
+            position: Vec3::new(x, y, z),
+            velocity: Vec3::new(u, vv, w),
+            omega: Vec3::ZERO,
+        });
+    }
+    Ok(out)
+}
+
+/// Reads a CSV particle file with a header row. Columns (any order):
+/// `x,y,z` (m, required), `phase` (name or 1-based index, required), `id` (default: row
+/// number), `diameter` or `radius` (m, default: the phase's), `u,v,w` (m/s, default 0),
+/// `wx,wy,wz` (rad/s, default 0). Unknown columns are an error.
+pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
+    const KNOWN: [&str; 13] = ["id", "phase", "x", "y", "z", "diameter", "radius", "u", "v", "w", "wx", "wy", "wz"];
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    let header_err = |message: String| CaseError::ParticleFile {
+        path: path.to_string(),
+        line: 1,
+        message,
+    };
+    let headers = rdr
+        .headers()
+        .map_err(|e| header_err(format!("cannot read the header row: {e}")))?
+        .clone();
+    let mut col = [None; 13];
+    for (c, h) in headers.iter().enumerate() {
+        let h = h.to_ascii_lowercase();
+        match KNOWN.iter().position(|k| *k == h) {
+            Some(k) => col[k] = Some(c),
+            None => {
+                return Err(header_err(format!(
+                    "unknown column '{h}'; the columns are {}",
+                    KNOWN.join(", ")
+                )));
+            }
+        }
+    }
+    for (k, name) in [(1, "phase"), (2, "x"), (3, "y"), (4, "z")] {
+        if col[k].is_none() {
+            return Err(header_err(format!("the required column '{name}' is missing")));
+        }
+    }
+    if col[5].is_some() && col[6].is_some() {
+        return Err(header_err("give either 'diameter' or 'radius', not both".into()));
+    }
+    let mut out = Vec::new();
+    for (row, rec) in rdr.records().enumerate() {
+        let line = rec.as_ref().ok().and_then(|r| r.position()).map_or(row + 2, |p| p.line() as usize);
+        let err = |message: String| CaseError::ParticleFile {
+            path: path.to_string(),
+            line,
+            message,
+        };
+        let rec = rec.map_err(|e| err(format!("{e}")))?;
+        let get = |k: usize| -> Result<Option<f64>, CaseError> {
+            match col[k] {
+                None => Ok(None),
+                Some(c) => {
+                    let s = rec.get(c).unwrap_or("");
+                    parse_number(s)
+                        .map(Some)
+                        .ok_or_else(|| err(format!("{} = '{s}' is not a number", KNOWN[k])))
+                }
+            }
+        };
+        let phase_text = col[1].and_then(|c| rec.get(c)).unwrap_or("");
+        let phase = phases
+            .iter()
+            .position(|p| p.name == phase_text)
+            .or_else(|| phase_text.parse::<usize>().ok().filter(|&k| k >= 1 && k <= phases.len()).map(|k| k - 1))
+            .ok_or_else(|| err(format!("phase '{phase_text}' is neither a phase name nor an index 1..{} (phases: {})", phases.len(), describe_phases(phases))))?;
+        let radius = match (get(5)?, get(6)?) {
+            (Some(d), _) => 0.5 * d,
+            (_, Some(r)) => r,
+            _ => phases[phase].radius(),
+        };
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(err(format!("the radius {radius} m must be positive")));
+        }
+        let id = match get(0)? {
+            None => (row + 1) as u32,
+            Some(v) if v >= 1.0 && v <= u32::MAX as f64 && v.fract() == 0.0 => v as u32,
+            Some(v) => return Err(err(format!("id {v} must be a whole number >= 1"))),
+        };
+        let v3 = |a: usize| -> Result<Vec3, CaseError> {
+            Ok(Vec3::new(get(a)?.unwrap_or(0.0), get(a + 1)?.unwrap_or(0.0), get(a + 2)?.unwrap_or(0.0)))
+        };
+        out.push(ParticleInit {
+            id,
+            phase: phase as u32,
+            radius,
+            density: phases[phase].density,
+            position: v3(2)?,
+            velocity: v3(7)?,
+            omega: v3(10)?,
+        });
+    }
+    Ok(out)
+}
+
+fn parse_number(s: &str) -> Option<f64> {
+    // Fortran-style exponents (1.0D-3) appear in MFIX files.
+    let v: f64 = s.replace(['D', 'd'], "e").parse().ok()?;
+    v.is_finite().then_some(v)
+}
+
+/// The phase whose diameter and density match, relative tolerance 1e-6.
+pub fn match_phase(diameter: f64, density: f64, phases: &[Phase]) -> Option<usize> {
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.abs().max(b.abs());
+    phases
+        .iter()
+        .position(|p| close(p.diameter, diameter) && close(p.density, density))
+}
+
+fn describe_phases(phases: &[Phase]) -> String {
+    phases
+        .iter()
+        .map(|p| format!("'{}' d = {} m, rho = {} kg/m³", p.name, p.diameter, p.density))
+        .collect::<Vec<_>>()
+        .join("; ")
+}

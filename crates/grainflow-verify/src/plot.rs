@@ -1,0 +1,1 @@
+//! Figures (PNG and SVG) for the verification reports.

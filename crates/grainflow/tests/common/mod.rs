@@ -1,0 +1,180 @@
+//! Shared set-up helpers for the physics tests (not a test target itself).
+//!
+//! Every test file includes this module with `mod common;`; not every file uses every helper.
+#![allow(dead_code)]
+
+use grainflow::contact::ContactParams;
+use grainflow::state::ParticleInit;
+use grainflow::{
+    ContactLaw, Integrator, Particles, Phase, Simulation, SimulationConfig, TimeStepRule, Vec3,
+    Wall, WallMaterial,
+};
+use std::f64::consts::PI;
+
+/// Mass of a solid sphere, written out independently of the engine's helper.
+pub fn sphere_mass(r: f64, rho: f64) -> f64 {
+    4.0 / 3.0 * PI * r.powi(3) * rho
+}
+
+/// A phase without elastic constants (LSD).
+pub fn phase(name: &str, diameter: f64, density: f64) -> Phase {
+    Phase {
+        name: name.into(),
+        diameter,
+        density,
+        youngs_modulus: None,
+        poisson_ratio: None,
+    }
+}
+
+/// A phase with elastic constants (Hertz).
+pub fn elastic_phase(name: &str, diameter: f64, density: f64, e: f64, nu: f64) -> Phase {
+    Phase {
+        name: name.into(),
+        diameter,
+        density,
+        youngs_modulus: Some(e),
+        poisson_ratio: Some(nu),
+    }
+}
+
+/// A wall material, with or without elastic constants.
+pub fn wall_material(name: &str, e: Option<f64>, nu: Option<f64>) -> WallMaterial {
+    WallMaterial {
+        name: name.into(),
+        youngs_modulus: e,
+        poisson_ratio: nu,
+    }
+}
+
+/// LSD contact inputs: k_n, e_n, μ; MFIX defaults otherwise.
+pub fn lsd_params(kn: f64, en: f64, mu: f64) -> ContactParams {
+    ContactParams {
+        kn: Some(kn),
+        en,
+        mu,
+        ..Default::default()
+    }
+}
+
+/// Hertz contact inputs: e_n, e_t, μ.
+pub fn hertz_params(en: f64, et: f64, mu: f64) -> ContactParams {
+    ContactParams {
+        en,
+        et: Some(et),
+        mu,
+        ..Default::default()
+    }
+}
+
+/// A configuration with zero gravity, an explicit time step and a very long run (tests call
+/// `step()` themselves).
+pub fn config(
+    law: ContactLaw,
+    phases: Vec<Phase>,
+    wall_materials: Vec<WallMaterial>,
+    walls: Vec<Wall>,
+    pair_params: Vec<ContactParams>,
+    wall_params: Vec<ContactParams>,
+    integrator: Integrator,
+    dt: f64,
+) -> SimulationConfig {
+    SimulationConfig {
+        phases,
+        wall_materials,
+        walls,
+        law,
+        pair_params,
+        wall_params,
+        integrator,
+        time_step: TimeStepRule::Fixed(dt),
+        t_start: 0.0,
+        t_stop: 1.0e6 * dt,
+        gravity: Vec3::ZERO,
+        skin: None,
+        motion: Vec::new(),
+    }
+}
+
+/// One particle's initial data.
+pub fn particle(id: u32, phase: u32, radius: f64, density: f64, x: Vec3, v: Vec3) -> ParticleInit {
+    ParticleInit {
+        id,
+        phase,
+        radius,
+        density,
+        position: x,
+        velocity: v,
+        omega: Vec3::ZERO,
+    }
+}
+
+/// Builds a simulation, panicking with the engine's message on a set-up error.
+pub fn simulation(config: SimulationConfig, init: &[ParticleInit]) -> Simulation {
+    Simulation::new(config, Particles::from_init(init)).expect("valid test set-up")
+}
+
+/// SplitMix64: a small deterministic generator, so the tests need no extra dependency.
+#[derive(Debug, Clone)]
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.uniform()
+    }
+
+    /// Standard normal (Box–Muller).
+    pub fn normal(&mut self) -> f64 {
+        let u1 = 1.0 - self.uniform();
+        let u2 = self.uniform();
+        (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
+    }
+
+    /// A point uniformly distributed in the box [lo, hi].
+    pub fn in_box(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
+        Vec3::new(
+            self.range(lo.x, hi.x),
+            self.range(lo.y, hi.y),
+            self.range(lo.z, hi.z),
+        )
+    }
+
+    /// A uniformly distributed unit vector.
+    pub fn unit(&mut self) -> Vec3 {
+        loop {
+            let v = Vec3::new(self.normal(), self.normal(), self.normal());
+            let l = v.length();
+            if l > 1e-3 {
+                return v / l;
+            }
+        }
+    }
+
+    /// An index in 0..n.
+    pub fn index(&mut self, n: usize) -> usize {
+        (self.uniform() * n as f64) as usize % n
+    }
+}
+
+/// Relative error |a − b|/|b|.
+pub fn rel_err(a: f64, b: f64) -> f64 {
+    ((a - b) / b).abs()
+}
