@@ -4,11 +4,14 @@ use crate::error::CaseError;
 use crate::particles;
 use crate::raw::*;
 use grainflow::contact::limits::{self, Range};
-use grainflow::contact::{ContactLaw, ContactParams, HistoryFrame, NormalModel, TangentialModel};
+use grainflow::contact::{
+    ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalModel, TangentialModel,
+};
 use grainflow::simulation::STANDARD_GRAVITY;
 use grainflow::state::ParticleInit;
 use grainflow::{
-    Integrator, MotionRule, Particles, Phase, PrescribedMotion, SimulationConfig, TimeStepRule, Vec3, Wall, WallMaterial,
+    Integrator, MotionRule, Particles, Phase, PrescribedMotion, SimulationConfig, TimeStepRule,
+    Vec3, Wall, WallMaterial,
 };
 use std::path::Path;
 
@@ -54,8 +57,13 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
 
 /// Validates case-file text. `origin` names it in messages; `read_file` reads a particle file
 /// named in the case.
-pub fn parse(text: &str, origin: &str, read_file: &dyn Fn(&str) -> Result<String, CaseError>) -> Result<Case, CaseError> {
-    let raw: RawCase = toml::from_str(text).map_err(|e| CaseError::Syntax(format!("{origin}: {e}")))?;
+pub fn parse(
+    text: &str,
+    origin: &str,
+    read_file: &dyn Fn(&str) -> Result<String, CaseError>,
+) -> Result<Case, CaseError> {
+    let raw: RawCase =
+        toml::from_str(text).map_err(|e| CaseError::Syntax(format!("{origin}: {e}")))?;
     validate(raw, read_file)
 }
 
@@ -71,12 +79,27 @@ fn check(r: Range, table: &str, key: &str, v: f64) -> Result<f64, CaseError> {
     }
 }
 
-fn choose<T: Copy>(table: &str, key: &str, value: Option<&str>, default: T, words: &[(&str, T)]) -> Result<T, CaseError> {
+fn choose<T: Copy>(
+    table: &str,
+    key: &str,
+    value: Option<&str>,
+    default: T,
+    words: &[(&str, T)],
+) -> Result<T, CaseError> {
     let Some(v) = value else { return Ok(default) };
-    words.iter().find(|(w, _)| *w == v).map(|(_, t)| *t).ok_or_else(|| {
-        let list: Vec<String> = words.iter().map(|(w, _)| format!("\"{w}\"")).collect();
-        CaseError::invalid(table, key, format!("\"{v}\""), format!("must be one of {}", list.join(", ")))
-    })
+    words
+        .iter()
+        .find(|(w, _)| *w == v)
+        .map(|(_, t)| *t)
+        .ok_or_else(|| {
+            let list: Vec<String> = words.iter().map(|(w, _)| format!("\"{w}\"")).collect();
+            CaseError::invalid(
+                table,
+                key,
+                format!("\"{v}\""),
+                format!("must be one of {}", list.join(", ")),
+            )
+        })
 }
 
 fn vec3(a: [f64; 3], table: &str, key: &str) -> Result<Vec3, CaseError> {
@@ -84,29 +107,72 @@ fn vec3(a: [f64; 3], table: &str, key: &str) -> Result<Vec3, CaseError> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(CaseError::invalid(table, key, format!("{a:?}"), "all three components must be finite numbers"))
+        Err(CaseError::invalid(
+            table,
+            key,
+            format!("{a:?}"),
+            "all three components must be finite numbers",
+        ))
     }
 }
 
-fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>) -> Result<Case, CaseError> {
+fn validate(
+    raw: RawCase,
+    read_file: &dyn Fn(&str) -> Result<String, CaseError>,
+) -> Result<Case, CaseError> {
     let mut warnings = Vec::new();
     match raw.version {
-        None => return Err(CaseError::missing("top level", "version", format!("the case-file format version; this program reads version {CASE_VERSION}"))),
+        None => {
+            return Err(CaseError::missing(
+                "top level",
+                "version",
+                format!("the case-file format version; this program reads version {CASE_VERSION}"),
+            ));
+        }
         Some(CASE_VERSION) => {}
-        Some(v) => return Err(CaseError::invalid("top level", "version", v, format!("this program reads case-file version {CASE_VERSION}"))),
+        Some(v) => {
+            return Err(CaseError::invalid(
+                "top level",
+                "version",
+                v,
+                format!("this program reads case-file version {CASE_VERSION}"),
+            ));
+        }
     }
 
     // Domain.
-    let domain = require(raw.domain, "top level", "[domain]", "the domain box: min and max corners in m")?;
-    let min = vec3(require(domain.min, "[domain]", "min", "lower corner of the box, m")?, "[domain]", "min")?;
-    let max = vec3(require(domain.max, "[domain]", "max", "upper corner of the box, m")?, "[domain]", "max")?;
+    let domain = require(
+        raw.domain,
+        "top level",
+        "[domain]",
+        "the domain box: min and max corners in m",
+    )?;
+    let min = vec3(
+        require(domain.min, "[domain]", "min", "lower corner of the box, m")?,
+        "[domain]",
+        "min",
+    )?;
+    let max = vec3(
+        require(domain.max, "[domain]", "max", "upper corner of the box, m")?,
+        "[domain]",
+        "max",
+    )?;
     if !(max.cmpgt(min).all()) {
-        return Err(CaseError::invalid("[domain]", "max", format!("{:?}", max.to_array()), format!("every component must exceed min = {:?}", min.to_array())));
+        return Err(CaseError::invalid(
+            "[domain]",
+            "max",
+            format!("{:?}", max.to_array()),
+            format!("every component must exceed min = {:?}", min.to_array()),
+        ));
     }
 
     // Phases.
     if raw.phases.is_empty() {
-        return Err(CaseError::missing("top level", "[[phases]]", "at least one solids phase with name, diameter (m) and density (kg/m³)"));
+        return Err(CaseError::missing(
+            "top level",
+            "[[phases]]",
+            "at least one solids phase with name, diameter (m) and density (kg/m³)",
+        ));
     }
     let mut phases = Vec::new();
     for (k, p) in raw.phases.iter().enumerate() {
@@ -114,18 +180,50 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         let name = require(p.name.clone(), &table, "name", "a unique phase name")?;
         let table = format!("[[phases]] '{name}'");
         if phases.iter().any(|q: &Phase| q.name == name) {
-            return Err(CaseError::invalid(&table, "name", format!("\"{name}\""), "phase names must be unique"));
+            return Err(CaseError::invalid(
+                &table,
+                "name",
+                format!("\"{name}\""),
+                "phase names must be unique",
+            ));
         }
-        let diameter = check(limits::DIAMETER, &table, "diameter", require(p.diameter, &table, "diameter", "reference diameter in m")?)?;
-        let density = check(limits::DENSITY, &table, "density", require(p.density, &table, "density", "density in kg/m³")?)?;
-        let youngs_modulus = p.youngs_modulus.map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v)).transpose()?;
-        let poisson_ratio = p.poisson_ratio.map(|v| check(limits::POISSON, &table, "poisson_ratio", v)).transpose()?;
-        phases.push(Phase { name, diameter, density, youngs_modulus, poisson_ratio });
+        let diameter = check(
+            limits::DIAMETER,
+            &table,
+            "diameter",
+            require(p.diameter, &table, "diameter", "reference diameter in m")?,
+        )?;
+        let density = check(
+            limits::DENSITY,
+            &table,
+            "density",
+            require(p.density, &table, "density", "density in kg/m³")?,
+        )?;
+        let youngs_modulus = p
+            .youngs_modulus
+            .map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v))
+            .transpose()?;
+        let poisson_ratio = p
+            .poisson_ratio
+            .map(|v| check(limits::POISSON, &table, "poisson_ratio", v))
+            .transpose()?;
+        phases.push(Phase {
+            name,
+            diameter,
+            density,
+            youngs_modulus,
+            poisson_ratio,
+        });
     }
     let phase_index = |name: &str, table: &str, key: &str| -> Result<usize, CaseError> {
         phases.iter().position(|p| p.name == name).ok_or_else(|| {
             let names: Vec<String> = phases.iter().map(|p| format!("\"{}\"", p.name)).collect();
-            CaseError::invalid(table, key, format!("\"{name}\""), format!("not a phase; the phases are {}", names.join(", ")))
+            CaseError::invalid(
+                table,
+                key,
+                format!("\"{name}\""),
+                format!("not a phase; the phases are {}", names.join(", ")),
+            )
         })
     };
 
@@ -133,72 +231,234 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
     let mut wall_materials = Vec::new();
     for (k, w) in raw.wall_materials.iter().enumerate() {
         let table = format!("[[wall_materials]] #{}", k + 1);
-        let name = require(w.name.clone(), &table, "name", "a unique wall material name")?;
+        let name = require(
+            w.name.clone(),
+            &table,
+            "name",
+            "a unique wall material name",
+        )?;
         let table = format!("[[wall_materials]] '{name}'");
         if wall_materials.iter().any(|q: &WallMaterial| q.name == name) {
-            return Err(CaseError::invalid(&table, "name", format!("\"{name}\""), "wall material names must be unique"));
+            return Err(CaseError::invalid(
+                &table,
+                "name",
+                format!("\"{name}\""),
+                "wall material names must be unique",
+            ));
         }
-        let youngs_modulus = w.youngs_modulus.map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v)).transpose()?;
-        let poisson_ratio = w.poisson_ratio.map(|v| check(limits::POISSON, &table, "poisson_ratio", v)).transpose()?;
-        wall_materials.push(WallMaterial { name, youngs_modulus, poisson_ratio });
+        let youngs_modulus = w
+            .youngs_modulus
+            .map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v))
+            .transpose()?;
+        let poisson_ratio = w
+            .poisson_ratio
+            .map(|v| check(limits::POISSON, &table, "poisson_ratio", v))
+            .transpose()?;
+        wall_materials.push(WallMaterial {
+            name,
+            youngs_modulus,
+            poisson_ratio,
+        });
     }
     if wall_materials.is_empty() {
-        wall_materials.push(WallMaterial { name: "wall".into(), youngs_modulus: None, poisson_ratio: None });
+        wall_materials.push(WallMaterial {
+            name: "wall".into(),
+            youngs_modulus: None,
+            poisson_ratio: None,
+        });
     }
-    let material_index = |name: &Option<String>, table: &str, key: &str| -> Result<usize, CaseError> {
-        let Some(name) = name else { return Ok(0) };
-        wall_materials.iter().position(|m| &m.name == name).ok_or_else(|| {
-            let names: Vec<String> = wall_materials.iter().map(|p| format!("\"{}\"", p.name)).collect();
-            CaseError::invalid(table, key, format!("\"{name}\""), format!("not a wall material; the wall materials are {}", names.join(", ")))
-        })
-    };
+    let material_index =
+        |name: &Option<String>, table: &str, key: &str| -> Result<usize, CaseError> {
+            let Some(name) = name else { return Ok(0) };
+            wall_materials
+                .iter()
+                .position(|m| &m.name == name)
+                .ok_or_else(|| {
+                    let names: Vec<String> = wall_materials
+                        .iter()
+                        .map(|p| format!("\"{}\"", p.name))
+                        .collect();
+                    CaseError::invalid(
+                        table,
+                        key,
+                        format!("\"{name}\""),
+                        format!(
+                            "not a wall material; the wall materials are {}",
+                            names.join(", ")
+                        ),
+                    )
+                })
+        };
     let mut walls = Vec::new();
     if domain.walls {
-        walls.extend(Wall::domain_box(min, max, material_index(&domain.wall_material, "[domain]", "wall_material")?));
+        walls.extend(Wall::domain_box(
+            min,
+            max,
+            material_index(&domain.wall_material, "[domain]", "wall_material")?,
+        ));
     }
     for (k, w) in raw.walls.iter().enumerate() {
         let name = w.name.clone().unwrap_or_else(|| format!("wall {}", k + 1));
         let table = format!("[[walls]] '{name}'");
-        let point = vec3(require(w.point, &table, "point", "a point on the plane, m")?, &table, "point")?;
-        let normal = vec3(require(w.normal, &table, "normal", "normal pointing into the particle space")?, &table, "normal")?;
+        let point = vec3(
+            require(w.point, &table, "point", "a point on the plane, m")?,
+            &table,
+            "point",
+        )?;
+        let normal = vec3(
+            require(
+                w.normal,
+                &table,
+                "normal",
+                "normal pointing into the particle space",
+            )?,
+            &table,
+            "normal",
+        )?;
         if normal.length() == 0.0 {
-            return Err(CaseError::invalid(&table, "normal", format!("{:?}", normal.to_array()), "the normal must not be zero"));
+            return Err(CaseError::invalid(
+                &table,
+                "normal",
+                format!("{:?}", normal.to_array()),
+                "the normal must not be zero",
+            ));
         }
-        walls.push(Wall::plane(name, point, normal, material_index(&w.material, &table, "material")?));
+        walls.push(Wall::plane(
+            name,
+            point,
+            normal,
+            material_index(&w.material, &table, "material")?,
+        ));
     }
 
     // Contact law and tables.
-    let contact = require(raw.contact, "top level", "[contact]", "the contact model and its parameters")?;
-    let normal = choose("[contact]", "model", contact.model.as_deref(), NormalModel::LinearSpringDashpot, &[("lsd", NormalModel::LinearSpringDashpot), ("hertz", NormalModel::Hertz)])?;
-    let tangential = choose("[contact]", "tangential", contact.tangential.as_deref(), TangentialModel::MfixTotal, &[("mfix", TangentialModel::MfixTotal), ("incremental_mindlin", TangentialModel::IncrementalMindlin)])?;
-    let history = choose("[contact]", "history", contact.history.as_deref(), HistoryFrame::Mfix, &[("mfix", HistoryFrame::Mfix), ("project", HistoryFrame::Project), ("rotate", HistoryFrame::Rotate)])?;
-    let law = ContactLaw { normal, tangential, history };
+    let contact = require(
+        raw.contact,
+        "top level",
+        "[contact]",
+        "the contact model and its parameters",
+    )?;
+    let normal = choose(
+        "[contact]",
+        "model",
+        contact.model.as_deref(),
+        NormalModel::LinearSpringDashpot,
+        &[
+            ("lsd", NormalModel::LinearSpringDashpot),
+            ("hertz", NormalModel::Hertz),
+        ],
+    )?;
+    let tangential = choose(
+        "[contact]",
+        "tangential",
+        contact.tangential.as_deref(),
+        TangentialModel::MfixTotal,
+        &[
+            ("mfix", TangentialModel::MfixTotal),
+            ("incremental_mindlin", TangentialModel::IncrementalMindlin),
+        ],
+    )?;
+    let history = choose(
+        "[contact]",
+        "history",
+        contact.history.as_deref(),
+        HistoryFrame::Mfix,
+        &[
+            ("mfix", HistoryFrame::Mfix),
+            ("project", HistoryFrame::Project),
+            ("rotate", HistoryFrame::Rotate),
+        ],
+    )?;
+    let lever = choose(
+        "[contact]",
+        "lever_arm",
+        contact.lever_arm.as_deref(),
+        LeverArm::RadicalPlane,
+        &[
+            ("mfix", LeverArm::RadicalPlane),
+            ("radius", LeverArm::Radius),
+        ],
+    )?;
+    let law = ContactLaw {
+        normal,
+        tangential,
+        history,
+        lever,
+    };
     if normal == NormalModel::Hertz {
         for p in &phases {
             let table = format!("[[phases]] '{}'", p.name);
-            require(p.youngs_modulus, &table, "youngs_modulus", "Young's modulus in Pa, required by the hertz model")?;
-            require(p.poisson_ratio, &table, "poisson_ratio", "Poisson's ratio, required by the hertz model")?;
+            require(
+                p.youngs_modulus,
+                &table,
+                "youngs_modulus",
+                "Young's modulus in Pa, required by the hertz model",
+            )?;
+            require(
+                p.poisson_ratio,
+                &table,
+                "poisson_ratio",
+                "Poisson's ratio, required by the hertz model",
+            )?;
         }
         if !walls.is_empty() {
             for m in &wall_materials {
                 let table = format!("[[wall_materials]] '{}'", m.name);
-                require(m.youngs_modulus, &table, "youngs_modulus", "Young's modulus in Pa, required by the hertz model for walls")?;
-                require(m.poisson_ratio, &table, "poisson_ratio", "Poisson's ratio, required by the hertz model for walls")?;
+                require(
+                    m.youngs_modulus,
+                    &table,
+                    "youngs_modulus",
+                    "Young's modulus in Pa, required by the hertz model for walls",
+                )?;
+                require(
+                    m.poisson_ratio,
+                    &table,
+                    "poisson_ratio",
+                    "Poisson's ratio, required by the hertz model for walls",
+                )?;
             }
         }
     }
-    for (table, t, is_pair) in [("[contact.particle]", &contact.particle, None), ("[contact.wall]", &contact.wall, None)]
-        .into_iter()
-        .chain(contact.pairs.iter().map(|t| ("[[contact.pairs]]", t, Some(true))))
-        .chain(contact.walls.iter().map(|t| ("[[contact.walls]]", t, Some(false))))
-    {
+    for (table, t, is_pair) in [
+        ("[contact.particle]", &contact.particle, None),
+        ("[contact.wall]", &contact.wall, None),
+    ]
+    .into_iter()
+    .chain(
+        contact
+            .pairs
+            .iter()
+            .map(|t| ("[[contact.pairs]]", t, Some(true))),
+    )
+    .chain(
+        contact
+            .walls
+            .iter()
+            .map(|t| ("[[contact.walls]]", t, Some(false))),
+    ) {
         let misplaced = match is_pair {
-            None => [("phases", t.phases.is_some()), ("phase", t.phase.is_some()), ("material", t.material.is_some())].into_iter().find(|x| x.1),
-            Some(true) => [("phase", t.phase.is_some()), ("material", t.material.is_some())].into_iter().find(|x| x.1),
+            None => [
+                ("phases", t.phases.is_some()),
+                ("phase", t.phase.is_some()),
+                ("material", t.material.is_some()),
+            ]
+            .into_iter()
+            .find(|x| x.1),
+            Some(true) => [
+                ("phase", t.phase.is_some()),
+                ("material", t.material.is_some()),
+            ]
+            .into_iter()
+            .find(|x| x.1),
             Some(false) => [("phases", t.phases.is_some())].into_iter().find(|x| x.1),
         };
         if let Some((key, _)) = misplaced {
-            return Err(CaseError::invalid(table, key, "(given)", "this key selects a pair: `phases` belongs in [[contact.pairs]], `phase` and `material` in [[contact.walls]]"));
+            return Err(CaseError::invalid(
+                table,
+                key,
+                "(given)",
+                "this key selects a pair: `phases` belongs in [[contact.pairs]], `phase` and `material` in [[contact.walls]]",
+            ));
         }
         check_params(table, t, law, &mut warnings)?;
     }
@@ -206,15 +466,33 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
     let mut pair_tables: Vec<Option<&RawContactParams>> = vec![None; n * (n + 1) / 2];
     for t in &contact.pairs {
         let table = "[[contact.pairs]]";
-        let [a, b] = require(t.phases.clone(), table, "phases", "the two phase names of the pair")?;
-        let (ia, ib) = (phase_index(&a, table, "phases")?, phase_index(&b, table, "phases")?);
-        let slot = &mut pair_tables[grainflow::contact::coefficients::upper_triangle_index(ia, ib, n)];
+        let [a, b] = require(
+            t.phases.clone(),
+            table,
+            "phases",
+            "the two phase names of the pair",
+        )?;
+        let (ia, ib) = (
+            phase_index(&a, table, "phases")?,
+            phase_index(&b, table, "phases")?,
+        );
+        let slot =
+            &mut pair_tables[grainflow::contact::coefficients::upper_triangle_index(ia, ib, n)];
         if slot.is_some() {
-            return Err(CaseError::invalid(table, "phases", format!("[\"{a}\", \"{b}\"]"), "each phase pair may appear only once"));
+            return Err(CaseError::invalid(
+                table,
+                "phases",
+                format!("[\"{a}\", \"{b}\"]"),
+                "each phase pair may appear only once",
+            ));
         }
         *slot = Some(t);
     }
-    let nw = if walls.is_empty() { 0 } else { wall_materials.len() };
+    let nw = if walls.is_empty() {
+        0
+    } else {
+        wall_materials.len()
+    };
     let mut wall_tables: Vec<Option<&RawContactParams>> = vec![None; n * nw];
     for t in &contact.walls {
         let table = "[[contact.walls]]";
@@ -226,7 +504,12 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         }
         let slot = &mut wall_tables[ip * nw + iw];
         if slot.is_some() {
-            return Err(CaseError::invalid(table, "phase", format!("\"{ph}\""), "each phase and wall material may appear only once"));
+            return Err(CaseError::invalid(
+                table,
+                "phase",
+                format!("\"{ph}\""),
+                "each phase and wall material may appear only once",
+            ));
         }
         *slot = Some(t);
     }
@@ -235,14 +518,29 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         for l in m..n {
             let over = pair_tables[grainflow::contact::coefficients::upper_triangle_index(m, l, n)];
             let what = format!("phase pair '{}'-'{}'", phases[m].name, phases[l].name);
-            pair_params.push(layer(over, &contact.particle, law, "[contact.particle]", &what)?);
+            pair_params.push(layer(
+                over,
+                &contact.particle,
+                law,
+                "[contact.particle]",
+                &what,
+            )?);
         }
     }
     let mut wall_params = Vec::with_capacity(wall_tables.len());
     for m in 0..n {
         for w in 0..nw {
-            let what = format!("phase '{}' against wall material '{}'", phases[m].name, wall_materials[w].name);
-            wall_params.push(layer(wall_tables[m * nw + w], &contact.wall, law, "[contact.wall]", &what)?);
+            let what = format!(
+                "phase '{}' against wall material '{}'",
+                phases[m].name, wall_materials[w].name
+            );
+            wall_params.push(layer(
+                wall_tables[m * nw + w],
+                &contact.wall,
+                law,
+                "[contact.wall]",
+                &what,
+            )?);
         }
     }
     if nw == 0 {
@@ -250,56 +548,165 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
     }
 
     // Time.
-    let time = require(raw.time, "top level", "[time]", "t_stop (s) and optionally dt, integrator")?;
+    let time = require(
+        raw.time,
+        "top level",
+        "[time]",
+        "t_stop (s) and optionally dt, integrator",
+    )?;
     let t_start = time.t_start.unwrap_or(0.0);
     if !t_start.is_finite() {
-        return Err(CaseError::invalid("[time]", "t_start", t_start, "must be a finite time in s"));
+        return Err(CaseError::invalid(
+            "[time]",
+            "t_start",
+            t_start,
+            "must be a finite time in s",
+        ));
     }
     let t_stop = require(time.t_stop, "[time]", "t_stop", "end time of the run, s")?;
     if !(t_stop.is_finite() && t_stop > t_start) {
-        return Err(CaseError::invalid("[time]", "t_stop", t_stop, format!("must be a finite time in s after t_start = {t_start}")));
+        return Err(CaseError::invalid(
+            "[time]",
+            "t_stop",
+            t_stop,
+            format!("must be a finite time in s after t_start = {t_start}"),
+        ));
     }
     let time_step = match (time.dt, time.dtsolid_factor) {
-        (Some(_), Some(_)) => return Err(CaseError::invalid("[time]", "dtsolid_factor", "(given with dt)", "give either an explicit dt or MFIX's dtsolid_factor, not both")),
+        (Some(_), Some(_)) => {
+            return Err(CaseError::invalid(
+                "[time]",
+                "dtsolid_factor",
+                "(given with dt)",
+                "give either an explicit dt or MFIX's dtsolid_factor, not both",
+            ));
+        }
         (Some(dt), None) if dt.is_finite() && dt > 0.0 => TimeStepRule::Fixed(dt),
-        (Some(dt), None) => return Err(CaseError::invalid("[time]", "dt", dt, "must be a positive time in s")),
+        (Some(dt), None) => {
+            return Err(CaseError::invalid(
+                "[time]",
+                "dt",
+                dt,
+                "must be a positive time in s",
+            ));
+        }
         (None, f) => {
             let factor = f.unwrap_or(50.0);
             if !(factor.is_finite() && factor >= 10.0) {
-                return Err(CaseError::invalid("[time]", "dtsolid_factor", factor, "must be at least 10 (MFIX rejects smaller values)"));
+                return Err(CaseError::invalid(
+                    "[time]",
+                    "dtsolid_factor",
+                    factor,
+                    "must be at least 10 (MFIX rejects smaller values)",
+                ));
             }
             TimeStepRule::Mfix { factor }
         }
     };
-    let integrator = choose("[time]", "integrator", time.integrator.as_deref(), Integrator::Euler, &[("euler", Integrator::Euler), ("adams_bashforth", Integrator::AdamsBashforth), ("velocity_verlet", Integrator::VelocityVerlet)])?;
+    let integrator = choose(
+        "[time]",
+        "integrator",
+        time.integrator.as_deref(),
+        Integrator::Euler,
+        &[
+            ("euler", Integrator::Euler),
+            ("adams_bashforth", Integrator::AdamsBashforth),
+            ("velocity_verlet", Integrator::VelocityVerlet),
+        ],
+    )?;
 
     let gravity = match raw.physics.gravity {
         Some(g) => vec3(g, "[physics]", "gravity")?,
         None => Vec3::new(0.0, -STANDARD_GRAVITY, 0.0),
     };
-    let skin = raw.neighbor.skin.map(|s| check(Range { lo: 0.0, lo_open: false, hi: f64::MAX, hi_open: false, valid: "must be a length >= 0 in m" }, "[neighbor]", "skin", s)).transpose()?;
-    let interval = raw.output.interval.map(|v| {
-        if v.is_finite() && v > 0.0 { Ok(v) } else { Err(CaseError::invalid("[output]", "interval", v, "must be a positive time in s")) }
-    }).transpose()?;
-    let output = OutputSettings { interval, snapshots: raw.output.snapshots.unwrap_or(true) };
+    let skin = raw
+        .neighbor
+        .skin
+        .map(|s| {
+            check(
+                Range {
+                    lo: 0.0,
+                    lo_open: false,
+                    hi: f64::MAX,
+                    hi_open: false,
+                    valid: "must be a length >= 0 in m",
+                },
+                "[neighbor]",
+                "skin",
+                s,
+            )
+        })
+        .transpose()?;
+    let interval = raw
+        .output
+        .interval
+        .map(|v| {
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err(CaseError::invalid(
+                    "[output]",
+                    "interval",
+                    v,
+                    "must be a positive time in s",
+                ))
+            }
+        })
+        .transpose()?;
+    let output = OutputSettings {
+        interval,
+        snapshots: raw.output.snapshots.unwrap_or(true),
+    };
 
     // Particles.
-    let praw = require(raw.particles, "top level", "[particles]", "a particle file and/or [[particles.list]]")?;
+    let praw = require(
+        raw.particles,
+        "top level",
+        "[particles]",
+        "a particle file and/or [[particles.list]]",
+    )?;
     let mut init: Vec<ParticleInit> = Vec::new();
     if let Some(file) = &praw.file {
-        let format = praw.format.clone().unwrap_or_else(|| if file.to_ascii_lowercase().ends_with(".csv") { "csv".into() } else { "mfix".into() });
+        let format = praw.format.clone().unwrap_or_else(|| {
+            if file.to_ascii_lowercase().ends_with(".csv") {
+                "csv".into()
+            } else {
+                "mfix".into()
+            }
+        });
         let text = read_file(file)?;
         init = match format.as_str() {
             "mfix" => particles::read_mfix(&text, file, &phases)?,
             "csv" => particles::read_csv(&text, file, &phases)?,
-            other => return Err(CaseError::invalid("[particles]", "format", format!("\"{other}\""), "must be \"mfix\" or \"csv\"")),
+            other => {
+                return Err(CaseError::invalid(
+                    "[particles]",
+                    "format",
+                    format!("\"{other}\""),
+                    "must be \"mfix\" or \"csv\"",
+                ));
+            }
         };
     } else if let Some(f) = &praw.format {
-        return Err(CaseError::invalid("[particles]", "format", format!("\"{f}\""), "only meaningful together with `file`"));
+        return Err(CaseError::invalid(
+            "[particles]",
+            "format",
+            format!("\"{f}\""),
+            "only meaningful together with `file`",
+        ));
     }
     for (k, p) in praw.list.iter().enumerate() {
         let table = format!("[[particles.list]] #{}", k + 1);
-        let phase = phase_index(&require(p.phase.clone(), &table, "phase", "the particle's phase name")?, &table, "phase")?;
+        let phase = phase_index(
+            &require(
+                p.phase.clone(),
+                &table,
+                "phase",
+                "the particle's phase name",
+            )?,
+            &table,
+            "phase",
+        )?;
         let radius = match p.diameter {
             Some(d) => 0.5 * check(limits::DIAMETER, &table, "diameter", d)?,
             None => phases[phase].radius(),
@@ -309,31 +716,61 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
             phase: phase as u32,
             radius,
             density: phases[phase].density,
-            position: vec3(require(p.position, &table, "position", "centre in m")?, &table, "position")?,
+            position: vec3(
+                require(p.position, &table, "position", "centre in m")?,
+                &table,
+                "position",
+            )?,
             velocity: vec3(p.velocity.unwrap_or([0.0; 3]), &table, "velocity")?,
-            omega: vec3(p.angular_velocity.unwrap_or([0.0; 3]), &table, "angular_velocity")?,
+            omega: vec3(
+                p.angular_velocity.unwrap_or([0.0; 3]),
+                &table,
+                "angular_velocity",
+            )?,
         });
     }
     if init.is_empty() {
-        return Err(CaseError::missing("[particles]", "file or list", "at least one particle"));
+        return Err(CaseError::missing(
+            "[particles]",
+            "file or list",
+            "at least one particle",
+        ));
     }
     let particles = Particles::from_init(&init);
 
     // Prescribed motion.
+    let ids: std::collections::HashSet<u32> = particles.id.iter().copied().collect();
     let mut motion = Vec::new();
     for (k, m) in raw.motion.iter().enumerate() {
         let table = format!("[[motion]] #{}", k + 1);
-        let (first, last) = match require(m.particles.clone(), &table, "particles", "an id or [first, last]")? {
+        let (first, last) = match require(
+            m.particles.clone(),
+            &table,
+            "particles",
+            "an id or [first, last]",
+        )? {
             IdSelection::One(i) => (i, i),
             IdSelection::Range([a, b]) if a <= b => (a, b),
-            IdSelection::Range([a, b]) => return Err(CaseError::invalid(&table, "particles", format!("[{a}, {b}]"), "the first id must not exceed the last")),
+            IdSelection::Range([a, b]) => {
+                return Err(CaseError::invalid(
+                    &table,
+                    "particles",
+                    format!("[{a}, {b}]"),
+                    "the first id must not exceed the last",
+                ));
+            }
         };
         let rule_word = require(m.rule.clone(), &table, "rule", "\"hold\" or \"follow\"")?;
         for id in first..=last {
             let rule = match rule_word.as_str() {
                 "hold" => {
                     if m.leader.is_some() || m.leader_offset.is_some() || m.axes.is_some() {
-                        return Err(CaseError::invalid(&table, "rule", "\"hold\"", "a held particle takes no leader, leader_offset or axes"));
+                        return Err(CaseError::invalid(
+                            &table,
+                            "rule",
+                            "\"hold\"",
+                            "a held particle takes no leader, leader_offset or axes",
+                        ));
                     }
                     MotionRule::Hold
                 }
@@ -342,20 +779,73 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
                         (Some(l), None) => l,
                         (None, Some(off)) => {
                             let l = id as i64 + off;
-                            u32::try_from(l).map_err(|_| CaseError::invalid(&table, "leader_offset", off, format!("particle {id} would follow id {l}, which cannot exist")))?
+                            u32::try_from(l).map_err(|_| {
+                                CaseError::invalid(
+                                    &table,
+                                    "leader_offset",
+                                    off,
+                                    format!(
+                                        "particle {id} would follow id {l}, which cannot exist"
+                                    ),
+                                )
+                            })?
                         }
-                        _ => return Err(CaseError::invalid(&table, "leader", "(see leader_offset)", "\"follow\" needs exactly one of `leader` (an id) or `leader_offset`")),
+                        _ => {
+                            return Err(CaseError::invalid(
+                                &table,
+                                "leader",
+                                "(see leader_offset)",
+                                "\"follow\" needs exactly one of `leader` (an id) or `leader_offset`",
+                            ));
+                        }
                     };
-                    let words = require(m.axes.clone(), &table, "axes", "the axes that follow the leader, e.g. [\"x\", \"z\"]")?;
+                    let words = require(
+                        m.axes.clone(),
+                        &table,
+                        "axes",
+                        "the axes that follow the leader, e.g. [\"x\", \"z\"]",
+                    )?;
                     let mut axes = [false; 3];
                     for w in &words {
-                        let k = ["x", "y", "z"].iter().position(|a| a == w).ok_or_else(|| CaseError::invalid(&table, "axes", format!("\"{w}\""), "each axis must be \"x\", \"y\" or \"z\""))?;
+                        let k = ["x", "y", "z"].iter().position(|a| a == w).ok_or_else(|| {
+                            CaseError::invalid(
+                                &table,
+                                "axes",
+                                format!("\"{w}\""),
+                                "each axis must be \"x\", \"y\" or \"z\"",
+                            )
+                        })?;
                         axes[k] = true;
                     }
                     MotionRule::Follow { leader, axes }
                 }
-                other => return Err(CaseError::invalid(&table, "rule", format!("\"{other}\""), "must be \"hold\" or \"follow\"")),
+                other => {
+                    return Err(CaseError::invalid(
+                        &table,
+                        "rule",
+                        format!("\"{other}\""),
+                        "must be \"hold\" or \"follow\"",
+                    ));
+                }
             };
+            if !ids.contains(&id) {
+                return Err(CaseError::invalid(
+                    &table,
+                    "particles",
+                    id,
+                    "no particle has this id",
+                ));
+            }
+            if let MotionRule::Follow { leader, .. } = rule {
+                if !ids.contains(&leader) {
+                    return Err(CaseError::invalid(
+                        &table,
+                        "leader",
+                        leader,
+                        format!("particle {id} would follow id {leader}, which no particle has"),
+                    ));
+                }
+            }
             motion.push(PrescribedMotion { particle: id, rule });
         }
     }
@@ -375,11 +865,22 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         skin,
         motion,
     };
-    Ok(Case { title: raw.title, config, particles, output, warnings })
+    Ok(Case {
+        title: raw.title,
+        config,
+        particles,
+        output,
+        warnings,
+    })
 }
 
 /// Range checks of one contact table, and warnings for keys the model does not use.
-fn check_params(table: &str, t: &RawContactParams, law: ContactLaw, warnings: &mut Vec<String>) -> Result<(), CaseError> {
+fn check_params(
+    table: &str,
+    t: &RawContactParams,
+    law: ContactLaw,
+    warnings: &mut Vec<String>,
+) -> Result<(), CaseError> {
     let checks: [(&str, Option<f64>, Range); 7] = [
         ("kn", t.kn, limits::KN),
         ("kt_fac", t.kt_fac, limits::KT_FAC),
@@ -396,11 +897,18 @@ fn check_params(table: &str, t: &RawContactParams, law: ContactLaw, warnings: &m
     }
     let unused: &[(&str, bool)] = match law.normal {
         NormalModel::LinearSpringDashpot => &[("et", t.et.is_some())],
-        NormalModel::Hertz => &[("kn", t.kn.is_some()), ("kt_fac", t.kt_fac.is_some()), ("etat_fac", t.etat_fac.is_some())],
+        NormalModel::Hertz => &[
+            ("kn", t.kn.is_some()),
+            ("kt_fac", t.kt_fac.is_some()),
+            ("etat_fac", t.etat_fac.is_some()),
+        ],
     };
     for (key, given) in unused {
         if *given {
-            warnings.push(format!("{table}: `{key}` is not used by the {} model (ignored)", law.normal_name()));
+            warnings.push(format!(
+                "{table}: `{key}` is not used by the {} model (ignored)",
+                law.normal_name()
+            ));
         }
     }
     Ok(())
@@ -408,7 +916,13 @@ fn check_params(table: &str, t: &RawContactParams, law: ContactLaw, warnings: &m
 
 /// Layers an override table over the defaults table over MFIX's built-in defaults, and checks
 /// that the model's required values are present.
-fn layer(over: Option<&RawContactParams>, base: &RawContactParams, law: ContactLaw, base_table: &str, what: &str) -> Result<ContactParams, CaseError> {
+fn layer(
+    over: Option<&RawContactParams>,
+    base: &RawContactParams,
+    law: ContactLaw,
+    base_table: &str,
+    what: &str,
+) -> Result<ContactParams, CaseError> {
     let d = ContactParams::default();
     let pick = |f: fn(&RawContactParams) -> Option<f64>| over.and_then(f).or_else(|| f(base));
     let p = ContactParams {
@@ -421,8 +935,16 @@ fn layer(over: Option<&RawContactParams>, base: &RawContactParams, law: ContactL
         mu_roll: pick(|t| t.mu_roll).unwrap_or(d.mu_roll),
     };
     match law.normal {
-        NormalModel::LinearSpringDashpot if p.kn.is_none() => Err(CaseError::missing(base_table, "kn", format!("normal stiffness in N/m for the {what}; set it there or in an override table"))),
-        NormalModel::Hertz if p.et.is_none() => Err(CaseError::missing(base_table, "et", format!("tangential restitution for the {what}, required by the hertz model"))),
+        NormalModel::LinearSpringDashpot if p.kn.is_none() => Err(CaseError::missing(
+            base_table,
+            "kn",
+            format!("normal stiffness in N/m for the {what}; set it there or in an override table"),
+        )),
+        NormalModel::Hertz if p.et.is_none() => Err(CaseError::missing(
+            base_table,
+            "et",
+            format!("tangential restitution for the {what}, required by the hertz model"),
+        )),
         _ => Ok(p),
     }
 }

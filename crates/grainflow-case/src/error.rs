@@ -56,7 +56,12 @@ pub enum CaseError {
 }
 
 impl CaseError {
-    pub(crate) fn invalid(table: impl Into<String>, key: impl Into<String>, value: impl ToString, valid: impl Into<String>) -> Self {
+    pub(crate) fn invalid(
+        table: impl Into<String>,
+        key: impl Into<String>,
+        value: impl ToString,
+        valid: impl Into<String>,
+    ) -> Self {
         CaseError::Invalid {
             table: table.into(),
             key: key.into(),
@@ -65,7 +70,11 @@ impl CaseError {
         }
     }
 
-    pub(crate) fn missing(table: impl Into<String>, key: impl Into<String>, hint: impl Into<String>) -> Self {
+    pub(crate) fn missing(
+        table: impl Into<String>,
+        key: impl Into<String>,
+        hint: impl Into<String>,
+    ) -> Self {
         CaseError::Missing {
             table: table.into(),
             key: key.into(),

@@ -61,7 +61,9 @@ pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
 /// number), `diameter` or `radius` (m, default: the phase's), `u,v,w` (m/s, default 0),
 /// `wx,wy,wz` (rad/s, default 0). Unknown columns are an error.
 pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
-    const KNOWN: [&str; 13] = ["id", "phase", "x", "y", "z", "diameter", "radius", "u", "v", "w", "wx", "wy", "wz"];
+    const KNOWN: [&str; 13] = [
+        "id", "phase", "x", "y", "z", "diameter", "radius", "u", "v", "w", "wx", "wy", "wz",
+    ];
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
@@ -90,15 +92,23 @@ pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particle
     }
     for (k, name) in [(1, "phase"), (2, "x"), (3, "y"), (4, "z")] {
         if col[k].is_none() {
-            return Err(header_err(format!("the required column '{name}' is missing")));
+            return Err(header_err(format!(
+                "the required column '{name}' is missing"
+            )));
         }
     }
     if col[5].is_some() && col[6].is_some() {
-        return Err(header_err("give either 'diameter' or 'radius', not both".into()));
+        return Err(header_err(
+            "give either 'diameter' or 'radius', not both".into(),
+        ));
     }
     let mut out = Vec::new();
     for (row, rec) in rdr.records().enumerate() {
-        let line = rec.as_ref().ok().and_then(|r| r.position()).map_or(row + 2, |p| p.line() as usize);
+        let line = rec
+            .as_ref()
+            .ok()
+            .and_then(|r| r.position())
+            .map_or(row + 2, |p| p.line() as usize);
         let err = |message: String| CaseError::ParticleFile {
             path: path.to_string(),
             line,
@@ -120,8 +130,20 @@ pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particle
         let phase = phases
             .iter()
             .position(|p| p.name == phase_text)
-            .or_else(|| phase_text.parse::<usize>().ok().filter(|&k| k >= 1 && k <= phases.len()).map(|k| k - 1))
-            .ok_or_else(|| err(format!("phase '{phase_text}' is neither a phase name nor an index 1..{} (phases: {})", phases.len(), describe_phases(phases))))?;
+            .or_else(|| {
+                phase_text
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|&k| k >= 1 && k <= phases.len())
+                    .map(|k| k - 1)
+            })
+            .ok_or_else(|| {
+                err(format!(
+                    "phase '{phase_text}' is neither a phase name nor an index 1..{} (phases: {})",
+                    phases.len(),
+                    describe_phases(phases)
+                ))
+            })?;
         let radius = match (get(5)?, get(6)?) {
             (Some(d), _) => 0.5 * d,
             (_, Some(r)) => r,
@@ -136,7 +158,11 @@ pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particle
             Some(v) => return Err(err(format!("id {v} must be a whole number >= 1"))),
         };
         let v3 = |a: usize| -> Result<Vec3, CaseError> {
-            Ok(Vec3::new(get(a)?.unwrap_or(0.0), get(a + 1)?.unwrap_or(0.0), get(a + 2)?.unwrap_or(0.0)))
+            Ok(Vec3::new(
+                get(a)?.unwrap_or(0.0),
+                get(a + 1)?.unwrap_or(0.0),
+                get(a + 2)?.unwrap_or(0.0),
+            ))
         };
         out.push(ParticleInit {
             id,
@@ -168,7 +194,12 @@ pub fn match_phase(diameter: f64, density: f64, phases: &[Phase]) -> Option<usiz
 fn describe_phases(phases: &[Phase]) -> String {
     phases
         .iter()
-        .map(|p| format!("'{}' d = {} m, rho = {} kg/m³", p.name, p.diameter, p.density))
+        .map(|p| {
+            format!(
+                "'{}' d = {} m, rho = {} kg/m³",
+                p.name, p.diameter, p.density
+            )
+        })
         .collect::<Vec<_>>()
         .join("; ")
 }

@@ -122,6 +122,9 @@ pub struct RawContact {
     pub tangential: Option<String>,
     /// "mfix" (stored displacement kept as is), "project" or "rotate". Default "mfix".
     pub history: Option<String>,
+    /// Lever arm of the tangential force: "mfix" (centre to radical plane: R − δ/2 between
+    /// equal spheres, R − δ at a wall) or "radius" (R). Default "mfix".
+    pub lever_arm: Option<String>,
     /// Defaults for every phase pair.
     #[serde(default)]
     pub particle: RawContactParams,

@@ -53,9 +53,19 @@ pub fn output_every(interval: Option<f64>, dt: f64, total_steps: u64) -> u64 {
 /// Runs `case` to its end, writing `out/timeseries.csv` and, if enabled,
 /// `out/snapshots/particles_<step>.csv` at every output (including the first and last step).
 /// `on_output` is called after each output with the simulation (for progress reports).
-pub fn run_case(case: Case, out: &Path, mut on_output: impl FnMut(&Simulation)) -> Result<RunSummary, RunError> {
+pub fn run_case(
+    case: Case,
+    out: &Path,
+    mut on_output: impl FnMut(&Simulation),
+) -> Result<RunSummary, RunError> {
     let sim = Simulation::new(case.config, case.particles)?;
-    run_simulation(sim, case.output.interval, case.output.snapshots, out, &mut on_output)
+    run_simulation(
+        sim,
+        case.output.interval,
+        case.output.snapshots,
+        out,
+        &mut on_output,
+    )
 }
 
 /// Why a run stopped early.
@@ -90,7 +100,10 @@ fn run_simulation(
     let every = output_every(interval, sim.dt(), sim.total_steps());
     let mut files = vec![ts_path.clone()];
     let mut outputs = 0;
-    let emit = |sim: &Simulation, ts: &mut TimeSeriesWriter, files: &mut Vec<PathBuf>| -> Result<Diagnostics, OutputError> {
+    let emit = |sim: &Simulation,
+                ts: &mut TimeSeriesWriter,
+                files: &mut Vec<PathBuf>|
+     -> Result<Diagnostics, OutputError> {
         let d = sim.diagnostics();
         ts.write(&d).map_err(io_err(&ts_path))?;
         if snapshots {
@@ -125,7 +138,11 @@ fn run_simulation(
         first,
         last,
         wall_seconds: wall,
-        particle_steps_per_second: if wall > 0.0 { (steps as f64) * (sim.particles().len() as f64) / wall } else { 0.0 },
+        particle_steps_per_second: if wall > 0.0 {
+            (steps as f64) * (sim.particles().len() as f64) / wall
+        } else {
+            0.0
+        },
         files,
     })
 }

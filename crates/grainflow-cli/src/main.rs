@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod run;
+mod verify;
 
 /// grainflow — a discrete element method engine for granular flows (MFIX-DEM compatible).
 #[derive(Debug, Parser)]
@@ -18,6 +19,9 @@ struct Cli {
 enum Command {
     /// Run a case file (TOML) and write its time series and particle snapshots.
     Run(run::RunArgs),
+    /// Run a verification case, compare with theory and experiment, write CSV, figures and
+    /// a summary; exits non-zero if a check fails.
+    Verify(verify::VerifyArgs),
 }
 
 /// Exit code for input the program cannot use.
@@ -29,12 +33,15 @@ fn main() -> ExitCode {
         Err(e) => {
             let _ = e.print();
             return match e.kind() {
-                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => ExitCode::SUCCESS,
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
+                    ExitCode::SUCCESS
+                }
                 _ => ExitCode::from(EXIT_BAD_INPUT),
             };
         }
     };
     match cli.command {
         Command::Run(args) => run::main(args),
+        Command::Verify(args) => verify::main(args),
     }
 }

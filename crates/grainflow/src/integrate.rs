@@ -1,6 +1,7 @@
 //! Time integration (reference: MFIX-DEM model §6, step 3).
 //!
-//! a = F/m + g and α = T/I are formed from the accumulators filled by the contact stage.
+//! a = F/m + g and α = T/I are formed from the accumulators filled by the contact stage
+//! (as products with the stored 1/m and 1/I).
 
 use crate::math::Vec3;
 use crate::state::Particles;
@@ -32,7 +33,10 @@ impl Integrator {
 
 #[inline(always)]
 fn accelerations(p: &Particles, i: usize, gravity: Vec3) -> (Vec3, Vec3) {
-    (p.force[i] / p.mass[i] + gravity, p.torque[i] / p.inertia[i])
+    (
+        p.force[i] * p.inv_mass[i] + gravity,
+        p.torque[i] * p.inv_inertia[i],
+    )
 }
 
 /// MFIX's `EULER` step.
@@ -49,20 +53,31 @@ pub fn euler(p: &mut Particles, gravity: Vec3, dt: f64) {
 /// accelerations are taken equal to the current ones.
 pub fn adams_bashforth(p: &mut Particles, gravity: Vec3, dt: f64, first: bool) {
     let h = 0.5 * dt;
-    for i in 0..p.len() {
-        let (a, alpha) = accelerations(p, i, gravity);
-        let (a_prev, alpha_prev) = if first {
+    let n = p.len();
+    // Slicing every array to n up front lets the compiler drop the bounds checks.
+    let (force, torque) = (&p.force[..n], &p.torque[..n]);
+    let (inv_m, inv_i) = (&p.inv_mass[..n], &p.inv_inertia[..n]);
+    let (x, v, w) = (
+        &mut p.position[..n],
+        &mut p.velocity[..n],
+        &mut p.omega[..n],
+    );
+    let (a_prev, alpha_prev) = (&mut p.accel_prev[..n], &mut p.alpha_prev[..n]);
+    for i in 0..n {
+        let a = force[i] * inv_m[i] + gravity;
+        let alpha = torque[i] * inv_i[i];
+        let (ap, alp) = if first {
             (a, alpha)
         } else {
-            (p.accel_prev[i], p.alpha_prev[i])
+            (a_prev[i], alpha_prev[i])
         };
-        let v0 = p.velocity[i];
-        let v1 = v0 + h * (3.0 * a - a_prev);
-        p.position[i] += h * (v0 + v1);
-        p.velocity[i] = v1;
-        p.omega[i] += h * (3.0 * alpha - alpha_prev);
-        p.accel_prev[i] = a;
-        p.alpha_prev[i] = alpha;
+        let v0 = v[i];
+        let v1 = v0 + h * (3.0 * a - ap);
+        x[i] += h * (v0 + v1);
+        v[i] = v1;
+        w[i] += h * (3.0 * alpha - alp);
+        a_prev[i] = a;
+        alpha_prev[i] = alpha;
     }
 }
 

@@ -2,7 +2,9 @@
 
 use crate::contact::geometry::{pair_contact, relative_velocity, wall_contact};
 use crate::contact::law::{contact_force, normal_spring_energy, rolling_torque};
-use crate::contact::{CoeffTable, ContactLaw, ContactParams, NormalModel, TangentialModel};
+use crate::contact::{
+    CoeffTable, ContactLaw, ContactParams, LeverArm, NormalModel, TangentialModel,
+};
 use crate::error::EngineError;
 use crate::integrate::{self, Integrator};
 use crate::material::{Phase, WallMaterial};
@@ -298,15 +300,20 @@ impl Simulation {
     fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self) {
         let dt = self.time_step.dt;
         let frame = self.law.history;
+        let lever = self.law.lever;
         let p = &mut self.particles;
         let nl = &mut self.neighbors;
         // Walls first, as MFIX does.
         for (k, &[i, w]) in nl.wall_pairs.iter().enumerate() {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
-            let Some(g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal) else {
+            let Some(mut g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal)
+            else {
                 nl.wall_history[k] = Vec3::ZERO;
                 continue;
             };
+            if lever == LeverArm::Radius {
+                g.lever_i = p.radius[i];
+            }
             let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
             let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
             let f =
@@ -387,6 +394,8 @@ fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
         p.radius.len(),
         p.mass.len(),
         p.inertia.len(),
+        p.inv_mass.len(),
+        p.inv_inertia.len(),
         p.position.len(),
         p.velocity.len(),
         p.omega.len(),

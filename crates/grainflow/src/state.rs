@@ -19,6 +19,10 @@ pub struct Particles {
     pub mass: Vec<f64>,
     /// Moment of inertia (2/5)·m·R², kg·m².
     pub inertia: Vec<f64>,
+    /// 1/m, 1/kg (the integrators multiply by it instead of dividing by m).
+    pub inv_mass: Vec<f64>,
+    /// 1/I, 1/(kg·m²).
+    pub inv_inertia: Vec<f64>,
     /// Centre position, m.
     pub position: Vec<Vec3>,
     /// Velocity, m/s.
@@ -64,6 +68,8 @@ impl Particles {
             radius: Vec::with_capacity(n),
             mass: Vec::with_capacity(n),
             inertia: Vec::with_capacity(n),
+            inv_mass: Vec::with_capacity(n),
+            inv_inertia: Vec::with_capacity(n),
             position: v3(),
             velocity: v3(),
             omega: v3(),
@@ -90,7 +96,10 @@ impl Particles {
         self.phase.push(q.phase);
         self.radius.push(q.radius);
         self.mass.push(m);
-        self.inertia.push(sphere_inertia(m, q.radius));
+        let inertia = sphere_inertia(m, q.radius);
+        self.inertia.push(inertia);
+        self.inv_mass.push(1.0 / m);
+        self.inv_inertia.push(1.0 / inertia);
         self.position.push(q.position);
         self.velocity.push(q.velocity);
         self.omega.push(q.omega);

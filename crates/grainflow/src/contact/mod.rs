@@ -48,6 +48,18 @@ pub enum HistoryFrame {
     Rotate,
 }
 
+/// Where the tangential force acts, i.e. the lever arm of its torque and of the spin's
+/// contribution to the contact-point velocity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LeverArm {
+    /// MFIX: the distance from the centre to the radical plane (R − δ/2 for equal spheres,
+    /// R − δ against a wall). Conserves angular momentum about the contact point.
+    RadicalPlane,
+    /// The particle radius R, as in the rigid-body analysis of oblique impact (Maw, Barber &
+    /// Fawcett; Chung & Ooi). Makes K·R·ω′ = (1 − e_t)·v_t0 exact for a wall impact.
+    Radius,
+}
+
 /// A complete contact law: normal model, tangential model and history treatment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ContactLaw {
@@ -57,6 +69,8 @@ pub struct ContactLaw {
     pub tangential: TangentialModel,
     /// Tangential history frame treatment.
     pub history: HistoryFrame,
+    /// Lever arm of the tangential force.
+    pub lever: LeverArm,
 }
 
 impl ContactLaw {
@@ -66,6 +80,7 @@ impl ContactLaw {
             normal,
             tangential: TangentialModel::MfixTotal,
             history: HistoryFrame::Mfix,
+            lever: LeverArm::RadicalPlane,
         }
     }
 
