@@ -40,6 +40,8 @@ use proptest::prelude::*;
 const REL_TOL: f64 = 1e-9;
 
 /// Law number k: normal model, tangential model, history frame and (k ≥ 12) the lever arm.
+// The struct update keeps this compiling if the engine adds fields to `ContactLaw`.
+#[allow(clippy::needless_update)]
 fn law_of(k: usize) -> ContactLaw {
     let normal = [NormalModel::LinearSpringDashpot, NormalModel::Hertz][k % 2];
     let tangential = [

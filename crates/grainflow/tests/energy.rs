@@ -22,13 +22,13 @@
 //! same Δt, over 32 entry phases spread over one step, taking the largest |E(t) − E(0)|/E_c at
 //! any time during or after the contact. The many-particle run then detects every contact as it
 //! starts, accumulates ΣE_c, and checks |E(t) − E(0)| ≤ 2·ε·ΣE_c (+ 1e-12·E for rounding) at
-//! every step. The factor 2
-//! covers what the calibration does not sample exactly: the supremum over entry phases
-//! between the 32 sampled ones (the error is smooth and periodic in the phase, so the sampled
-//! maximum is within a few per cent of it), and contacts that overlap in time (a particle
-//! touching two others), whose errors add only approximately. The worst case assumed here
-//! — all errors of the same sign — is pessimistic, but a genuine leak (any damping, a missing
-//! or double-counted elastic energy, a wrong gravity term) costs O(E_c) per contact and breaks
+//! every step. The factor 2 covers what the calibration does not sample exactly: the supremum
+//! over entry phases between the 32 sampled ones (the error is smooth and periodic in the
+//! phase, so the sampled maximum is within a few per cent of it), and contacts that overlap in
+//! time (a particle touching two others), whose errors add only approximately. The worst case
+//! assumed here — all errors of the same sign — is pessimistic, but a genuine leak (any
+//! damping: e_n = 0.99 loses 2 % of E_c per contact; a missing or double-counted elastic
+//! energy; a wrong gravity term) costs far more than 2ε ≈ 2e-3 of E_c per contact and breaks
 //! the bound within the first few contacts.
 
 mod common;
@@ -301,7 +301,7 @@ fn single_contact_energy_error_is_second_order() {
     assert!((2.8..=5.2).contains(&ratio), "eps(50)/eps(100) = {ratio}");
 }
 
-/// 250 particles, Δt = t_coll/50 (MFIX's default factor), a few hundred contacts.
+/// 250 particles, Δt = t_coll/50 (MFIX's default factor), about 2 400 contacts.
 #[test]
 fn elastic_gas_conserves_energy() {
     let n = 50.0;
@@ -316,7 +316,7 @@ fn elastic_gas_conserves_energy() {
     );
 }
 
-/// The same for longer, with thousands of contacts, at two time steps.
+/// 300 particles for longer (tens of thousands of contacts), at two time steps.
 #[test]
 #[cfg_attr(debug_assertions, ignore = "expensive: run with --release")]
 fn elastic_gas_conserves_energy_long() {
