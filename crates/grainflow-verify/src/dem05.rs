@@ -713,13 +713,18 @@ pub fn write(report: &Report, dir: &Path) -> Result<Vec<PathBuf>, VerifyError> {
         write_atomic(&p, impacts_csv(&report.converged).as_bytes()).map_err(io_at(&p))?;
         files.push(p);
     }
-    for c in [Collision::Wall, Collision::Particle] {
-        let fig = figure(report, c);
-        let png = out.join(format!("dem05_{}.png", c.name()));
-        let svg = out.join(format!("dem05_{}.svg", c.name()));
-        plot::write_figure(&fig, &png, &svg)?;
-        files.push(png);
-        files.push(svg);
+    // The two figures are independent: draw them in parallel.
+    let figures: Vec<Result<[PathBuf; 2], VerifyError>> = [Collision::Wall, Collision::Particle]
+        .into_par_iter()
+        .map(|c| {
+            let png = out.join(format!("dem05_{}.png", c.name()));
+            let svg = out.join(format!("dem05_{}.svg", c.name()));
+            plot::write_figure(&figure(report, c), &png, &svg)?;
+            Ok([png, svg])
+        })
+        .collect();
+    for f in figures {
+        files.extend(f?);
     }
     let summary = out.join("summary.md");
     write_atomic(&summary, summary_markdown(report).as_bytes()).map_err(io_at(&summary))?;

@@ -1,10 +1,13 @@
 //! Time integration (reference: MFIX-DEM model §6, step 3).
 //!
 //! a = F/m + g and α = T/I are formed from the accumulators filled by the contact stage
-//! (as products with the stored 1/m and 1/I).
+//! (as products with the stored 1/m and 1/I). Each function integrates the particle slots in
+//! `range`; the simulation passes the runs of slots that are not prescribed (prescribed
+//! particles are overwritten after the step, so integrating them would be wasted work).
 
 use crate::math::Vec3;
 use crate::state::Particles;
+use std::ops::Range;
 
 /// The time integrator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,8 +43,8 @@ fn accelerations(p: &Particles, i: usize, gravity: Vec3) -> (Vec3, Vec3) {
 }
 
 /// MFIX's `EULER` step.
-pub fn euler(p: &mut Particles, gravity: Vec3, dt: f64) {
-    for i in 0..p.len() {
+pub fn euler(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64) {
+    for i in range {
         let (a, alpha) = accelerations(p, i, gravity);
         p.velocity[i] += dt * a;
         p.position[i] += dt * p.velocity[i];
@@ -51,19 +54,24 @@ pub fn euler(p: &mut Particles, gravity: Vec3, dt: f64) {
 
 /// MFIX's `ADAMS_BASHFORTH` step. `first` marks the first step of the run, where the previous
 /// accelerations are taken equal to the current ones.
-pub fn adams_bashforth(p: &mut Particles, gravity: Vec3, dt: f64, first: bool) {
+pub fn adams_bashforth(
+    p: &mut Particles,
+    range: Range<usize>,
+    gravity: Vec3,
+    dt: f64,
+    first: bool,
+) {
     let h = 0.5 * dt;
-    let n = p.len();
-    // Slicing every array to n up front lets the compiler drop the bounds checks.
-    let (force, torque) = (&p.force[..n], &p.torque[..n]);
-    let (inv_m, inv_i) = (&p.inv_mass[..n], &p.inv_inertia[..n]);
-    let (x, v, w) = (
-        &mut p.position[..n],
-        &mut p.velocity[..n],
-        &mut p.omega[..n],
-    );
-    let (a_prev, alpha_prev) = (&mut p.accel_prev[..n], &mut p.alpha_prev[..n]);
-    for i in 0..n {
+    let r = range;
+    // Slicing every array to the range up front lets the compiler drop the bounds checks.
+    let (force, torque) = (&p.force[r.clone()], &p.torque[r.clone()]);
+    let (inv_m, inv_i) = (&p.inv_mass[r.clone()], &p.inv_inertia[r.clone()]);
+    let x = &mut p.position[r.clone()];
+    let v = &mut p.velocity[r.clone()];
+    let w = &mut p.omega[r.clone()];
+    let a_prev = &mut p.accel_prev[r.clone()];
+    let alpha_prev = &mut p.alpha_prev[r];
+    for i in 0..force.len() {
         let a = force[i] * inv_m[i] + gravity;
         let alpha = torque[i] * inv_i[i];
         let (ap, alp) = if first {
@@ -82,9 +90,9 @@ pub fn adams_bashforth(p: &mut Particles, gravity: Vec3, dt: f64, first: bool) {
 }
 
 /// Velocity Verlet, first half: kick by Δt/2 with the current accelerations, then drift by Δt.
-pub fn verlet_kick_drift(p: &mut Particles, gravity: Vec3, dt: f64) {
+pub fn verlet_kick_drift(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64) {
     let h = 0.5 * dt;
-    for i in 0..p.len() {
+    for i in range {
         let (a, alpha) = accelerations(p, i, gravity);
         p.velocity[i] += h * a;
         p.omega[i] += h * alpha;
@@ -93,9 +101,9 @@ pub fn verlet_kick_drift(p: &mut Particles, gravity: Vec3, dt: f64) {
 }
 
 /// Velocity Verlet, second half: kick by Δt/2 with the new accelerations.
-pub fn verlet_kick(p: &mut Particles, gravity: Vec3, dt: f64) {
+pub fn verlet_kick(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64) {
     let h = 0.5 * dt;
-    for i in 0..p.len() {
+    for i in range {
         let (a, alpha) = accelerations(p, i, gravity);
         p.velocity[i] += h * a;
         p.omega[i] += h * alpha;

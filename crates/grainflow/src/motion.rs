@@ -81,6 +81,27 @@ pub(crate) fn resolve(
         .collect()
 }
 
+/// The runs of consecutive slots not under prescribed motion, in order.
+pub(crate) fn free_runs(rules: &[ResolvedMotion], n: usize) -> Vec<std::ops::Range<usize>> {
+    let mut prescribed = vec![false; n];
+    for r in rules {
+        prescribed[r.slot] = true;
+    }
+    let mut runs = Vec::new();
+    let mut start = None;
+    for (i, &p) in prescribed.iter().chain(std::iter::once(&true)).enumerate() {
+        match (p, start) {
+            (false, None) => start = Some(i),
+            (true, Some(s)) => {
+                runs.push(s..i);
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    runs
+}
+
 pub(crate) fn apply(rules: &[ResolvedMotion], p: &mut Particles) {
     for r in rules {
         let mut x = r.anchor.to_array();

@@ -65,6 +65,8 @@ pub struct Simulation {
     step: u64,
     neighbors: NeighborList,
     motion: Vec<ResolvedMotion>,
+    /// Runs of slots that are integrated (every slot not under prescribed motion).
+    free: Vec<std::ops::Range<usize>>,
     history_started: bool,
     forces_current: bool,
 }
@@ -145,6 +147,7 @@ impl Simulation {
             None => 0.2 * particles.max_radius(),
         };
         let motion = motion::resolve(&config.motion, &particles)?;
+        let free = motion::free_runs(&motion, particles.len());
         let mut neighbors = NeighborList::new(skin);
         neighbors.build(&particles, &config.walls);
         Ok(Simulation {
@@ -160,6 +163,7 @@ impl Simulation {
             step: 0,
             neighbors,
             motion,
+            free,
             history_started: false,
             forces_current: false,
         })
@@ -243,19 +247,28 @@ impl Simulation {
         match self.integrator {
             Integrator::Euler => {
                 self.compute_forces();
-                integrate::euler(&mut self.particles, g, dt);
+                for r in self.free.clone() {
+                    integrate::euler(&mut self.particles, r, g, dt);
+                }
             }
             Integrator::AdamsBashforth => {
                 self.compute_forces();
-                integrate::adams_bashforth(&mut self.particles, g, dt, !self.history_started);
+                let first = !self.history_started;
+                for r in self.free.clone() {
+                    integrate::adams_bashforth(&mut self.particles, r, g, dt, first);
+                }
             }
             Integrator::VelocityVerlet => {
                 if !self.forces_current {
                     self.compute_forces();
                 }
-                integrate::verlet_kick_drift(&mut self.particles, g, dt);
+                for r in self.free.clone() {
+                    integrate::verlet_kick_drift(&mut self.particles, r, g, dt);
+                }
                 self.compute_forces();
-                integrate::verlet_kick(&mut self.particles, g, dt);
+                for r in self.free.clone() {
+                    integrate::verlet_kick(&mut self.particles, r, g, dt);
+                }
                 self.forces_current = true;
             }
         }

@@ -274,3 +274,66 @@ fn damping_coefficient_inverts_restitution() {
     // e = 0: critical damping.
     assert_rel("critical", damping_coefficient(4.0, 9.0, 0.0), 12.0, 1e-15);
 }
+
+/// MFIX's rule with damping and unequal phases (mfix-dem-model.md §5): TCOLL is the minimum
+/// over the *phase pairs* of π/√(k_n/m_eff − (η_n/m_eff)²/4) — the wall contacts, made much
+/// stiffer here, are not included — and DTSOLID = TCOLL/DTSOLID_FACTOR; factors below 10 are
+/// rejected. Expected values from the formulas written out here (η from the model document).
+#[test]
+fn mfix_time_step_with_damping_ignores_walls() {
+    let phases = vec![phase("a", 0.004, 3000.0), phase("b", 0.006, 2000.0)];
+    let (ma, mb) = (sphere_mass(0.002, 3000.0), sphere_mass(0.003, 2000.0));
+    // (k_n, e_n) for 1-1, 1-2, 2-2, and m_eff of each.
+    let pairs = [
+        (1e5, 0.9, ma / 2.0),
+        (3e5, 0.3, ma * mb / (ma + mb)),
+        (2e5, 0.6, mb / 2.0),
+    ];
+    let eta = |k: f64, m: f64, e: f64| {
+        let l: f64 = e.ln();
+        2.0 * (k * m).sqrt() * l.abs() / (PI * PI + l * l).sqrt()
+    };
+    let tcoll = pairs
+        .iter()
+        .map(|&(k, e, m)| PI / (k / m - (eta(k, m, e) / m).powi(2) / 4.0).sqrt())
+        .fold(f64::INFINITY, f64::min);
+    let build = |factor: f64| {
+        let mut cfg = config(
+            ContactLaw::mfix(NormalModel::LinearSpringDashpot),
+            phases.clone(),
+            vec![wall_material("w", None, None)],
+            Wall::domain_box(Vec3::ZERO, Vec3::ONE, 0),
+            pairs
+                .iter()
+                .map(|&(k, e, _)| lsd_params(k, e, 0.3))
+                .collect(),
+            vec![lsd_params(1e9, 0.5, 0.3); 2],
+            Integrator::Euler,
+            1.0,
+        );
+        cfg.time_step = TimeStepRule::Mfix { factor };
+        cfg.t_stop = 0.01;
+        Simulation::new(
+            cfg,
+            grainflow::Particles::from_init(&[particle(
+                1,
+                0,
+                0.002,
+                3000.0,
+                Vec3::splat(0.5),
+                Vec3::ZERO,
+            )]),
+        )
+    };
+    let sim = build(20.0).expect("valid");
+    let ts = sim.time_step();
+    assert_rel("TCOLL", ts.tcoll.unwrap(), tcoll, FORMULA_TOL);
+    assert_rel("DTSOLID", ts.dt, tcoll / 20.0, FORMULA_TOL);
+    let steps = ts.steps as f64;
+    assert!(steps * ts.dt >= 0.01 && (steps - 1.0) * ts.dt < 0.01);
+    assert!(build(10.0).is_ok());
+    assert!(
+        build(9.9).is_err(),
+        "DTSOLID_FACTOR below 10 must be rejected"
+    );
+}

@@ -556,13 +556,15 @@ fn touching_pair_across_cell_boundary_is_found_with_zero_skin() {
     );
 }
 
-/// The rebuild criterion is strict: a displacement of exactly skin/2 does not rebuild, the next
-/// step does. Dyadic numbers make every position exact: Δt = 2⁻¹⁴ s, v = 2⁻⁶ m/s, so a step is
-/// 2⁻²⁰ m, and skin = 2⁻¹⁶ m, so skin/2 is reached exactly after 8 steps: rebuilds at force
-/// evaluations 9, 18, 27, …
+/// The rebuild criterion is strict and exact: a displacement of exactly skin/2 does not
+/// rebuild, the next step does. Dyadic numbers make every position exact: Δt = 2⁻¹⁴ s,
+/// v = 2⁻¹⁰ m/s, so a step is 2⁻²⁴ m, and skin = 2⁻¹⁶ m, so skin/2 = 128 steps is reached
+/// exactly: rebuilds at force evaluations 129, 258, … (a threshold off by more than 1/128
+/// relative would shift them).
 #[test]
 fn simulation_rebuild_at_exactly_half_a_skin_is_strict() {
-    let (skin, dt, v) = (2f64.powi(-16), 2f64.powi(-14), 2f64.powi(-6));
+    let (skin, dt, v) = (2f64.powi(-16), 2f64.powi(-14), 2f64.powi(-10));
+    let steps = 400u64;
     for integrator in [Integrator::Euler, Integrator::AdamsBashforth] {
         let p = lsd_params(1e4, 1.0, 0.0);
         let mut cfg = config(
@@ -581,11 +583,11 @@ fn simulation_rebuild_at_exactly_half_a_skin_is_strict() {
             particle(2, 0, 0.001, 2500.0, Vec3::ONE, Vec3::ZERO),
         ];
         let mut sim = simulation(cfg, &init);
-        for k in 0..100u64 {
+        for k in 0..steps {
             sim.step();
             assert_eq!(
                 sim.neighbors().stats().builds,
-                1 + k / 9,
+                1 + k / 129,
                 "{integrator:?}: builds after {} steps",
                 k + 1
             );
@@ -593,7 +595,7 @@ fn simulation_rebuild_at_exactly_half_a_skin_is_strict() {
         // The position really is exact.
         assert_eq!(
             sim.particles().position[0],
-            Vec3::new(0.0, 0.0, -100.0 * v * dt)
+            Vec3::new(0.0, 0.0, -(steps as f64) * v * dt)
         );
     }
 }

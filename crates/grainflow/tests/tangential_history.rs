@@ -118,3 +118,73 @@ fn verlet_noop_hook_changes_nothing() {
     assert_eq!(stored_slip(&plain), stored_slip(&hooked));
     check_slip("velocity_verlet, hooked", &hooked);
 }
+
+/// Oblique frictional impacts, particle–wall and particle–particle: while in contact the
+/// stored displacement is loaded (non-zero); once the contact has ended — the pair still in
+/// the neighbour list, within the skin — it is exactly zero again (mfix-dem-model.md §1–2:
+/// "reset to zero when contact ends"), so a later contact starts from zero.
+#[test]
+fn history_is_reset_when_contact_ends() {
+    for integrator in [
+        Integrator::Euler,
+        Integrator::AdamsBashforth,
+        Integrator::VelocityVerlet,
+    ] {
+        let p = lsd_params(1e3, 0.8, 0.3);
+        let mut cfg = config(
+            ContactLaw::mfix(NormalModel::LinearSpringDashpot),
+            vec![phase("p", 0.002, 2500.0)],
+            vec![wall_material("w", None, None)],
+            vec![Wall::plane("floor", Vec3::ZERO, Vec3::Y, 0)],
+            vec![p],
+            vec![p],
+            integrator,
+            2e-6,
+        );
+        cfg.skin = Some(2e-4);
+        let v = Vec3::new(0.3, -0.2, 0.1);
+        let init = [
+            // Towards the floor, 1 µm away.
+            particle(1, 0, 1e-3, 2500.0, Vec3::new(0.0, 1.001e-3, 0.0), v),
+            // An oblique pair, far above the floor, 1 µm apart.
+            particle(2, 0, 1e-3, 2500.0, Vec3::new(0.0, 0.01, 0.0), -v),
+            particle(3, 0, 1e-3, 2500.0, Vec3::new(0.0, 0.01 - 2.001e-3, 0.0), v),
+        ];
+        let mut sim = simulation(cfg, &init);
+        let (mut loaded_wall, mut loaded_pair) = (false, false);
+        let (mut checked_wall, mut checked_pair) = (0, 0);
+        for _ in 0..2000 {
+            sim.step();
+            let p = sim.particles();
+            let nl = sim.neighbors();
+            for (k, &[i, _]) in nl.wall_pairs.iter().enumerate() {
+                let gap = p.position[i as usize].y - p.radius[i as usize];
+                if gap < 0.0 {
+                    loaded_wall |= nl.wall_history[k] != Vec3::ZERO;
+                } else if loaded_wall && gap > 1e-6 {
+                    // Separated (by more than a step's travel) after a loaded contact.
+                    assert_eq!(nl.wall_history[k], Vec3::ZERO, "{integrator:?} wall");
+                    checked_wall += 1;
+                }
+            }
+            for (k, &[i, j]) in nl.pairs.iter().enumerate() {
+                let (i, j) = (i as usize, j as usize);
+                let gap = (p.position[j] - p.position[i]).length() - p.radius[i] - p.radius[j];
+                if gap < 0.0 {
+                    loaded_pair |= nl.pair_history[k] != Vec3::ZERO;
+                } else if loaded_pair && gap > 1e-6 {
+                    assert_eq!(nl.pair_history[k], Vec3::ZERO, "{integrator:?} pair");
+                    checked_pair += 1;
+                }
+            }
+        }
+        assert!(
+            loaded_wall && loaded_pair,
+            "{integrator:?}: contacts never loaded"
+        );
+        assert!(
+            checked_wall > 0 && checked_pair > 0,
+            "{integrator:?}: no step checked after separation ({checked_wall}, {checked_pair})"
+        );
+    }
+}
