@@ -94,7 +94,7 @@ pub fn markdown_table(checks: &[Check]) -> String {
             if v.is_nan() {
                 "–".to_string()
             } else {
-                format!("{v:.3e}")
+                format!("{v:.4e}")
             }
         };
         s.push_str(&format!(

@@ -671,6 +671,30 @@ fn checks(mfix: &[ModelRun], converged: &[ModelRun], lever_r: &[ModelRun]) -> Ve
             }
         }
     }
+    // MFIX's total-displacement Hertz spring is not conservative (dem05.md, known weaknesses):
+    // report how close the small-angle tangential restitution comes to 1, or beyond.
+    for run in converged
+        .iter()
+        .chain(lever_r)
+        .filter(|r| r.spec.model == Model::Hertz)
+    {
+        let lever = if run.spec.lever == LeverArm::Radius {
+            "lever R"
+        } else {
+            "MFIX lever"
+        };
+        if let Some((e, i)) = max_by(
+            run.of(Collision::Wall)
+                .filter(|i| i.vt0 > 0.0 && i.impact_angle_deg < 5.0),
+            |i| i.vt_signed / i.vt0,
+        ) {
+            out.push(Check::report(
+                format!("hertz wall, converged, {lever}: largest signed e_t = v_t′·t̂/v_t0 below 5°"),
+                e,
+                format!("at θ = {:.2}°; above 1 the total-displacement spring returns more tangential momentum than it took", i.impact_angle_deg),
+            ));
+        }
+    }
     for run in converged {
         let m = run.spec.model.name();
         if let Some(mf) = mfix.iter().find(|r| r.spec.model == run.spec.model) {
