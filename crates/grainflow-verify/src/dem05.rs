@@ -22,6 +22,8 @@ use std::time::Instant;
 pub const LSD_CASE: &str = include_str!("../cases/dem05/lsd.toml");
 /// The Hertz case file.
 pub const HERTZ_CASE: &str = include_str!("../cases/dem05/hertz.toml");
+/// MFIX 21.3's own DEM05 output, as printed in its regression files (four decimals).
+pub const MFIX_REFERENCE: &str = include_str!("../data/mfix-dem05/reference.csv");
 /// MFIX's particle layout.
 pub const PARTICLE_INPUT: &str = include_str!("../cases/dem05/particle_input.dat");
 
@@ -502,6 +504,93 @@ fn interpolate(points: &[(f64, f64)], x: f64) -> f64 {
     f64::NAN
 }
 
+/// One row of MFIX's reference output: (model, collision, angle, rebound angle, e_t, ω).
+type ReferenceRow<'a> = (&'a str, &'a str, f64, f64, Option<f64>, f64);
+
+fn mfix_reference_rows() -> Vec<ReferenceRow<'static>> {
+    MFIX_REFERENCE
+        .lines()
+        .skip(1)
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let num = |k: usize| f.get(k).and_then(|v| v.parse::<f64>().ok());
+            Some((*f.first()?, *f.get(1)?, num(2)?, num(3)?, num(4), num(5)?))
+        })
+        .collect()
+}
+
+/// The run against MFIX 21.3's printed output: every value within half a unit of its fourth
+/// decimal (5e-5), i.e. equal to MFIX's number once rounded as MFIX prints it.
+fn mfix_reference_checks(run: &ModelRun) -> Vec<Check> {
+    let m = run.spec.model.name();
+    let rows: Vec<ReferenceRow> = mfix_reference_rows()
+        .into_iter()
+        .filter(|r| r.0 == m)
+        .collect();
+    let quantities: [(
+        &str,
+        fn(&Impact) -> Option<f64>,
+        fn(&ReferenceRow) -> Option<f64>,
+    ); 3] = [
+        (
+            "rebound angle (deg)",
+            |i| Some(i.rebound_angle_deg),
+            |r| Some(r.3),
+        ),
+        (
+            "tangential restitution",
+            |i| i.tangential_restitution,
+            |r| r.4,
+        ),
+        (
+            "angular velocity (rad/s)",
+            |i| Some(i.angular_velocity),
+            |r| Some(r.5),
+        ),
+    ];
+    quantities
+        .iter()
+        .map(|(what, ours, theirs)| {
+            let mut worst = (0.0f64, String::from("no rows"));
+            let mut compared = 0;
+            for c in [Collision::Wall, Collision::Particle] {
+                for i in run.of(c) {
+                    let Some(r) = rows
+                        .iter()
+                        .find(|r| r.1 == c.name() && (r.2 - i.impact_angle_deg).abs() < 1e-3)
+                    else {
+                        worst = (
+                            f64::NAN,
+                            format!("no MFIX row for {} at {:.4}°", c.name(), i.impact_angle_deg),
+                        );
+                        continue;
+                    };
+                    if let (Some(a), Some(b)) = (ours(i), theirs(r)) {
+                        compared += 1;
+                        let e = (a - b).abs();
+                        if !(e <= worst.0) {
+                            worst = (
+                                e,
+                                format!(
+                                    "{} at θ = {:.1}°: {a:.6} vs MFIX {b:.4}",
+                                    c.name(),
+                                    i.impact_angle_deg
+                                ),
+                            );
+                        }
+                    }
+                }
+            }
+            Check::assert(
+                format!("{m}: {what} equals MFIX 21.3's output to its 4 printed decimals"),
+                worst.0,
+                5e-5,
+                format!("{compared} values; worst {}", worst.1),
+            )
+        })
+        .collect()
+}
+
 /// The measured point where the simulated curve deviates most (absolute), from angle `from` on.
 fn worst_abs<'a>(
     pts: &'a [(f64, f64)],
@@ -537,6 +626,10 @@ fn checks(mfix: &[ModelRun], converged: &[ModelRun], lever_r: &[ModelRun]) -> Ve
             0.0,
             format!("{} steps vs MFIX {steps}", run.steps),
         ));
+    }
+    // Number for number against MFIX's own output.
+    for run in mfix {
+        out.extend(mfix_reference_checks(run));
     }
     // Gross sliding: closed forms, 1e-3 relative.
     for run in mfix {

@@ -29,6 +29,11 @@ fn dem05_converged_all_checks_pass_and_files_are_complete() {
             .count()
     };
     assert_eq!(asserted("time step equals MFIX"), 2);
+    assert_eq!(
+        asserted("equals MFIX 21.3's output"),
+        6,
+        "3 quantities × 2 models"
+    );
     assert_eq!(asserted("step count equals MFIX"), 2);
     assert_eq!(
         asserted("gross-sliding"),
