@@ -4,14 +4,12 @@ use crate::error::CaseError;
 use crate::particles;
 use crate::raw::*;
 use grainflow::contact::limits::{self, Range};
-use grainflow::contact::{
-    ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalModel, TangentialModel,
-};
+use grainflow::contact::{ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalModel, TangentialModel};
 use grainflow::simulation::STANDARD_GRAVITY;
 use grainflow::state::ParticleInit;
 use grainflow::{
-    Integrator, MotionRule, Particles, Phase, PrescribedMotion, SimulationConfig, TimeStepRule,
-    Vec3, Wall, WallMaterial,
+    Integrator, MotionRule, Particles, Phase, PrescribedMotion, SimulationConfig, TimeStepRule, Vec3, Wall,
+    WallMaterial,
 };
 use std::path::Path;
 
@@ -44,10 +42,8 @@ pub struct OutputSettings {
 
 /// Reads and validates a case file; particle files are read relative to its folder.
 pub fn load(path: &Path) -> Result<Case, CaseError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CaseError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| CaseError::Read { path: path.to_path_buf(), source })?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse(&text, &path.display().to_string(), &|name: &str| {
         let p = dir.join(name);
@@ -62,8 +58,7 @@ pub fn parse(
     origin: &str,
     read_file: &dyn Fn(&str) -> Result<String, CaseError>,
 ) -> Result<Case, CaseError> {
-    let raw: RawCase =
-        toml::from_str(text).map_err(|e| CaseError::Syntax(format!("{origin}: {e}")))?;
+    let raw: RawCase = toml::from_str(text).map_err(|e| CaseError::Syntax(format!("{origin}: {e}")))?;
     validate(raw, read_file)
 }
 
@@ -72,11 +67,7 @@ fn require<T>(v: Option<T>, table: &str, key: &str, hint: &str) -> Result<T, Cas
 }
 
 fn check(r: Range, table: &str, key: &str, v: f64) -> Result<f64, CaseError> {
-    if r.contains(v) {
-        Ok(v)
-    } else {
-        Err(CaseError::invalid(table, key, v, r.valid))
-    }
+    if r.contains(v) { Ok(v) } else { Err(CaseError::invalid(table, key, v, r.valid)) }
 }
 
 fn choose<T: Copy>(
@@ -87,19 +78,10 @@ fn choose<T: Copy>(
     words: &[(&str, T)],
 ) -> Result<T, CaseError> {
     let Some(v) = value else { return Ok(default) };
-    words
-        .iter()
-        .find(|(w, _)| *w == v)
-        .map(|(_, t)| *t)
-        .ok_or_else(|| {
-            let list: Vec<String> = words.iter().map(|(w, _)| format!("\"{w}\"")).collect();
-            CaseError::invalid(
-                table,
-                key,
-                format!("\"{v}\""),
-                format!("must be one of {}", list.join(", ")),
-            )
-        })
+    words.iter().find(|(w, _)| *w == v).map(|(_, t)| *t).ok_or_else(|| {
+        let list: Vec<String> = words.iter().map(|(w, _)| format!("\"{w}\"")).collect();
+        CaseError::invalid(table, key, format!("\"{v}\""), format!("must be one of {}", list.join(", ")))
+    })
 }
 
 fn vec3(a: [f64; 3], table: &str, key: &str) -> Result<Vec3, CaseError> {
@@ -107,19 +89,11 @@ fn vec3(a: [f64; 3], table: &str, key: &str) -> Result<Vec3, CaseError> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(CaseError::invalid(
-            table,
-            key,
-            format!("{a:?}"),
-            "all three components must be finite numbers",
-        ))
+        Err(CaseError::invalid(table, key, format!("{a:?}"), "all three components must be finite numbers"))
     }
 }
 
-fn validate(
-    raw: RawCase,
-    read_file: &dyn Fn(&str) -> Result<String, CaseError>,
-) -> Result<Case, CaseError> {
+fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>) -> Result<Case, CaseError> {
     let mut warnings = Vec::new();
     match raw.version {
         None => {
@@ -141,22 +115,9 @@ fn validate(
     }
 
     // Domain.
-    let domain = require(
-        raw.domain,
-        "top level",
-        "[domain]",
-        "the domain box: min and max corners in m",
-    )?;
-    let min = vec3(
-        require(domain.min, "[domain]", "min", "lower corner of the box, m")?,
-        "[domain]",
-        "min",
-    )?;
-    let max = vec3(
-        require(domain.max, "[domain]", "max", "upper corner of the box, m")?,
-        "[domain]",
-        "max",
-    )?;
+    let domain = require(raw.domain, "top level", "[domain]", "the domain box: min and max corners in m")?;
+    let min = vec3(require(domain.min, "[domain]", "min", "lower corner of the box, m")?, "[domain]", "min")?;
+    let max = vec3(require(domain.max, "[domain]", "max", "upper corner of the box, m")?, "[domain]", "max")?;
     if !(max.cmpgt(min).all()) {
         return Err(CaseError::invalid(
             "[domain]",
@@ -199,21 +160,11 @@ fn validate(
             "density",
             require(p.density, &table, "density", "density in kg/m³")?,
         )?;
-        let youngs_modulus = p
-            .youngs_modulus
-            .map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v))
-            .transpose()?;
-        let poisson_ratio = p
-            .poisson_ratio
-            .map(|v| check(limits::POISSON, &table, "poisson_ratio", v))
-            .transpose()?;
-        phases.push(Phase {
-            name,
-            diameter,
-            density,
-            youngs_modulus,
-            poisson_ratio,
-        });
+        let youngs_modulus =
+            p.youngs_modulus.map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v)).transpose()?;
+        let poisson_ratio =
+            p.poisson_ratio.map(|v| check(limits::POISSON, &table, "poisson_ratio", v)).transpose()?;
+        phases.push(Phase { name, diameter, density, youngs_modulus, poisson_ratio });
     }
     let phase_index = |name: &str, table: &str, key: &str| -> Result<usize, CaseError> {
         phases.iter().position(|p| p.name == name).ok_or_else(|| {
@@ -231,12 +182,7 @@ fn validate(
     let mut wall_materials = Vec::new();
     for (k, w) in raw.wall_materials.iter().enumerate() {
         let table = format!("[[wall_materials]] #{}", k + 1);
-        let name = require(
-            w.name.clone(),
-            &table,
-            "name",
-            "a unique wall material name",
-        )?;
+        let name = require(w.name.clone(), &table, "name", "a unique wall material name")?;
         let table = format!("[[wall_materials]] '{name}'");
         if wall_materials.iter().any(|q: &WallMaterial| q.name == name) {
             return Err(CaseError::invalid(
@@ -246,49 +192,27 @@ fn validate(
                 "wall material names must be unique",
             ));
         }
-        let youngs_modulus = w
-            .youngs_modulus
-            .map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v))
-            .transpose()?;
-        let poisson_ratio = w
-            .poisson_ratio
-            .map(|v| check(limits::POISSON, &table, "poisson_ratio", v))
-            .transpose()?;
-        wall_materials.push(WallMaterial {
-            name,
-            youngs_modulus,
-            poisson_ratio,
-        });
+        let youngs_modulus =
+            w.youngs_modulus.map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v)).transpose()?;
+        let poisson_ratio =
+            w.poisson_ratio.map(|v| check(limits::POISSON, &table, "poisson_ratio", v)).transpose()?;
+        wall_materials.push(WallMaterial { name, youngs_modulus, poisson_ratio });
     }
     if wall_materials.is_empty() {
-        wall_materials.push(WallMaterial {
-            name: "wall".into(),
-            youngs_modulus: None,
-            poisson_ratio: None,
-        });
+        wall_materials.push(WallMaterial { name: "wall".into(), youngs_modulus: None, poisson_ratio: None });
     }
-    let material_index =
-        |name: &Option<String>, table: &str, key: &str| -> Result<usize, CaseError> {
-            let Some(name) = name else { return Ok(0) };
-            wall_materials
-                .iter()
-                .position(|m| &m.name == name)
-                .ok_or_else(|| {
-                    let names: Vec<String> = wall_materials
-                        .iter()
-                        .map(|p| format!("\"{}\"", p.name))
-                        .collect();
-                    CaseError::invalid(
-                        table,
-                        key,
-                        format!("\"{name}\""),
-                        format!(
-                            "not a wall material; the wall materials are {}",
-                            names.join(", ")
-                        ),
-                    )
-                })
-        };
+    let material_index = |name: &Option<String>, table: &str, key: &str| -> Result<usize, CaseError> {
+        let Some(name) = name else { return Ok(0) };
+        wall_materials.iter().position(|m| &m.name == name).ok_or_else(|| {
+            let names: Vec<String> = wall_materials.iter().map(|p| format!("\"{}\"", p.name)).collect();
+            CaseError::invalid(
+                table,
+                key,
+                format!("\"{name}\""),
+                format!("not a wall material; the wall materials are {}", names.join(", ")),
+            )
+        })
+    };
     let mut walls = Vec::new();
     if domain.walls {
         walls.extend(Wall::domain_box(
@@ -300,18 +224,9 @@ fn validate(
     for (k, w) in raw.walls.iter().enumerate() {
         let name = w.name.clone().unwrap_or_else(|| format!("wall {}", k + 1));
         let table = format!("[[walls]] '{name}'");
-        let point = vec3(
-            require(w.point, &table, "point", "a point on the plane, m")?,
-            &table,
-            "point",
-        )?;
+        let point = vec3(require(w.point, &table, "point", "a point on the plane, m")?, &table, "point")?;
         let normal = vec3(
-            require(
-                w.normal,
-                &table,
-                "normal",
-                "normal pointing into the particle space",
-            )?,
+            require(w.normal, &table, "normal", "normal pointing into the particle space")?,
             &table,
             "normal",
         )?;
@@ -323,68 +238,40 @@ fn validate(
                 "the normal must not be zero",
             ));
         }
-        walls.push(Wall::plane(
-            name,
-            point,
-            normal,
-            material_index(&w.material, &table, "material")?,
-        ));
+        walls.push(Wall::plane(name, point, normal, material_index(&w.material, &table, "material")?));
     }
 
     // Contact law and tables.
-    let contact = require(
-        raw.contact,
-        "top level",
-        "[contact]",
-        "the contact model and its parameters",
-    )?;
+    let contact = require(raw.contact, "top level", "[contact]", "the contact model and its parameters")?;
     let normal = choose(
         "[contact]",
         "model",
         contact.model.as_deref(),
         NormalModel::LinearSpringDashpot,
-        &[
-            ("lsd", NormalModel::LinearSpringDashpot),
-            ("hertz", NormalModel::Hertz),
-        ],
+        &[("lsd", NormalModel::LinearSpringDashpot), ("hertz", NormalModel::Hertz)],
     )?;
     let tangential = choose(
         "[contact]",
         "tangential",
         contact.tangential.as_deref(),
         TangentialModel::MfixTotal,
-        &[
-            ("mfix", TangentialModel::MfixTotal),
-            ("incremental_mindlin", TangentialModel::IncrementalMindlin),
-        ],
+        &[("mfix", TangentialModel::MfixTotal), ("incremental_mindlin", TangentialModel::IncrementalMindlin)],
     )?;
     let history = choose(
         "[contact]",
         "history",
         contact.history.as_deref(),
         HistoryFrame::Mfix,
-        &[
-            ("mfix", HistoryFrame::Mfix),
-            ("project", HistoryFrame::Project),
-            ("rotate", HistoryFrame::Rotate),
-        ],
+        &[("mfix", HistoryFrame::Mfix), ("project", HistoryFrame::Project), ("rotate", HistoryFrame::Rotate)],
     )?;
     let lever = choose(
         "[contact]",
         "lever_arm",
         contact.lever_arm.as_deref(),
         LeverArm::RadicalPlane,
-        &[
-            ("mfix", LeverArm::RadicalPlane),
-            ("radius", LeverArm::Radius),
-        ],
+        &[("mfix", LeverArm::RadicalPlane), ("radius", LeverArm::Radius)],
     )?;
-    let law = ContactLaw {
-        normal,
-        tangential,
-        history,
-        lever,
-    };
+    let law = ContactLaw { normal, tangential, history, lever };
     if normal == NormalModel::Hertz {
         for p in &phases {
             let table = format!("[[phases]] '{}'", p.name);
@@ -419,23 +306,12 @@ fn validate(
             }
         }
     }
-    for (table, t, is_pair) in [
-        ("[contact.particle]", &contact.particle, None),
-        ("[contact.wall]", &contact.wall, None),
-    ]
-    .into_iter()
-    .chain(
-        contact
-            .pairs
-            .iter()
-            .map(|t| ("[[contact.pairs]]", t, Some(true))),
-    )
-    .chain(
-        contact
-            .walls
-            .iter()
-            .map(|t| ("[[contact.walls]]", t, Some(false))),
-    ) {
+    for (table, t, is_pair) in
+        [("[contact.particle]", &contact.particle, None), ("[contact.wall]", &contact.wall, None)]
+            .into_iter()
+            .chain(contact.pairs.iter().map(|t| ("[[contact.pairs]]", t, Some(true))))
+            .chain(contact.walls.iter().map(|t| ("[[contact.walls]]", t, Some(false))))
+    {
         let misplaced = match is_pair {
             None => [
                 ("phases", t.phases.is_some()),
@@ -444,12 +320,9 @@ fn validate(
             ]
             .into_iter()
             .find(|x| x.1),
-            Some(true) => [
-                ("phase", t.phase.is_some()),
-                ("material", t.material.is_some()),
-            ]
-            .into_iter()
-            .find(|x| x.1),
+            Some(true) => {
+                [("phase", t.phase.is_some()), ("material", t.material.is_some())].into_iter().find(|x| x.1)
+            }
             Some(false) => [("phases", t.phases.is_some())].into_iter().find(|x| x.1),
         };
         if let Some((key, _)) = misplaced {
@@ -466,18 +339,9 @@ fn validate(
     let mut pair_tables: Vec<Option<&RawContactParams>> = vec![None; n * (n + 1) / 2];
     for t in &contact.pairs {
         let table = "[[contact.pairs]]";
-        let [a, b] = require(
-            t.phases.clone(),
-            table,
-            "phases",
-            "the two phase names of the pair",
-        )?;
-        let (ia, ib) = (
-            phase_index(&a, table, "phases")?,
-            phase_index(&b, table, "phases")?,
-        );
-        let slot =
-            &mut pair_tables[grainflow::contact::coefficients::upper_triangle_index(ia, ib, n)];
+        let [a, b] = require(t.phases.clone(), table, "phases", "the two phase names of the pair")?;
+        let (ia, ib) = (phase_index(&a, table, "phases")?, phase_index(&b, table, "phases")?);
+        let slot = &mut pair_tables[grainflow::contact::coefficients::upper_triangle_index(ia, ib, n)];
         if slot.is_some() {
             return Err(CaseError::invalid(
                 table,
@@ -488,11 +352,7 @@ fn validate(
         }
         *slot = Some(t);
     }
-    let nw = if walls.is_empty() {
-        0
-    } else {
-        wall_materials.len()
-    };
+    let nw = if walls.is_empty() { 0 } else { wall_materials.len() };
     let mut wall_tables: Vec<Option<&RawContactParams>> = vec![None; n * nw];
     for t in &contact.walls {
         let table = "[[contact.walls]]";
@@ -518,29 +378,15 @@ fn validate(
         for l in m..n {
             let over = pair_tables[grainflow::contact::coefficients::upper_triangle_index(m, l, n)];
             let what = format!("phase pair '{}'-'{}'", phases[m].name, phases[l].name);
-            pair_params.push(layer(
-                over,
-                &contact.particle,
-                law,
-                "[contact.particle]",
-                &what,
-            )?);
+            pair_params.push(layer(over, &contact.particle, law, "[contact.particle]", &what)?);
         }
     }
     let mut wall_params = Vec::with_capacity(wall_tables.len());
     for m in 0..n {
         for w in 0..nw {
-            let what = format!(
-                "phase '{}' against wall material '{}'",
-                phases[m].name, wall_materials[w].name
-            );
-            wall_params.push(layer(
-                wall_tables[m * nw + w],
-                &contact.wall,
-                law,
-                "[contact.wall]",
-                &what,
-            )?);
+            let what =
+                format!("phase '{}' against wall material '{}'", phases[m].name, wall_materials[w].name);
+            wall_params.push(layer(wall_tables[m * nw + w], &contact.wall, law, "[contact.wall]", &what)?);
         }
     }
     if nw == 0 {
@@ -548,20 +394,10 @@ fn validate(
     }
 
     // Time.
-    let time = require(
-        raw.time,
-        "top level",
-        "[time]",
-        "t_stop (s) and optionally dt, integrator",
-    )?;
+    let time = require(raw.time, "top level", "[time]", "t_stop (s) and optionally dt, integrator")?;
     let t_start = time.t_start.unwrap_or(0.0);
     if !t_start.is_finite() {
-        return Err(CaseError::invalid(
-            "[time]",
-            "t_start",
-            t_start,
-            "must be a finite time in s",
-        ));
+        return Err(CaseError::invalid("[time]", "t_start", t_start, "must be a finite time in s"));
     }
     let t_stop = require(time.t_stop, "[time]", "t_stop", "end time of the run, s")?;
     if !(t_stop.is_finite() && t_stop > t_start) {
@@ -583,12 +419,7 @@ fn validate(
         }
         (Some(dt), None) if dt.is_finite() && dt > 0.0 => TimeStepRule::Fixed(dt),
         (Some(dt), None) => {
-            return Err(CaseError::invalid(
-                "[time]",
-                "dt",
-                dt,
-                "must be a positive time in s",
-            ));
+            return Err(CaseError::invalid("[time]", "dt", dt, "must be a positive time in s"));
         }
         (None, f) => {
             let factor = f.unwrap_or(50.0);
@@ -644,35 +475,19 @@ fn validate(
             if v.is_finite() && v > 0.0 {
                 Ok(v)
             } else {
-                Err(CaseError::invalid(
-                    "[output]",
-                    "interval",
-                    v,
-                    "must be a positive time in s",
-                ))
+                Err(CaseError::invalid("[output]", "interval", v, "must be a positive time in s"))
             }
         })
         .transpose()?;
-    let output = OutputSettings {
-        interval,
-        snapshots: raw.output.snapshots.unwrap_or(true),
-    };
+    let output = OutputSettings { interval, snapshots: raw.output.snapshots.unwrap_or(true) };
 
     // Particles.
-    let praw = require(
-        raw.particles,
-        "top level",
-        "[particles]",
-        "a particle file and/or [[particles.list]]",
-    )?;
+    let praw =
+        require(raw.particles, "top level", "[particles]", "a particle file and/or [[particles.list]]")?;
     let mut init: Vec<ParticleInit> = Vec::new();
     if let Some(file) = &praw.file {
         let format = praw.format.clone().unwrap_or_else(|| {
-            if file.to_ascii_lowercase().ends_with(".csv") {
-                "csv".into()
-            } else {
-                "mfix".into()
-            }
+            if file.to_ascii_lowercase().ends_with(".csv") { "csv".into() } else { "mfix".into() }
         });
         let text = read_file(file)?;
         init = match format.as_str() {
@@ -698,12 +513,7 @@ fn validate(
     for (k, p) in praw.list.iter().enumerate() {
         let table = format!("[[particles.list]] #{}", k + 1);
         let phase = phase_index(
-            &require(
-                p.phase.clone(),
-                &table,
-                "phase",
-                "the particle's phase name",
-            )?,
+            &require(p.phase.clone(), &table, "phase", "the particle's phase name")?,
             &table,
             "phase",
         )?;
@@ -716,25 +526,13 @@ fn validate(
             phase: phase as u32,
             radius,
             density: phases[phase].density,
-            position: vec3(
-                require(p.position, &table, "position", "centre in m")?,
-                &table,
-                "position",
-            )?,
+            position: vec3(require(p.position, &table, "position", "centre in m")?, &table, "position")?,
             velocity: vec3(p.velocity.unwrap_or([0.0; 3]), &table, "velocity")?,
-            omega: vec3(
-                p.angular_velocity.unwrap_or([0.0; 3]),
-                &table,
-                "angular_velocity",
-            )?,
+            omega: vec3(p.angular_velocity.unwrap_or([0.0; 3]), &table, "angular_velocity")?,
         });
     }
     if init.is_empty() {
-        return Err(CaseError::missing(
-            "[particles]",
-            "file or list",
-            "at least one particle",
-        ));
+        return Err(CaseError::missing("[particles]", "file or list", "at least one particle"));
     }
     let particles = Particles::from_init(&init);
 
@@ -743,12 +541,8 @@ fn validate(
     let mut motion = Vec::new();
     for (k, m) in raw.motion.iter().enumerate() {
         let table = format!("[[motion]] #{}", k + 1);
-        let (first, last) = match require(
-            m.particles.clone(),
-            &table,
-            "particles",
-            "an id or [first, last]",
-        )? {
+        let (first, last) = match require(m.particles.clone(), &table, "particles", "an id or [first, last]")?
+        {
             IdSelection::One(i) => (i, i),
             IdSelection::Range([a, b]) if a <= b => (a, b),
             IdSelection::Range([a, b]) => {
@@ -784,9 +578,7 @@ fn validate(
                                     &table,
                                     "leader_offset",
                                     off,
-                                    format!(
-                                        "particle {id} would follow id {l}, which cannot exist"
-                                    ),
+                                    format!("particle {id} would follow id {l}, which cannot exist"),
                                 )
                             })?
                         }
@@ -829,12 +621,7 @@ fn validate(
                 }
             };
             if !ids.contains(&id) {
-                return Err(CaseError::invalid(
-                    &table,
-                    "particles",
-                    id,
-                    "no particle has this id",
-                ));
+                return Err(CaseError::invalid(&table, "particles", id, "no particle has this id"));
             }
             if let MotionRule::Follow { leader, .. } = rule {
                 if !ids.contains(&leader) {
@@ -865,13 +652,7 @@ fn validate(
         skin,
         motion,
     };
-    Ok(Case {
-        title: raw.title,
-        config,
-        particles,
-        output,
-        warnings,
-    })
+    Ok(Case { title: raw.title, config, particles, output, warnings })
 }
 
 /// Range checks of one contact table, and warnings for keys the model does not use.
@@ -897,18 +678,14 @@ fn check_params(
     }
     let unused: &[(&str, bool)] = match law.normal {
         NormalModel::LinearSpringDashpot => &[("et", t.et.is_some())],
-        NormalModel::Hertz => &[
-            ("kn", t.kn.is_some()),
-            ("kt_fac", t.kt_fac.is_some()),
-            ("etat_fac", t.etat_fac.is_some()),
-        ],
+        NormalModel::Hertz => {
+            &[("kn", t.kn.is_some()), ("kt_fac", t.kt_fac.is_some()), ("etat_fac", t.etat_fac.is_some())]
+        }
     };
     for (key, given) in unused {
         if *given {
-            warnings.push(format!(
-                "{table}: `{key}` is not used by the {} model (ignored)",
-                law.normal_name()
-            ));
+            warnings
+                .push(format!("{table}: `{key}` is not used by the {} model (ignored)", law.normal_name()));
         }
     }
     Ok(())

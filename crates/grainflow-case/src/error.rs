@@ -70,15 +70,7 @@ impl CaseError {
         }
     }
 
-    pub(crate) fn missing(
-        table: impl Into<String>,
-        key: impl Into<String>,
-        hint: impl Into<String>,
-    ) -> Self {
-        CaseError::Missing {
-            table: table.into(),
-            key: key.into(),
-            hint: hint.into(),
-        }
+    pub(crate) fn missing(table: impl Into<String>, key: impl Into<String>, hint: impl Into<String>) -> Self {
+        CaseError::Missing { table: table.into(), key: key.into(), hint: hint.into() }
     }
 }

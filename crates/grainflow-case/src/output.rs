@@ -19,16 +19,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
 }
 
 fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path
-        .file_name()
-        .map(|n| n.to_os_string())
-        .unwrap_or_default();
+    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
     name.push(format!(".partial-{}", std::process::id()));
     path.with_file_name(name)
 }
 
 /// Header of the time-series CSV.
-pub const TIMESERIES_HEADER: &str = "step,time,kinetic_translational,kinetic_rotational,potential,elastic,contacts,max_overlap_ratio";
+pub const TIMESERIES_HEADER: &str =
+    "step,time,kinetic_translational,kinetic_rotational,potential,elastic,contacts,max_overlap_ratio";
 
 /// The time-series CSV, streamed into a temporary file and renamed into place by
 /// [`finish`](Self::finish).
@@ -44,11 +42,7 @@ impl TimeSeriesWriter {
         let tmp = temp_path(path);
         let mut out = BufWriter::new(File::create(&tmp)?);
         writeln!(out, "{TIMESERIES_HEADER}")?;
-        Ok(TimeSeriesWriter {
-            path: path.to_path_buf(),
-            tmp,
-            out,
-        })
+        Ok(TimeSeriesWriter { path: path.to_path_buf(), tmp, out })
     }
 
     /// Appends one row (units: s, J, count, dimensionless).

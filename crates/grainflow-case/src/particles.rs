@@ -16,11 +16,7 @@ pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
         if t.is_empty() || t.starts_with('#') || t.starts_with('!') {
             continue;
         }
-        let err = |message: String| CaseError::ParticleFile {
-            path: path.to_string(),
-            line: k + 1,
-            message,
-        };
+        let err = |message: String| CaseError::ParticleFile { path: path.to_string(), line: k + 1, message };
         let fields: Vec<&str> = t.split_whitespace().collect();
         if fields.len() != 8 {
             return Err(err(format!(
@@ -61,22 +57,12 @@ pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
 /// number), `diameter` or `radius` (m, default: the phase's), `u,v,w` (m/s, default 0),
 /// `wx,wy,wz` (rad/s, default 0). Unknown columns are an error.
 pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
-    const KNOWN: [&str; 13] = [
-        "id", "phase", "x", "y", "z", "diameter", "radius", "u", "v", "w", "wx", "wy", "wz",
-    ];
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .comment(Some(b'#'))
-        .from_reader(text.as_bytes());
-    let header_err = |message: String| CaseError::ParticleFile {
-        path: path.to_string(),
-        line: 1,
-        message,
-    };
-    let headers = rdr
-        .headers()
-        .map_err(|e| header_err(format!("cannot read the header row: {e}")))?
-        .clone();
+    const KNOWN: [&str; 13] =
+        ["id", "phase", "x", "y", "z", "diameter", "radius", "u", "v", "w", "wx", "wy", "wz"];
+    let mut rdr =
+        csv::ReaderBuilder::new().trim(csv::Trim::All).comment(Some(b'#')).from_reader(text.as_bytes());
+    let header_err = |message: String| CaseError::ParticleFile { path: path.to_string(), line: 1, message };
+    let headers = rdr.headers().map_err(|e| header_err(format!("cannot read the header row: {e}")))?.clone();
     let mut col = [None; 13];
     for (c, h) in headers.iter().enumerate() {
         let h = h.to_ascii_lowercase();
@@ -92,28 +78,16 @@ pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particle
     }
     for (k, name) in [(1, "phase"), (2, "x"), (3, "y"), (4, "z")] {
         if col[k].is_none() {
-            return Err(header_err(format!(
-                "the required column '{name}' is missing"
-            )));
+            return Err(header_err(format!("the required column '{name}' is missing")));
         }
     }
     if col[5].is_some() && col[6].is_some() {
-        return Err(header_err(
-            "give either 'diameter' or 'radius', not both".into(),
-        ));
+        return Err(header_err("give either 'diameter' or 'radius', not both".into()));
     }
     let mut out = Vec::new();
     for (row, rec) in rdr.records().enumerate() {
-        let line = rec
-            .as_ref()
-            .ok()
-            .and_then(|r| r.position())
-            .map_or(row + 2, |p| p.line() as usize);
-        let err = |message: String| CaseError::ParticleFile {
-            path: path.to_string(),
-            line,
-            message,
-        };
+        let line = rec.as_ref().ok().and_then(|r| r.position()).map_or(row + 2, |p| p.line() as usize);
+        let err = |message: String| CaseError::ParticleFile { path: path.to_string(), line, message };
         let rec = rec.map_err(|e| err(format!("{e}")))?;
         let get = |k: usize| -> Result<Option<f64>, CaseError> {
             match col[k] {
@@ -131,11 +105,7 @@ pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particle
             .iter()
             .position(|p| p.name == phase_text)
             .or_else(|| {
-                phase_text
-                    .parse::<usize>()
-                    .ok()
-                    .filter(|&k| k >= 1 && k <= phases.len())
-                    .map(|k| k - 1)
+                phase_text.parse::<usize>().ok().filter(|&k| k >= 1 && k <= phases.len()).map(|k| k - 1)
             })
             .ok_or_else(|| {
                 err(format!(
@@ -158,11 +128,7 @@ pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particle
             Some(v) => return Err(err(format!("id {v} must be a whole number >= 1"))),
         };
         let v3 = |a: usize| -> Result<Vec3, CaseError> {
-            Ok(Vec3::new(
-                get(a)?.unwrap_or(0.0),
-                get(a + 1)?.unwrap_or(0.0),
-                get(a + 2)?.unwrap_or(0.0),
-            ))
+            Ok(Vec3::new(get(a)?.unwrap_or(0.0), get(a + 1)?.unwrap_or(0.0), get(a + 2)?.unwrap_or(0.0)))
         };
         out.push(ParticleInit {
             id,
@@ -186,20 +152,13 @@ fn parse_number(s: &str) -> Option<f64> {
 /// The phase whose diameter and density match, relative tolerance 1e-6.
 pub fn match_phase(diameter: f64, density: f64, phases: &[Phase]) -> Option<usize> {
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.abs().max(b.abs());
-    phases
-        .iter()
-        .position(|p| close(p.diameter, diameter) && close(p.density, density))
+    phases.iter().position(|p| close(p.diameter, diameter) && close(p.density, density))
 }
 
 fn describe_phases(phases: &[Phase]) -> String {
     phases
         .iter()
-        .map(|p| {
-            format!(
-                "'{}' d = {} m, rho = {} kg/m³",
-                p.name, p.diameter, p.density
-            )
-        })
+        .map(|p| format!("'{}' d = {} m, rho = {} kg/m³", p.name, p.diameter, p.density))
         .collect::<Vec<_>>()
         .join("; ")
 }

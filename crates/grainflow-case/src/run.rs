@@ -59,13 +59,7 @@ pub fn run_case(
     mut on_output: impl FnMut(&Simulation),
 ) -> Result<RunSummary, RunError> {
     let sim = Simulation::new(case.config, case.particles)?;
-    run_simulation(
-        sim,
-        case.output.interval,
-        case.output.snapshots,
-        out,
-        &mut on_output,
-    )
+    run_simulation(sim, case.output.interval, case.output.snapshots, out, &mut on_output)
 }
 
 /// Why a run stopped early.

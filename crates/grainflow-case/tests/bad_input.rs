@@ -37,9 +37,7 @@ position = [0.05, 0.05, 0.05]
 
 fn parse_text(text: &str) -> Result<grainflow_case::Case, CaseError> {
     parse(text, "case.toml", &|name: &str| match name {
-        "bad.dat" => {
-            Ok("0.05 0.05 0.05 0.002 2500 0 0 0\n0.01 0.02 0.03 0.002 9999 0 0 0\n".into())
-        }
+        "bad.dat" => Ok("0.05 0.05 0.05 0.002 2500 0 0 0\n0.01 0.02 0.03 0.002 9999 0 0 0\n".into()),
         "short.dat" => Ok("0.05 0.05 0.05 0.002 2500 0 0\n".into()),
         "bad.csv" => Ok("x,y,z,phase,colour\n0.05,0.05,0.05,glass,red\n".into()),
         "text.csv" => Ok("x,y,z,phase\n0.05,abc,0.05,glass\n".into()),
@@ -52,10 +50,7 @@ fn parse_text(text: &str) -> Result<grainflow_case::Case, CaseError> {
 
 /// Replaces `from` with `to` in the base case (the text must occur).
 fn edit(from: &str, to: &str) -> String {
-    assert!(
-        BASE.contains(from),
-        "test bug: '{from}' not in the base case"
-    );
+    assert!(BASE.contains(from), "test bug: '{from}' not in the base case");
     BASE.replacen(from, to, 1)
 }
 
@@ -69,54 +64,19 @@ fn base_case_is_valid() {
 #[test]
 fn each_bad_input_names_table_key_value_and_what_is_valid() {
     let cases: Vec<(&str, String, &[&str])> = vec![
-        (
-            "syntax error",
-            edit("t_stop = 0.01", "t_stop = = 0.01"),
-            &["case.toml", "line"],
-        ),
+        ("syntax error", edit("t_stop = 0.01", "t_stop = = 0.01"), &["case.toml", "line"]),
         (
             "unknown key",
-            edit(
-                "mu = 0.3\n[contact.wall]",
-                "mu = 0.3\nfriction = 0.3\n[contact.wall]",
-            ),
+            edit("mu = 0.3\n[contact.wall]", "mu = 0.3\nfriction = 0.3\n[contact.wall]"),
             &["unknown field `friction`", "expected one of"],
         ),
-        (
-            "unknown table",
-            format!("{BASE}\n[solver]\nx = 1\n"),
-            &["unknown field `solver`"],
-        ),
-        (
-            "wrong type",
-            edit("t_stop = 0.01", "t_stop = \"soon\""),
-            &["t_stop", "invalid type"],
-        ),
-        (
-            "missing version",
-            edit("version = 1", ""),
-            &["top level", "version"],
-        ),
-        (
-            "wrong version",
-            edit("version = 1", "version = 7"),
-            &["version", "= 7", "version 1"],
-        ),
-        (
-            "missing t_stop",
-            edit("t_stop = 0.01", ""),
-            &["[time]", "t_stop"],
-        ),
-        (
-            "missing [time]",
-            edit("[time]\nt_stop = 0.01", ""),
-            &["[time]", "missing"],
-        ),
-        (
-            "missing domain max",
-            edit("max = [0.1, 0.1, 0.1]", ""),
-            &["[domain]", "max"],
-        ),
+        ("unknown table", format!("{BASE}\n[solver]\nx = 1\n"), &["unknown field `solver`"]),
+        ("wrong type", edit("t_stop = 0.01", "t_stop = \"soon\""), &["t_stop", "invalid type"]),
+        ("missing version", edit("version = 1", ""), &["top level", "version"]),
+        ("wrong version", edit("version = 1", "version = 7"), &["version", "= 7", "version 1"]),
+        ("missing t_stop", edit("t_stop = 0.01", ""), &["[time]", "t_stop"]),
+        ("missing [time]", edit("[time]\nt_stop = 0.01", ""), &["[time]", "missing"]),
+        ("missing domain max", edit("max = [0.1, 0.1, 0.1]", ""), &["[domain]", "max"]),
         (
             "inverted domain",
             edit("max = [0.1, 0.1, 0.1]", "max = [0.1, -0.1, 0.1]"),
@@ -134,10 +94,7 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
         ),
         (
             "en above 1",
-            edit(
-                "en = 0.9\nmu = 0.3\n[contact.wall]",
-                "en = 1.5\nmu = 0.3\n[contact.wall]",
-            ),
+            edit("en = 0.9\nmu = 0.3\n[contact.wall]", "en = 1.5\nmu = 0.3\n[contact.wall]"),
             &["[contact.particle]", "`en` = 1.5", "(0, 1]"],
         ),
         (
@@ -153,12 +110,7 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
         (
             "wall poisson too low",
             edit("poisson_ratio = 0.3", "poisson_ratio = -1.0"),
-            &[
-                "[[wall_materials]] 'steel'",
-                "poisson_ratio",
-                "-1",
-                "(-1, 0.5)",
-            ],
+            &["[[wall_materials]] 'steel'", "poisson_ratio", "-1", "(-1, 0.5)"],
         ),
         (
             "kt_fac above 1",
@@ -175,18 +127,12 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
         ),
         (
             "negative kn",
-            edit(
-                "kn = 1000.0\nen = 0.9\nmu = 0.3\n[time]",
-                "kn = -5.0\nen = 0.9\nmu = 0.3\n[time]",
-            ),
+            edit("kn = 1000.0\nen = 0.9\nmu = 0.3\n[time]", "kn = -5.0\nen = 0.9\nmu = 0.3\n[time]"),
             &["[contact.wall]", "`kn` = -5", "positive"],
         ),
         (
             "LSD without kn",
-            edit(
-                "kn = 1000.0\nen = 0.9\nmu = 0.3\n[contact.wall]",
-                "en = 0.9\nmu = 0.3\n[contact.wall]",
-            ),
+            edit("kn = 1000.0\nen = 0.9\nmu = 0.3\n[contact.wall]", "en = 0.9\nmu = 0.3\n[contact.wall]"),
             &["[contact.particle]", "kn", "N/m"],
         ),
         (
@@ -206,10 +152,7 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
         ),
         (
             "dt and factor",
-            edit(
-                "t_stop = 0.01",
-                "t_stop = 0.01\ndt = 1e-6\ndtsolid_factor = 50",
-            ),
+            edit("t_stop = 0.01", "t_stop = 0.01\ndt = 1e-6\ndtsolid_factor = 50"),
             &["[time]", "dtsolid_factor", "not both"],
         ),
         (
@@ -217,11 +160,7 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
             edit("t_stop = 0.01", "t_stop = 0.01\ndtsolid_factor = 5"),
             &["[time]", "dtsolid_factor", "5", "at least 10"],
         ),
-        (
-            "negative dt",
-            edit("t_stop = 0.01", "t_stop = 0.01\ndt = -1e-6"),
-            &["[time]", "dt", "positive"],
-        ),
+        ("negative dt", edit("t_stop = 0.01", "t_stop = 0.01\ndt = -1e-6"), &["[time]", "dt", "positive"]),
         (
             "t_stop before start",
             edit("t_stop = 0.01", "t_stop = 0.01\nt_start = 0.02"),
@@ -239,10 +178,7 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
         ),
         (
             "no particles",
-            edit(
-                "[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]",
-                "[particles]",
-            ),
+            edit("[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]", "[particles]"),
             &["[particles]", "at least one particle"],
         ),
         (
@@ -313,25 +249,17 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
         ),
         (
             "follow a missing particle",
-            format!(
-                "{BASE}\n[[motion]]\nparticles = 1\nrule = \"follow\"\nleader = 5\naxes = [\"x\"]\n"
-            ),
+            format!("{BASE}\n[[motion]]\nparticles = 1\nrule = \"follow\"\nleader = 5\naxes = [\"x\"]\n"),
             &["[[motion]] #1", "`leader` = 5", "which no particle has"],
         ),
         (
             "hold a missing particle",
             format!("{BASE}\n[[motion]]\nparticles = [1, 3]\nrule = \"hold\"\n"),
-            &[
-                "[[motion]] #1",
-                "`particles` = 2",
-                "no particle has this id",
-            ],
+            &["[[motion]] #1", "`particles` = 2", "no particle has this id"],
         ),
         (
             "bad axis",
-            format!(
-                "{BASE}\n[[motion]]\nparticles = 1\nrule = \"follow\"\nleader = 1\naxes = [\"w\"]\n"
-            ),
+            format!("{BASE}\n[[motion]]\nparticles = 1\nrule = \"follow\"\nleader = 1\naxes = [\"w\"]\n"),
             &["[[motion]] #1", "axes", "\"w\""],
         ),
     ];

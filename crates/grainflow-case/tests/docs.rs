@@ -47,24 +47,12 @@ fn every_case_file_key_is_documented_and_every_documented_key_exists() {
         "motion",
         "params",
     ];
-    let undocumented: Vec<_> = code
-        .iter()
-        .filter(|k| !doc.contains(*k) && !tables.contains(&k.as_str()))
-        .collect();
-    assert!(
-        undocumented.is_empty(),
-        "keys without a row in docs/case-file.md: {undocumented:?}"
-    );
+    let undocumented: Vec<_> =
+        code.iter().filter(|k| !doc.contains(*k) && !tables.contains(&k.as_str())).collect();
+    assert!(undocumented.is_empty(), "keys without a row in docs/case-file.md: {undocumented:?}");
     let unknown: Vec<_> = doc.iter().filter(|k| !code.contains(*k)).collect();
-    assert!(
-        unknown.is_empty(),
-        "documented keys the code does not read: {unknown:?}"
-    );
-    assert!(
-        code.len() > 40,
-        "the key scan found only {} keys",
-        code.len()
-    );
+    assert!(unknown.is_empty(), "documented keys the code does not read: {unknown:?}");
+    assert!(code.len() > 40, "the key scan found only {} keys", code.len());
 }
 
 #[test]

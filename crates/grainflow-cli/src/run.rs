@@ -27,11 +27,7 @@ pub fn main(args: RunArgs) -> ExitCode {
         eprintln!("warning: {w}");
     }
     let n = case.particles.len();
-    let title = if case.title.is_empty() {
-        args.case.display().to_string()
-    } else {
-        case.title.clone()
-    };
+    let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
     println!("grainflow {}: {title}", env!("CARGO_PKG_VERSION"));
     match run_case(case, &args.out, |_| {}) {
         Ok(s) => {

@@ -11,13 +11,8 @@ fn bad_case_file_exits_2_with_a_message_and_no_panic() {
     let dir = tempfile::tempdir().expect("temp dir");
     let case = dir.path().join("case.toml");
     std::fs::write(&case, "version = 1\n[domain]\nmin = [0,0,0]\nmax = [1,1,1]\n[[phases]]\nname = \"a\"\ndiameter = -0.1\ndensity = 1000.0\n").expect("write");
-    let out = grainflow()
-        .arg("run")
-        .arg(&case)
-        .arg("--out")
-        .arg(dir.path().join("out"))
-        .output()
-        .expect("runs");
+    let out =
+        grainflow().arg("run").arg(&case).arg("--out").arg(dir.path().join("out")).output().expect("runs");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
     assert!(
@@ -29,10 +24,7 @@ fn bad_case_file_exits_2_with_a_message_and_no_panic() {
 
 #[test]
 fn missing_case_file_exits_2() {
-    let out = grainflow()
-        .args(["run", "no/such/case.toml"])
-        .output()
-        .expect("runs");
+    let out = grainflow().args(["run", "no/such/case.toml"]).output().expect("runs");
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read no/such/case.toml"));
 }
@@ -55,17 +47,10 @@ fn examples_run_and_write_their_outputs() {
         .arg(dir.path())
         .output()
         .expect("runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let ts = std::fs::read_to_string(dir.path().join("timeseries.csv")).expect("time series");
-    let rows: Vec<Vec<f64>> = ts
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|f| f.parse().expect("number")).collect())
-        .collect();
+    let rows: Vec<Vec<f64>> =
+        ts.lines().skip(1).map(|l| l.split(',').map(|f| f.parse().expect("number")).collect()).collect();
     let m = 4.0 / 3.0 * std::f64::consts::PI * 0.1f64.powi(3) * 2600.0;
     let g = 9.80665;
     let mut checked = 0;
@@ -73,11 +58,7 @@ fn examples_run_and_write_their_outputs() {
         let (t, potential) = (r[1], r[4]);
         let y = 0.5 - 0.5 * g * t * t;
         // Relative 1e-9: only rounding separates AB2 from the exact parabola.
-        assert!(
-            (potential - m * g * y).abs() <= 1e-9 * m * g * 0.5,
-            "t = {t}: {potential} vs {}",
-            m * g * y
-        );
+        assert!((potential - m * g * y).abs() <= 1e-9 * m * g * 0.5, "t = {t}: {potential} vs {}", m * g * y);
         checked += 1;
     }
     assert!(checked > 20, "only {checked} free-fall rows");

@@ -28,19 +28,8 @@ pub struct Check {
 
 impl Check {
     /// An asserted check.
-    pub fn assert(
-        name: impl Into<String>,
-        error: f64,
-        tolerance: f64,
-        detail: impl Into<String>,
-    ) -> Self {
-        Check {
-            name: name.into(),
-            error,
-            tolerance,
-            detail: detail.into(),
-            kind: CheckKind::Assert,
-        }
+    pub fn assert(name: impl Into<String>, error: f64, tolerance: f64, detail: impl Into<String>) -> Self {
+        Check { name: name.into(), error, tolerance, detail: detail.into(), kind: CheckKind::Assert }
     }
 
     /// A reported-only measurement.
@@ -86,16 +75,11 @@ impl Check {
 
 /// The checks as a Markdown table.
 pub fn markdown_table(checks: &[Check]) -> String {
-    let mut s = String::from(
-        "| check | measured error | tolerance | status | detail |\n|---|---|---|---|---|\n",
-    );
+    let mut s =
+        String::from("| check | measured error | tolerance | status | detail |\n|---|---|---|---|---|\n");
     for c in checks {
         let num = |v: f64| {
-            if v.is_nan() {
-                "–".to_string()
-            } else {
-                format!("{v:.4e}")
-            }
+            if v.is_nan() { "–".to_string() } else { format!("{v:.4e}") }
         };
         s.push_str(&format!(
             "| {} | {} | {} | {} | {} |\n",

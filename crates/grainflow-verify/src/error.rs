@@ -31,8 +31,5 @@ pub enum VerifyError {
 
 /// Maps an io error to [`VerifyError::Io`] for `path`.
 pub fn io_at(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> VerifyError + '_ {
-    move |source| VerifyError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
+    move |source| VerifyError::Io { path: path.to_path_buf(), source }
 }

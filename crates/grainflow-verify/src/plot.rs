@@ -31,9 +31,9 @@ use plotters::coord::ranged1d::{BoldPoints, Ranged};
 use plotters::coord::types::RangedCoordf64;
 use plotters::element::{DashedPathElement, IntoDynElement};
 use plotters::prelude::{
-    BitMapBackend, BitMapElement, ChartBuilder, Circle, Cross, DrawingArea, DrawingBackend,
-    EmptyElement, IntoDrawingArea, IntoFont, MultiLineText, PathElement, RGBColor, Rectangle,
-    SVGBackend, SeriesLabelPosition, ShapeStyle, TextStyle, TriangleMarker,
+    BitMapBackend, BitMapElement, ChartBuilder, Circle, Cross, DrawingArea, DrawingBackend, EmptyElement,
+    IntoDrawingArea, IntoFont, MultiLineText, PathElement, RGBColor, Rectangle, SVGBackend,
+    SeriesLabelPosition, ShapeStyle, TextStyle, TriangleMarker,
 };
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{Color as _, FontStyle};
@@ -118,15 +118,8 @@ impl Color {
     /// A qualitative palette for series without a natural colour: cycles through
     /// blue, orange, green, red, purple, brown, grey.
     pub fn palette(i: usize) -> Color {
-        const P: [Color; 7] = [
-            Color::BLUE,
-            Color::ORANGE,
-            Color::GREEN,
-            Color::RED,
-            Color::PURPLE,
-            Color::BROWN,
-            Color::GREY,
-        ];
+        const P: [Color; 7] =
+            [Color::BLUE, Color::ORANGE, Color::GREEN, Color::RED, Color::PURPLE, Color::BROWN, Color::GREY];
         P[i % P.len()]
     }
 
@@ -146,17 +139,8 @@ pub struct Series {
 
 impl Series {
     /// A line series.
-    pub fn line(
-        label: impl Into<String>,
-        points: Vec<(f64, f64)>,
-        style: LineStyle,
-        color: Color,
-    ) -> Self {
-        Series {
-            label: label.into(),
-            points,
-            style: SeriesStyle::Line { style, color },
-        }
+    pub fn line(label: impl Into<String>, points: Vec<(f64, f64)>, style: LineStyle, color: Color) -> Self {
+        Series { label: label.into(), points, style: SeriesStyle::Line { style, color } }
     }
 
     /// A marker (scatter) series.
@@ -166,11 +150,7 @@ impl Series {
         shape: MarkerShape,
         color: Color,
     ) -> Self {
-        Series {
-            label: label.into(),
-            points,
-            style: SeriesStyle::Markers { shape, color },
-        }
+        Series { label: label.into(), points, style: SeriesStyle::Markers { shape, color } }
     }
 }
 
@@ -190,17 +170,8 @@ pub struct Panel {
 
 impl Panel {
     /// An empty panel with automatic ranges.
-    pub fn new(
-        title: impl Into<String>,
-        x_label: impl Into<String>,
-        y_label: impl Into<String>,
-    ) -> Self {
-        Panel {
-            title: title.into(),
-            x_label: x_label.into(),
-            y_label: y_label.into(),
-            ..Panel::default()
-        }
+    pub fn new(title: impl Into<String>, x_label: impl Into<String>, y_label: impl Into<String>) -> Self {
+        Panel { title: title.into(), x_label: x_label.into(), y_label: y_label.into(), ..Panel::default() }
     }
 }
 
@@ -247,23 +218,16 @@ pub fn write_figure(fig: &Figure, png: &Path, svg: &Path) -> Result<(), PlotErro
     let ss = SUPERSAMPLE;
     let mut big = vec![255u8; (size.0 * ss * size.1 * ss * 3) as usize];
     let drawn = {
-        let root =
-            BitMapBackend::with_buffer(&mut big, (size.0 * ss, size.1 * ss)).into_drawing_area();
+        let root = BitMapBackend::with_buffer(&mut big, (size.0 * ss, size.1 * ss)).into_drawing_area();
         draw_figure(&root, fig, Metrics { s: ss as f64 }).and_then(|()| root.present().map_err(err))
     };
     if let Err(message) = drawn {
-        return Err(PlotError::Draw {
-            path: png.to_path_buf(),
-            message,
-        });
+        return Err(PlotError::Draw { path: png.to_path_buf(), message });
     }
     let small = downsample(&big, size, ss);
     drop(big);
     let tmp = temp_path(png, Some("png"));
-    let io_err = |source| PlotError::Io {
-        path: png.to_path_buf(),
-        source,
-    };
+    let io_err = |source| PlotError::Io { path: png.to_path_buf(), source };
     // Create the file first so that a missing folder or a permission problem is an I/O error.
     fs::File::create(&tmp).map_err(io_err)?;
     let drawn = {
@@ -275,10 +239,7 @@ pub fn write_figure(fig: &Figure, png: &Path, svg: &Path) -> Result<(), PlotErro
     };
     if let Err(message) = drawn {
         let _ = fs::remove_file(&tmp);
-        return Err(PlotError::Draw {
-            path: png.to_path_buf(),
-            message,
-        });
+        return Err(PlotError::Draw { path: png.to_path_buf(), message });
     }
     if let Err(e) = fs::rename(&tmp, png) {
         let _ = fs::remove_file(&tmp);
@@ -292,16 +253,10 @@ pub fn write_figure(fig: &Figure, png: &Path, svg: &Path) -> Result<(), PlotErro
         draw_figure(&root, fig, Metrics { s: 1.0 }).and_then(|()| root.present().map_err(err))
     };
     if let Err(message) = drawn {
-        return Err(PlotError::Draw {
-            path: svg.to_path_buf(),
-            message,
-        });
+        return Err(PlotError::Draw { path: svg.to_path_buf(), message });
     }
     let tmp = temp_path(svg, None);
-    let io_err = |source| PlotError::Io {
-        path: svg.to_path_buf(),
-        source,
-    };
+    let io_err = |source| PlotError::Io { path: svg.to_path_buf(), source };
     if let Err(e) = fs::write(&tmp, text.as_bytes()).and_then(|()| fs::rename(&tmp, svg)) {
         let _ = fs::remove_file(&tmp);
         return Err(io_err(e));
@@ -325,10 +280,7 @@ fn ensure_font() -> Result<(), PlotError> {
 fn temp_path(target: &Path, ext: Option<&str>) -> PathBuf {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let mut name = target
-        .file_name()
-        .map(|s| s.to_os_string())
-        .unwrap_or_else(|| "figure".into());
+    let mut name = target.file_name().map(|s| s.to_os_string()).unwrap_or_else(|| "figure".into());
     name.push(format!(".partial-{}-{n}", std::process::id()));
     if let Some(ext) = ext {
         name.push(".");
@@ -417,17 +369,12 @@ fn draw_figure<DB: DrawingBackend>(
     let mut header_h = m.px(12.0);
     if !fig.title.is_empty() {
         let style = m.font(TITLE_SIZE).pos(Pos::new(HPos::Center, VPos::Top));
-        root.draw_text(&fig.title, &style, (w as i32 / 2, header_h))
-            .map_err(err)?;
+        root.draw_text(&fig.title, &style, (w as i32 / 2, header_h)).map_err(err)?;
         header_h += m.px(TITLE_SIZE + 6.0);
     }
     if let Some(note) = fig.note.as_deref().filter(|n| !n.is_empty()) {
-        let style = m
-            .font(NOTE_SIZE)
-            .color(&RGBColor(90, 90, 90))
-            .pos(Pos::new(HPos::Center, VPos::Top));
-        root.draw_text(note, &style, (w as i32 / 2, header_h))
-            .map_err(err)?;
+        let style = m.font(NOTE_SIZE).color(&RGBColor(90, 90, 90)).pos(Pos::new(HPos::Center, VPos::Top));
+        root.draw_text(note, &style, (w as i32 / 2, header_h)).map_err(err)?;
         header_h += m.px(NOTE_SIZE + 6.0);
     }
     header_h += m.px(4.0);
@@ -459,45 +406,25 @@ impl TickFormat {
     fn for_range(lo: f64, hi: f64, n: usize) -> Self {
         let ticks = tick_values(lo, hi, n);
         let max_abs = ticks.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let step = ticks
-            .windows(2)
-            .map(|w| (w[1] - w[0]).abs())
-            .fold(f64::INFINITY, f64::min);
-        let step = if step.is_finite() && step > 0.0 {
-            step
-        } else {
-            (hi - lo).abs().max(f64::MIN_POSITIVE)
-        };
+        let step = ticks.windows(2).map(|w| (w[1] - w[0]).abs()).fold(f64::INFINITY, f64::min);
+        let step = if step.is_finite() && step > 0.0 { step } else { (hi - lo).abs().max(f64::MIN_POSITIVE) };
         let scientific = max_abs >= 1e5 || (max_abs > 0.0 && max_abs < 1e-3);
         for decimals in 0..=12 {
-            let f = TickFormat {
-                decimals,
-                scientific,
-            };
-            let exact = ticks.iter().all(|&v| {
-                f.format(v)
-                    .parse::<f64>()
-                    .is_ok_and(|p| (p - v).abs() <= step * 1e-3)
-            });
+            let f = TickFormat { decimals, scientific };
+            let exact =
+                ticks.iter().all(|&v| f.format(v).parse::<f64>().is_ok_and(|p| (p - v).abs() <= step * 1e-3));
             if exact {
                 return f;
             }
         }
-        TickFormat {
-            decimals: 12,
-            scientific,
-        }
+        TickFormat { decimals: 12, scientific }
     }
 
     fn format(&self, v: f64) -> String {
         // Avoid "-0.0".
         let v = if v == 0.0 { 0.0 } else { v };
         if self.scientific {
-            if v == 0.0 {
-                "0".to_string()
-            } else {
-                format!("{:.*e}", self.decimals, v)
-            }
+            if v == 0.0 { "0".to_string() } else { format!("{:.*e}", self.decimals, v) }
         } else {
             let s = format!("{:.*}", self.decimals, v);
             if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
@@ -518,11 +445,7 @@ fn x_label_count(lo: f64, hi: f64, width: i32, m: Metrics) -> usize {
     for n in (3..=8).rev() {
         let f = TickFormat::for_range(lo, hi, n);
         let ticks = tick_values(lo, hi, n);
-        let widest = ticks
-            .iter()
-            .map(|&v| m.text_width(&f.format(v), TICK_SIZE))
-            .max()
-            .unwrap_or(0);
+        let widest = ticks.iter().map(|&v| m.text_width(&f.format(v), TICK_SIZE)).max().unwrap_or(0);
         if (ticks.len() as i32) * (widest + m.px(24.0)) <= width {
             return n;
         }
@@ -556,9 +479,7 @@ fn x_label_area(has_desc: bool, m: Metrics) -> u32 {
 fn auto_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values
         .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if lo > hi {
         return (0.0, 1.0);
     }
@@ -599,12 +520,7 @@ fn clip_segment(
     let (dx, dy) = (q.0 - p.0, q.1 - p.1);
     let mut t0 = 0.0f64;
     let mut t1 = 1.0f64;
-    for (pk, qk) in [
-        (-dx, p.0 - x0),
-        (dx, x1 - p.0),
-        (-dy, p.1 - y0),
-        (dy, y1 - p.1),
-    ] {
+    for (pk, qk) in [(-dx, p.0 - x0), (dx, x1 - p.0), (-dy, p.1 - y0), (dy, y1 - p.1)] {
         if pk == 0.0 {
             if qk < 0.0 {
                 return None;
@@ -621,16 +537,8 @@ fn clip_segment(
     if t0 > t1 || !t0.is_finite() || !t1.is_finite() {
         return None;
     }
-    let a = if t0 > 0.0 {
-        (p.0 + t0 * dx, p.1 + t0 * dy)
-    } else {
-        p
-    };
-    let b = if t1 < 1.0 {
-        (p.0 + t1 * dx, p.1 + t1 * dy)
-    } else {
-        q
-    };
+    let a = if t0 > 0.0 { (p.0 + t0 * dx, p.1 + t0 * dy) } else { p };
+    let b = if t1 < 1.0 { (p.0 + t1 * dx, p.1 + t1 * dy) } else { q };
     Some((a, b, t0 > 0.0, t1 < 1.0))
 }
 
@@ -642,11 +550,7 @@ fn line_runs(points: &[(f64, f64)], xr: (f64, f64), yr: (f64, f64)) -> Vec<Vec<(
     let finite = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
     for w in points.windows(2) {
         let (p, q) = (w[0], w[1]);
-        let clipped = if finite(&p) && finite(&q) {
-            clip_segment(p, q, xr, yr)
-        } else {
-            None
-        };
+        let clipped = if finite(&p) && finite(&q) { clip_segment(p, q, xr, yr) } else { None };
         match clipped {
             Some((a, b, a_moved, b_moved)) => {
                 if run.is_empty() || a_moved {
@@ -712,12 +616,7 @@ const LEGEND_POSITIONS: [SeriesLabelPosition; 8] = [
 ];
 
 /// Legend box `[x0, y0, x1, y1]` inside a plot of size `dim` (plot pixel coordinates).
-fn legend_box(
-    pos: &SeriesLabelPosition,
-    size: (i32, i32),
-    dim: (u32, u32),
-    m: Metrics,
-) -> [i32; 4] {
+fn legend_box(pos: &SeriesLabelPosition, size: (i32, i32), dim: (u32, u32), m: Metrics) -> [i32; 4] {
     use SeriesLabelPosition::*;
     let (w, h) = size;
     let (aw, ah) = (dim.0 as i32, dim.1 as i32);
@@ -739,18 +638,8 @@ fn legend_box(
 
 /// Series geometry clipped to the final ranges.
 enum Prepared<'a> {
-    Line {
-        series: &'a Series,
-        style: LineStyle,
-        color: Color,
-        runs: Vec<Vec<(f64, f64)>>,
-    },
-    Markers {
-        series: &'a Series,
-        shape: MarkerShape,
-        color: Color,
-        points: Vec<(f64, f64)>,
-    },
+    Line { series: &'a Series, style: LineStyle, color: Color, runs: Vec<Vec<(f64, f64)>> },
+    Markers { series: &'a Series, shape: MarkerShape, color: Color, points: Vec<(f64, f64)> },
 }
 
 fn prepare(panel: &Panel, xr: (f64, f64), yr: (f64, f64)) -> Vec<Prepared<'_>> {
@@ -758,18 +647,12 @@ fn prepare(panel: &Panel, xr: (f64, f64), yr: (f64, f64)) -> Vec<Prepared<'_>> {
         .series
         .iter()
         .map(|s| match s.style {
-            SeriesStyle::Line { style, color } => Prepared::Line {
-                series: s,
-                style,
-                color,
-                runs: line_runs(&s.points, xr, yr),
-            },
-            SeriesStyle::Markers { shape, color } => Prepared::Markers {
-                series: s,
-                shape,
-                color,
-                points: marker_points(&s.points, xr, yr),
-            },
+            SeriesStyle::Line { style, color } => {
+                Prepared::Line { series: s, style, color, runs: line_runs(&s.points, xr, yr) }
+            }
+            SeriesStyle::Markers { shape, color } => {
+                Prepared::Markers { series: s, shape, color, points: marker_points(&s.points, xr, yr) }
+            }
         })
         .collect()
 }
@@ -782,12 +665,7 @@ fn data_samples(
     dim: (u32, u32),
 ) -> Vec<(f64, f64)> {
     let (w, h) = (dim.0 as f64, dim.1 as f64);
-    let to_px = |(x, y): (f64, f64)| {
-        (
-            (x - xr.0) / (xr.1 - xr.0) * w,
-            (1.0 - (y - yr.0) / (yr.1 - yr.0)) * h,
-        )
-    };
+    let to_px = |(x, y): (f64, f64)| ((x - xr.0) / (xr.1 - xr.0) * w, (1.0 - (y - yr.0) / (yr.1 - yr.0)) * h);
     let mut out = Vec::new();
     for p in prepared {
         match p {
@@ -828,10 +706,7 @@ fn legend_size(labels: &[&str], m: Metrics) -> Result<(i32, i32), String> {
         text.push_line(*l);
     }
     let (w, h) = text.estimate_dimension().map_err(err)?;
-    Ok((
-        w + m.px(LEGEND_SYMBOL_AREA + 2.0 * LEGEND_MARGIN),
-        h + m.px(2.0 * LEGEND_MARGIN),
-    ))
+    Ok((w + m.px(LEGEND_SYMBOL_AREA + 2.0 * LEGEND_MARGIN), h + m.px(2.0 * LEGEND_MARGIN)))
 }
 
 fn draw_panel<DB: DrawingBackend>(
@@ -843,8 +718,7 @@ fn draw_panel<DB: DrawingBackend>(
     let inner = if panel.title.is_empty() {
         area
     } else {
-        area.titled(&panel.title, m.font(PANEL_TITLE_SIZE))
-            .map_err(err)?
+        area.titled(&panel.title, m.font(PANEL_TITLE_SIZE)).map_err(err)?
     };
 
     // Ranges.
@@ -855,20 +729,10 @@ fn draw_panel<DB: DrawingBackend>(
     let xr = x_fixed.unwrap_or_else(|| {
         // With a fixed y range, only points inside it matter for x (and vice versa).
         let ys = y_fixed.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-        auto_range(
-            all()
-                .filter(finite)
-                .filter(|p| p.1 >= ys.0 && p.1 <= ys.1)
-                .map(|p| p.0),
-        )
+        auto_range(all().filter(finite).filter(|p| p.1 >= ys.0 && p.1 <= ys.1).map(|p| p.0))
     });
     let mut yr = y_fixed.unwrap_or_else(|| {
-        auto_range(
-            all()
-                .filter(finite)
-                .filter(|p| p.0 >= xr.0 && p.0 <= xr.1)
-                .map(|p| p.1),
-        )
+        auto_range(all().filter(finite).filter(|p| p.0 >= xr.0 && p.0 <= xr.1).map(|p| p.1))
     });
 
     let x_area = x_label_area(!panel.x_label.is_empty(), m);
@@ -886,12 +750,7 @@ fn draw_panel<DB: DrawingBackend>(
 
     // Legend placement: the preferred corner hiding the least data; with an automatic y range,
     // make headroom above the data when every position would hide some.
-    let labels: Vec<&str> = panel
-        .series
-        .iter()
-        .map(|s| s.label.as_str())
-        .filter(|l| !l.is_empty())
-        .collect();
+    let labels: Vec<&str> = panel.series.iter().map(|s| s.label.as_str()).filter(|l| !l.is_empty()).collect();
     let mut legend_pos = SeriesLabelPosition::UpperRight;
     if !labels.is_empty() {
         let lsize = legend_size(&labels, m)?;
@@ -962,21 +821,14 @@ fn draw_panel<DB: DrawingBackend>(
     // Series, in order (later series on top).
     for p in prepare(panel, xr, yr) {
         match p {
-            Prepared::Line {
-                series,
-                style,
-                color,
-                runs,
-            } => {
+            Prepared::Line { series, style, color, runs } => {
                 let shape = line_shape(style, color, m);
                 let (on, off) = (m.px(DASH_ON), m.px(DASH_OFF));
                 let (legend_on, legend_off) = (m.px(8.0), m.px(5.0));
                 let legend_len = m.px(LEGEND_SYMBOL_LEN);
                 let anno = match style {
-                    LineStyle::Dashed => chart.draw_series(
-                        runs.into_iter()
-                            .map(|run| DashedPathElement::new(run, on, off, shape)),
-                    ),
+                    LineStyle::Dashed => chart
+                        .draw_series(runs.into_iter().map(|run| DashedPathElement::new(run, on, off, shape))),
                     LineStyle::Solid | LineStyle::Thin => {
                         chart.draw_series(runs.into_iter().map(|run| PathElement::new(run, shape)))
                     }
@@ -994,44 +846,35 @@ fn draw_panel<DB: DrawingBackend>(
                     });
                 }
             }
-            Prepared::Markers {
-                series,
-                shape,
-                color,
-                points,
-            } => {
+            Prepared::Markers { series, shape, color, points } => {
                 let fill = color.rgb().filled();
                 let stroke = color.rgb().stroke_width(m.upx(2.0));
                 let r = m.px(MARKER_SIZE);
                 let one = m.px(1.0);
                 let legend_len = m.px(LEGEND_SYMBOL_LEN);
                 let pts = points.into_iter();
-                let anno =
-                    match shape {
-                        MarkerShape::Circle => chart.draw_series(
-                            pts.map(|q| EmptyElement::at(q) + Circle::new((0, 0), r, fill)),
-                        ),
-                        MarkerShape::Triangle => chart.draw_series(pts.map(|q| {
-                            EmptyElement::at(q) + TriangleMarker::new((0, 0), r + one, fill)
-                        })),
-                        MarkerShape::Square => chart.draw_series(pts.map(|q| {
-                            EmptyElement::at(q)
-                                + Rectangle::new([(one - r, one - r), (r - one, r - one)], fill)
-                        })),
-                        MarkerShape::Cross => chart.draw_series(
-                            pts.map(|q| EmptyElement::at(q) + Cross::new((0, 0), r, stroke)),
-                        ),
+                let anno = match shape {
+                    MarkerShape::Circle => {
+                        chart.draw_series(pts.map(|q| EmptyElement::at(q) + Circle::new((0, 0), r, fill)))
                     }
-                    .map_err(err)?;
+                    MarkerShape::Triangle => chart.draw_series(
+                        pts.map(|q| EmptyElement::at(q) + TriangleMarker::new((0, 0), r + one, fill)),
+                    ),
+                    MarkerShape::Square => chart.draw_series(pts.map(|q| {
+                        EmptyElement::at(q) + Rectangle::new([(one - r, one - r), (r - one, r - one)], fill)
+                    })),
+                    MarkerShape::Cross => {
+                        chart.draw_series(pts.map(|q| EmptyElement::at(q) + Cross::new((0, 0), r, stroke)))
+                    }
+                }
+                .map_err(err)?;
                 if !series.label.is_empty() {
                     anno.label(series.label.as_str()).legend(move |(x, y)| {
                         // Pixel coordinates here, so plain (DB-independent) elements do.
                         let (cx, cy) = (x + legend_len / 2, y);
                         match shape {
                             MarkerShape::Circle => Circle::new((cx, cy), r, fill).into_dyn(),
-                            MarkerShape::Triangle => {
-                                TriangleMarker::new((cx, cy), r + one, fill).into_dyn()
-                            }
+                            MarkerShape::Triangle => TriangleMarker::new((cx, cy), r + one, fill).into_dyn(),
                             MarkerShape::Square => Rectangle::new(
                                 [(cx + one - r, cy + one - r), (cx + r - one, cy + r - one)],
                                 fill,
@@ -1120,9 +963,7 @@ mod tests {
         third.y_range = Some((-0.5, 0.5));
         third.series = vec![Series::line(
             "clipped dashes",
-            (0..=100)
-                .map(|i| (i as f64 * 0.02 - 0.5, (i as f64 * 0.1).sin()))
-                .collect(),
+            (0..=100).map(|i| (i as f64 * 0.02 - 0.5, (i as f64 * 0.1).sin())).collect(),
             LineStyle::Dashed,
             Color::GREEN,
         )];
@@ -1198,26 +1039,11 @@ mod tests {
         let (png, svg) = (dir.path().join("d.png"), dir.path().join("d.svg"));
         let mut all_nan = Panel::new("", "", "");
         all_nan.series = vec![
-            Series::line(
-                "nan",
-                vec![(f64::NAN, f64::NAN); 5],
-                LineStyle::Dashed,
-                Color::RED,
-            ),
-            Series::markers(
-                "",
-                vec![(1.0, f64::INFINITY)],
-                MarkerShape::Square,
-                Color::BLACK,
-            ),
+            Series::line("nan", vec![(f64::NAN, f64::NAN); 5], LineStyle::Dashed, Color::RED),
+            Series::markers("", vec![(1.0, f64::INFINITY)], MarkerShape::Square, Color::BLACK),
         ];
         let mut single = Panel::new("single point", "x", "y");
-        single.series = vec![Series::markers(
-            "one",
-            vec![(2.0, 3.0)],
-            MarkerShape::Triangle,
-            Color::BLUE,
-        )];
+        single.series = vec![Series::markers("one", vec![(2.0, 3.0)], MarkerShape::Triangle, Color::BLUE)];
         let mut bad_range = Panel::new("bad range", "x", "y");
         bad_range.x_range = Some((1.0, 1.0));
         bad_range.y_range = Some((f64::NAN, 1.0));
@@ -1271,14 +1097,7 @@ mod tests {
 
     #[test]
     fn plot_clipping_breaks_lines() {
-        let pts = [
-            (0.0, 0.0),
-            (1.0, 1.0),
-            (f64::NAN, 0.0),
-            (2.0, 0.0),
-            (3.0, 5.0),
-            (4.0, 0.0),
-        ];
+        let pts = [(0.0, 0.0), (1.0, 1.0), (f64::NAN, 0.0), (2.0, 0.0), (3.0, 5.0), (4.0, 0.0)];
         let runs = line_runs(&pts, (-10.0, 10.0), (-1.0, 2.0));
         assert_eq!(runs.len(), 3, "{runs:?}");
         assert_eq!(runs[0], vec![(0.0, 0.0), (1.0, 1.0)]);
@@ -1299,15 +1118,10 @@ mod tests {
                 (v, 0.9 - 0.1 * v.powf(0.2))
             })
             .collect();
-        let e_sim: Vec<(f64, f64)> = e_th
-            .iter()
-            .step_by(4)
-            .map(|&(v, e)| (v, e + 0.004 * (v * 7.0).sin()))
-            .collect();
-        let err: Vec<(f64, f64)> = e_sim
-            .iter()
-            .map(|&(v, _)| (v, 2.5e-5 * (1.0 + (v * 3.0).cos())))
-            .collect();
+        let e_sim: Vec<(f64, f64)> =
+            e_th.iter().step_by(4).map(|&(v, e)| (v, e + 0.004 * (v * 7.0).sin())).collect();
+        let err: Vec<(f64, f64)> =
+            e_sim.iter().map(|&(v, _)| (v, 2.5e-5 * (1.0 + (v * 3.0).cos()))).collect();
         let energy: Vec<(f64, f64)> = (0..=500)
             .map(|i| {
                 let t = i as f64 * 2e-4;
@@ -1329,11 +1143,7 @@ mod tests {
                         ),
                         Series::markers("grainflow", e_sim, MarkerShape::Circle, Color::BLUE),
                     ],
-                    ..Panel::new(
-                        "Restitution",
-                        "impact velocity v [m/s]",
-                        "coefficient of restitution e [-]",
-                    )
+                    ..Panel::new("Restitution", "impact velocity v [m/s]", "coefficient of restitution e [-]")
                 },
                 Panel {
                     series: vec![
@@ -1348,27 +1158,13 @@ mod tests {
                     ..Panel::new("Error", "impact velocity v [m/s]", "absolute error [-]")
                 },
                 Panel {
-                    series: vec![Series::line(
-                        "dissipated energy",
-                        energy,
-                        LineStyle::Solid,
-                        Color::GREEN,
-                    )],
+                    series: vec![Series::line("dissipated energy", energy, LineStyle::Solid, Color::GREEN)],
                     ..Panel::new("Energy", "time t [s]", "E [J]")
                 },
             ],
         };
-        write_figure(
-            &fig,
-            Path::new("/tmp/plot_example.png"),
-            Path::new("/tmp/plot_example.svg"),
-        )
-        .unwrap();
-        write_figure(
-            &demo_figure(),
-            Path::new("/tmp/plot_demo.png"),
-            Path::new("/tmp/plot_demo.svg"),
-        )
-        .unwrap();
+        write_figure(&fig, Path::new("/tmp/plot_example.png"), Path::new("/tmp/plot_example.svg")).unwrap();
+        write_figure(&demo_figure(), Path::new("/tmp/plot_demo.png"), Path::new("/tmp/plot_demo.svg"))
+            .unwrap();
     }
 }

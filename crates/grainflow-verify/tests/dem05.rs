@@ -8,11 +8,7 @@ use grainflow_verify::dem05::{self, Collision, Model, Options};
 #[test]
 #[cfg_attr(debug_assertions, ignore = "expensive: run with --release")]
 fn dem05_converged_all_checks_pass_and_files_are_complete() {
-    let report = dem05::evaluate(Options {
-        converged: true,
-        integrator: None,
-    })
-    .expect("runs");
+    let report = dem05::evaluate(Options { converged: true, integrator: None }).expect("runs");
     let failed: Vec<String> = report
         .checks
         .iter()
@@ -22,24 +18,12 @@ fn dem05_converged_all_checks_pass_and_files_are_complete() {
     assert!(failed.is_empty(), "failed checks:\n{}", failed.join("\n"));
     // Every check promised by the case is present and asserted (none skipped with --converged).
     let asserted = |needle: &str| {
-        report
-            .checks
-            .iter()
-            .filter(|c| c.kind == CheckKind::Assert && c.name.contains(needle))
-            .count()
+        report.checks.iter().filter(|c| c.kind == CheckKind::Assert && c.name.contains(needle)).count()
     };
     assert_eq!(asserted("time step equals MFIX"), 2);
-    assert_eq!(
-        asserted("equals MFIX 21.3's output"),
-        6,
-        "3 quantities × 2 models"
-    );
+    assert_eq!(asserted("equals MFIX 21.3's output"), 6, "3 quantities × 2 models");
     assert_eq!(asserted("step count equals MFIX"), 2);
-    assert_eq!(
-        asserted("gross-sliding"),
-        12,
-        "e_t, ω, angle × 2 models × 2 collisions"
-    );
+    assert_eq!(asserted("gross-sliding"), 12, "e_t, ω, angle × 2 models × 2 collisions");
     assert_eq!(asserted("K·R·ω′"), 2);
     assert_eq!(asserted("LSD e_t at θ"), 1);
     assert_eq!(asserted("vs Kharaz"), 4);
@@ -73,16 +57,11 @@ fn dem05_converged_all_checks_pass_and_files_are_complete() {
                 .map(|r| r[2].parse().expect("angle"))
                 .collect();
             // MFIX's 31 angles: 0, 0.5, …, 2.5, then every 2.5° to 65°.
-            let expected: Vec<f64> = [0.0, 0.5, 1.0, 1.5, 2.0]
-                .into_iter()
-                .chain((1..=26).map(|k| 2.5 * k as f64))
-                .collect();
+            let expected: Vec<f64> =
+                [0.0, 0.5, 1.0, 1.5, 2.0].into_iter().chain((1..=26).map(|k| 2.5 * k as f64)).collect();
             assert_eq!(angles.len(), 31);
             for (a, e) in angles.iter().zip(&expected) {
-                assert!(
-                    (a - e).abs() < 1e-3,
-                    "{model} {collision}: angle {a} where MFIX has {e}"
-                );
+                assert!((a - e).abs() < 1e-3, "{model} {collision}: angle {a} where MFIX has {e}");
             }
         }
     }

@@ -30,10 +30,6 @@ pub enum EngineError {
 
 impl EngineError {
     pub(crate) fn invalid(what: impl Into<String>, value: f64, valid: impl Into<String>) -> Self {
-        EngineError::InvalidValue {
-            what: what.into(),
-            value: format!("{value}"),
-            valid: valid.into(),
-        }
+        EngineError::InvalidValue { what: what.into(), value: format!("{value}"), valid: valid.into() }
     }
 }

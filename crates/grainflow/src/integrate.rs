@@ -36,10 +36,7 @@ impl Integrator {
 
 #[inline(always)]
 fn accelerations(p: &Particles, i: usize, gravity: Vec3) -> (Vec3, Vec3) {
-    (
-        p.force[i] * p.inv_mass[i] + gravity,
-        p.torque[i] * p.inv_inertia[i],
-    )
+    (p.force[i] * p.inv_mass[i] + gravity, p.torque[i] * p.inv_inertia[i])
 }
 
 /// MFIX's `EULER` step.
@@ -54,13 +51,7 @@ pub fn euler(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64) {
 
 /// MFIX's `ADAMS_BASHFORTH` step. `first` marks the first step of the run, where the previous
 /// accelerations are taken equal to the current ones.
-pub fn adams_bashforth(
-    p: &mut Particles,
-    range: Range<usize>,
-    gravity: Vec3,
-    dt: f64,
-    first: bool,
-) {
+pub fn adams_bashforth(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64, first: bool) {
     let h = 0.5 * dt;
     let r = range;
     // Slicing every array to the range up front lets the compiler drop the bounds checks.
@@ -74,11 +65,7 @@ pub fn adams_bashforth(
     for i in 0..force.len() {
         let a = force[i] * inv_m[i] + gravity;
         let alpha = torque[i] * inv_i[i];
-        let (ap, alp) = if first {
-            (a, alpha)
-        } else {
-            (a_prev[i], alpha_prev[i])
-        };
+        let (ap, alp) = if first { (a, alpha) } else { (a_prev[i], alpha_prev[i]) };
         let v0 = v[i];
         let v1 = v0 + h * (3.0 * a - ap);
         x[i] += h * (v0 + v1);

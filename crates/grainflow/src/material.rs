@@ -55,11 +55,7 @@ pub struct WallMaterial {
 
 impl WallMaterial {
     pub(crate) fn validate(&self) -> Result<(), EngineError> {
-        validate_elastic(
-            &format!("wall material '{}'", self.name),
-            self.youngs_modulus,
-            self.poisson_ratio,
-        )
+        validate_elastic(&format!("wall material '{}'", self.name), self.youngs_modulus, self.poisson_ratio)
     }
 }
 

@@ -41,10 +41,7 @@ pub(crate) struct ResolvedMotion {
     anchor: Vec3,
 }
 
-pub(crate) fn resolve(
-    rules: &[PrescribedMotion],
-    p: &Particles,
-) -> Result<Vec<ResolvedMotion>, EngineError> {
+pub(crate) fn resolve(rules: &[PrescribedMotion], p: &Particles) -> Result<Vec<ResolvedMotion>, EngineError> {
     let mut slot_of = std::collections::HashMap::with_capacity(p.len());
     for (i, &id) in p.id.iter().enumerate() {
         slot_of.insert(id, i);
@@ -71,12 +68,7 @@ pub(crate) fn resolve(
                     (Some(find(leader, "a leader")?), axes)
                 }
             };
-            Ok(ResolvedMotion {
-                slot,
-                leader,
-                axes,
-                anchor: p.position[slot],
-            })
+            Ok(ResolvedMotion { slot, leader, axes, anchor: p.position[slot] })
         })
         .collect()
 }

@@ -67,10 +67,7 @@ fn pair_key(id_a: u32, id_b: u32) -> u64 {
 impl NeighborList {
     /// An empty list with the given skin (m).
     pub fn new(skin: f64) -> Self {
-        NeighborList {
-            skin,
-            ..Default::default()
-        }
+        NeighborList { skin, ..Default::default() }
     }
 
     /// The skin distance, m.
@@ -130,7 +127,10 @@ impl NeighborList {
                 hi = Vec3::ZERO;
             }
             let extent = hi - lo;
-            let mut cell = 2.0 * p.max_radius() + skin;
+            // A hair above the largest cut-off, so that rounding in the cell index of a point
+            // on a cell boundary can never put two particles closer than the cut-off into
+            // non-adjacent cells.
+            let mut cell = (2.0 * p.max_radius() + skin) * (1.0 + 1e-6);
             let max_cells = (8 * n).max(1024) as f64;
             let count = |c: f64| {
                 let d = (extent / c).floor() + Vec3::ONE;
@@ -154,8 +154,7 @@ impl NeighborList {
             self.cell_count.resize(n_cells + 1, 0);
             self.cell_of.clear();
             for x in &p.position {
-                let c =
-                    coord(x.x, lo.x, nx) + nx * (coord(x.y, lo.y, ny) + ny * coord(x.z, lo.z, nz));
+                let c = coord(x.x, lo.x, nx) + nx * (coord(x.y, lo.y, ny) + ny * coord(x.z, lo.z, nz));
                 self.cell_of.push(c as u32);
                 self.cell_count[c + 1] += 1;
             }
@@ -217,11 +216,8 @@ impl NeighborList {
             self.stats.distance_checks += checks;
         }
         self.new_pairs.sort_unstable_by_key(|e| e.0);
-        let (keys, hist) = merge_history(
-            &self.pair_keys,
-            &self.pair_history,
-            self.new_pairs.iter().map(|e| e.0),
-        );
+        let (keys, hist) =
+            merge_history(&self.pair_keys, &self.pair_history, self.new_pairs.iter().map(|e| e.0));
         self.pairs.clear();
         self.pairs.extend(self.new_pairs.iter().map(|e| e.1));
         self.pair_keys = keys;
@@ -235,17 +231,13 @@ impl NeighborList {
                 self.stats.distance_checks += 1;
                 let d = wall.distance(p.position[i]);
                 if d < p.radius[i] + self.skin {
-                    self.new_pairs
-                        .push((pair_key(p.id[i], w as u32), [i as u32, w as u32]));
+                    self.new_pairs.push((pair_key(p.id[i], w as u32), [i as u32, w as u32]));
                 }
             }
         }
         self.new_pairs.sort_unstable_by_key(|e| e.0);
-        let (keys, hist) = merge_history(
-            &self.wall_keys,
-            &self.wall_history,
-            self.new_pairs.iter().map(|e| e.0),
-        );
+        let (keys, hist) =
+            merge_history(&self.wall_keys, &self.wall_history, self.new_pairs.iter().map(|e| e.0));
         self.wall_pairs.clear();
         self.wall_pairs.extend(self.new_pairs.iter().map(|e| e.1));
         self.wall_keys = keys;
@@ -266,11 +258,7 @@ fn merge_history(
         while k < old_keys.len() && old_keys[k] < key {
             k += 1;
         }
-        let h = if k < old_keys.len() && old_keys[k] == key {
-            old_hist[k]
-        } else {
-            Vec3::ZERO
-        };
+        let h = if k < old_keys.len() && old_keys[k] == key { old_hist[k] } else { Vec3::ZERO };
         keys.push(key);
         hist.push(h);
     }

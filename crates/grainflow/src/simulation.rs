@@ -2,9 +2,7 @@
 
 use crate::contact::geometry::{pair_contact, relative_velocity, wall_contact};
 use crate::contact::law::{contact_force, normal_spring_energy, rolling_torque};
-use crate::contact::{
-    CoeffTable, ContactLaw, ContactParams, LeverArm, NormalModel, TangentialModel,
-};
+use crate::contact::{CoeffTable, ContactLaw, ContactParams, LeverArm, NormalModel, TangentialModel};
 use crate::error::EngineError;
 use crate::integrate::{self, Integrator};
 use crate::material::{Phase, WallMaterial};
@@ -82,9 +80,7 @@ impl Simulation {
             wm.validate()?;
         }
         if config.phases.is_empty() {
-            return Err(EngineError::BadReference(
-                "at least one phase is needed".into(),
-            ));
+            return Err(EngineError::BadReference("at least one phase is needed".into()));
         }
         for w in &config.walls {
             if w.material >= config.wall_materials.len() {
@@ -103,23 +99,15 @@ impl Simulation {
             }
         }
         check_particles(&particles, config.phases.len())?;
-        if !(config.t_start.is_finite()
-            && config.t_stop.is_finite()
-            && config.t_stop > config.t_start)
-        {
+        if !(config.t_start.is_finite() && config.t_stop.is_finite() && config.t_stop > config.t_start) {
             return Err(EngineError::invalid(
                 "t_stop",
                 config.t_stop,
-                format!(
-                    "the end time must be finite and after the start time {} s",
-                    config.t_start
-                ),
+                format!("the end time must be finite and after the start time {} s", config.t_start),
             ));
         }
         if !config.gravity.is_finite() {
-            return Err(EngineError::BadReference(
-                "gravity must be a finite vector in m/s²".into(),
-            ));
+            return Err(EngineError::BadReference("gravity must be a finite vector in m/s²".into()));
         }
         let coeffs = CoeffTable::build(
             &config.law,
@@ -260,7 +248,9 @@ impl Simulation {
             }
             Integrator::VelocityVerlet => {
                 if !self.forces_current {
-                    self.compute_forces();
+                    // Forces of the current state for the first half kick; the tangential
+                    // springs advance once per step, in the evaluation after the drift.
+                    self.evaluate_forces(false);
                 }
                 for r in self.free.clone() {
                     integrate::verlet_kick_drift(&mut self.particles, r, g, dt);
@@ -269,7 +259,9 @@ impl Simulation {
                 for r in self.free.clone() {
                     integrate::verlet_kick(&mut self.particles, r, g, dt);
                 }
-                self.forces_current = true;
+                // Prescribed motion moves particles after this evaluation: their partners'
+                // forces must then be evaluated again before the next half kick.
+                self.forces_current = self.motion.is_empty();
             }
         }
         self.history_started = true;
@@ -296,22 +288,31 @@ impl Simulation {
         }
     }
 
-    /// Contact forces and torques from the current state into the accumulators.
+    /// Contact forces and torques from the current state into the accumulators, advancing the
+    /// tangential springs by one step (this is the force evaluation of a step).
     pub fn compute_forces(&mut self) {
+        self.evaluate_forces(true);
+    }
+
+    /// Contact forces and torques into the accumulators. With `advance_history` the tangential
+    /// springs take this step's increment (s = h + Δt·v_t) and store it; without, the forces
+    /// are those of the stored springs as they are (s = h), and nothing is stored — so
+    /// evaluating the same state again gives the same forces and leaves the history alone.
+    fn evaluate_forces(&mut self, advance_history: bool) {
         self.neighbors.update(&self.particles, &self.walls);
         self.particles.clear_forces();
         use NormalModel::*;
         use TangentialModel::*;
         match (self.law.normal, self.law.tangential) {
-            (LinearSpringDashpot, MfixTotal) => self.force_loop::<false, false>(),
-            (LinearSpringDashpot, IncrementalMindlin) => self.force_loop::<false, true>(),
-            (Hertz, MfixTotal) => self.force_loop::<true, false>(),
-            (Hertz, IncrementalMindlin) => self.force_loop::<true, true>(),
+            (LinearSpringDashpot, MfixTotal) => self.force_loop::<false, false>(advance_history),
+            (LinearSpringDashpot, IncrementalMindlin) => self.force_loop::<false, true>(advance_history),
+            (Hertz, MfixTotal) => self.force_loop::<true, false>(advance_history),
+            (Hertz, IncrementalMindlin) => self.force_loop::<true, true>(advance_history),
         }
     }
 
-    fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self) {
-        let dt = self.time_step.dt;
+    fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool) {
+        let dt = if advance_history { self.time_step.dt } else { 0.0 };
         let frame = self.law.history;
         let lever = self.law.lever;
         let p = &mut self.particles;
@@ -319,8 +320,7 @@ impl Simulation {
         // Walls first, as MFIX does.
         for (k, &[i, w]) in nl.wall_pairs.iter().enumerate() {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
-            let Some(mut g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal)
-            else {
+            let Some(mut g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal) else {
                 nl.wall_history[k] = Vec3::ZERO;
                 continue;
             };
@@ -329,41 +329,45 @@ impl Simulation {
             }
             let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
             let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
-            let f =
-                contact_force::<HERTZ, INCREMENTAL>(frame, c, &g, v_r, &mut nl.wall_history[k], dt);
+            let mut h = nl.wall_history[k];
+            let f = contact_force::<HERTZ, INCREMENTAL>(frame, c, &g, v_r, &mut h, dt);
+            if advance_history {
+                nl.wall_history[k] = h;
+            }
             p.force[i] += f.total();
-            p.torque[i] += f.torque(g.lever_i, g.normal)
-                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
+            p.torque[i] +=
+                f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
         }
         for (k, &[i, j]) in nl.pairs.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
-            let Some(g) = pair_contact(p.position[i], p.position[j], p.radius[i], p.radius[j])
-            else {
+            let Some(mut g) = pair_contact(p.position[i], p.position[j], p.radius[i], p.radius[j]) else {
                 nl.pair_history[k] = Vec3::ZERO;
                 continue;
             };
+            if lever == LeverArm::Radius {
+                (g.lever_i, g.lever_j) = (p.radius[i], p.radius[j]);
+            }
             let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
             let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
-            let f =
-                contact_force::<HERTZ, INCREMENTAL>(frame, c, &g, v_r, &mut nl.pair_history[k], dt);
+            let mut h = nl.pair_history[k];
+            let f = contact_force::<HERTZ, INCREMENTAL>(frame, c, &g, v_r, &mut h, dt);
+            if advance_history {
+                nl.pair_history[k] = h;
+            }
             let total = f.total();
             p.force[i] += total;
             p.force[j] -= total;
-            p.torque[i] += f.torque(g.lever_i, g.normal)
-                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
-            p.torque[j] += f.torque(g.lever_j, g.normal)
-                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[j]);
+            p.torque[i] +=
+                f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
+            p.torque[j] +=
+                f.torque(g.lever_j, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[j]);
         }
     }
 
     /// Energies, contacts and overlaps of the current state.
     pub fn diagnostics(&self) -> Diagnostics {
         let p = &self.particles;
-        let mut d = Diagnostics {
-            time: self.time(),
-            step: self.step,
-            ..Default::default()
-        };
+        let mut d = Diagnostics { time: self.time(), step: self.step, ..Default::default() };
         for i in 0..p.len() {
             d.kinetic_translational += 0.5 * p.mass[i] * p.velocity[i].length_squared();
             d.kinetic_rotational += 0.5 * p.inertia[i] * p.omega[i].length_squared();
@@ -378,11 +382,7 @@ impl Simulation {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
             if let Some(g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal) {
                 let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
-                visit(
-                    g.overlap,
-                    p.radius[i],
-                    normal_spring_energy(self.law.normal, c, g.overlap),
-                );
+                visit(g.overlap, p.radius[i], normal_spring_energy(self.law.normal, c, g.overlap));
             }
         }
         for &[i, j] in &self.neighbors.pairs {
@@ -418,17 +418,12 @@ fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
         p.alpha_prev.len(),
     ];
     if lens.iter().any(|&l| l != n) {
-        return Err(EngineError::BadReference(
-            "particle arrays have different lengths".into(),
-        ));
+        return Err(EngineError::BadReference("particle arrays have different lengths".into()));
     }
     let mut ids: Vec<u32> = p.id.clone();
     ids.sort_unstable();
     if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
-        return Err(EngineError::BadReference(format!(
-            "particle id {} is used twice",
-            w[0]
-        )));
+        return Err(EngineError::BadReference(format!("particle id {} is used twice", w[0])));
     }
     for i in 0..n {
         let id = p.id[i];

@@ -39,11 +39,7 @@ pub fn collision_time(kn: f64, eta_n: f64, m_eff: f64) -> f64 {
 /// Number of steps MFIX takes for a run of length `span`: ceil of the single-precision quotient.
 pub fn step_count(span: f64, dt: f64) -> u64 {
     let q = (span as f32) / (dt as f32);
-    if q.is_finite() && q > 0.0 {
-        q.ceil() as u64
-    } else {
-        0
-    }
+    if q.is_finite() && q > 0.0 { q.ceil() as u64 } else { 0 }
 }
 
 /// Applies the rule.
@@ -89,11 +85,7 @@ pub fn choose(
         }
         TimeStepRule::Fixed(dt) => {
             if !(dt.is_finite() && dt > 0.0) {
-                return Err(EngineError::invalid(
-                    "dt",
-                    dt,
-                    "the time step must be a positive time in s",
-                ));
+                return Err(EngineError::invalid("dt", dt, "the time step must be a positive time in s"));
             }
             let text = if tcoll.is_finite() {
                 format!(
@@ -112,10 +104,5 @@ pub fn choose(
             "MFIX's time-step rule needs at least one phase; give an explicit dt".into(),
         ));
     }
-    Ok(TimeStepChoice {
-        dt,
-        steps: step_count(span, dt),
-        tcoll,
-        explanation,
-    })
+    Ok(TimeStepChoice { dt, steps: step_count(span, dt), tcoll, explanation })
 }

@@ -19,12 +19,7 @@ pub struct Wall {
 impl Wall {
     /// A plane through `point` with normal `normal` (normalised here).
     pub fn plane(name: impl Into<String>, point: Vec3, normal: Vec3, material: usize) -> Self {
-        Wall {
-            point,
-            normal: normal.normalize(),
-            material,
-            name: name.into(),
-        }
+        Wall { point, normal: normal.normalize(), material, name: name.into() }
     }
 
     /// The six faces of the axis-aligned box [min, max] (MFIX's default walls), facing inwards,

@@ -32,9 +32,7 @@ use glam::DQuat;
 use grainflow::contact::geometry::{pair_contact, relative_velocity, wall_contact};
 use grainflow::contact::law::{contact_force_dyn, normal_spring_energy};
 use grainflow::contact::{ContactCoeffs, ContactParams};
-use grainflow::{
-    ContactLaw, HistoryFrame, Integrator, LeverArm, NormalModel, TangentialModel, Vec3, Wall,
-};
+use grainflow::{ContactLaw, HistoryFrame, Integrator, LeverArm, NormalModel, TangentialModel, Vec3, Wall};
 use proptest::prelude::*;
 
 const REL_TOL: f64 = 1e-9;
@@ -44,23 +42,10 @@ const REL_TOL: f64 = 1e-9;
 #[allow(clippy::needless_update)]
 fn law_of(k: usize) -> ContactLaw {
     let normal = [NormalModel::LinearSpringDashpot, NormalModel::Hertz][k % 2];
-    let tangential = [
-        TangentialModel::MfixTotal,
-        TangentialModel::IncrementalMindlin,
-    ][(k / 2) % 2];
-    let history = [
-        HistoryFrame::Mfix,
-        HistoryFrame::Project,
-        HistoryFrame::Rotate,
-    ][(k / 4) % 3];
+    let tangential = [TangentialModel::MfixTotal, TangentialModel::IncrementalMindlin][(k / 2) % 2];
+    let history = [HistoryFrame::Mfix, HistoryFrame::Project, HistoryFrame::Rotate][(k / 4) % 3];
     let lever = [LeverArm::RadicalPlane, LeverArm::Radius][(k / 12) % 2];
-    ContactLaw {
-        normal,
-        tangential,
-        history,
-        lever,
-        ..ContactLaw::mfix(normal)
-    }
+    ContactLaw { normal, tangential, history, lever, ..ContactLaw::mfix(normal) }
 }
 
 /// The 12 force laws (the lever arm is a matter of the geometry, not of the force law).
@@ -79,9 +64,7 @@ fn vec3(scale: f64) -> impl Strategy<Value = Vec3> {
 
 fn unit() -> impl Strategy<Value = Vec3> {
     prop::array::uniform3(-1.0f64..1.0)
-        .prop_filter("non-degenerate direction", |a| {
-            Vec3::from_array(*a).length() > 0.1
-        })
+        .prop_filter("non-degenerate direction", |a| Vec3::from_array(*a).length() > 0.1)
         .prop_map(|a| Vec3::from_array(a).normalize())
 }
 
@@ -100,20 +83,8 @@ struct RawCoeffs {
 }
 
 fn raw_coeffs() -> impl Strategy<Value = RawCoeffs> {
-    (
-        0.0f64..1.0,
-        0.0f64..1.5,
-        0.0f64..1.0,
-        0.0f64..1.0,
-        0.0f64..1.0,
-    )
-        .prop_map(|(log_kn, kt_ratio, zeta_n, zeta_t, mu)| RawCoeffs {
-            log_kn,
-            kt_ratio,
-            zeta_n,
-            zeta_t,
-            mu,
-        })
+    (0.0f64..1.0, 0.0f64..1.5, 0.0f64..1.0, 0.0f64..1.0, 0.0f64..1.0)
+        .prop_map(|(log_kn, kt_ratio, zeta_n, zeta_t, mu)| RawCoeffs { log_kn, kt_ratio, zeta_n, zeta_t, mu })
 }
 
 /// Coefficients of realistic size: LSD k_n in 1e3…1e8 N/m, Hertz K_n in 1e8…1e11 N/m^1.5,
@@ -172,55 +143,25 @@ impl PairState {
         match (law.tangential, law.normal) {
             (TangentialModel::MfixTotal, _) => s,
             (TangentialModel::IncrementalMindlin, NormalModel::LinearSpringDashpot) => c.kt * s,
-            (TangentialModel::IncrementalMindlin, NormalModel::Hertz) => {
-                c.kt * self.delta().sqrt() * s
-            }
+            (TangentialModel::IncrementalMindlin, NormalModel::Hertz) => c.kt * self.delta().sqrt() * s,
         }
     }
 }
 
 fn pair_state() -> impl Strategy<Value = PairState> {
     (
-        (
-            vec3(0.01),
-            0.5e-3f64..1.5e-3,
-            0.5e-3f64..1.5e-3,
-            unit(),
-            1e-3f64..0.2,
-        ),
+        (vec3(0.01), 0.5e-3f64..1.5e-3, 0.5e-3f64..1.5e-3, unit(), 1e-3f64..0.2),
         (vec3(2.0), vec3(2.0), vec3(1000.0), vec3(1000.0)),
         (vec3(1.0), 0.0f64..1.0, -8.0f64..-5.0),
     )
-        .prop_map(
-            |((xi, ri, rj, n, overlap_frac), (vi, vj, wi, wj), (h_dir, h_frac, log_dt))| {
-                PairState {
-                    xi,
-                    ri,
-                    rj,
-                    n,
-                    overlap_frac,
-                    vi,
-                    vj,
-                    wi,
-                    wj,
-                    h_dir,
-                    h_frac,
-                    log_dt,
-                }
-            },
-        )
+        .prop_map(|((xi, ri, rj, n, overlap_frac), (vi, vj, wi, wj), (h_dir, h_frac, log_dt))| {
+            PairState { xi, ri, rj, n, overlap_frac, vi, vj, wi, wj, h_dir, h_frac, log_dt }
+        })
 }
 
 /// The sum of the magnitudes of the terms that make up a contact force: the scale its rounding
 /// errors are relative to.
-fn force_scale(
-    law: &ContactLaw,
-    c: &ContactCoeffs,
-    delta: f64,
-    v_r: Vec3,
-    h: Vec3,
-    dt: f64,
-) -> f64 {
+fn force_scale(law: &ContactLaw, c: &ContactCoeffs, delta: f64, v_r: Vec3, h: Vec3, dt: f64) -> f64 {
     let (p, q, k) = match law.normal {
         NormalModel::LinearSpringDashpot => (delta, 1.0, c.kt),
         NormalModel::Hertz => (delta.powf(1.5), delta.powf(0.25), c.kt * delta.sqrt()),
@@ -463,11 +404,7 @@ fn pair_sim(
 }
 
 fn any_integrator() -> impl Strategy<Value = Integrator> {
-    prop_oneof![
-        Just(Integrator::Euler),
-        Just(Integrator::AdamsBashforth),
-        Just(Integrator::VelocityVerlet)
-    ]
+    prop_oneof![Just(Integrator::Euler), Just(Integrator::AdamsBashforth), Just(Integrator::VelocityVerlet)]
 }
 
 /// After a few steps of a real simulation: F_i + F_j = 0; each particle's torque is the
@@ -559,7 +496,6 @@ proptest! {
     /// [`check_pair_simulation`] with `LeverArm::Radius`: the torque on each particle must be
     /// R_k·(n × F_t), the moment about its centre of the force applied at x_k ± R_k·n.
     #[test]
-    #[ignore = "engine bug: LeverArm::Radius is applied to wall contacts only; pair contacts keep the radical-plane lever (simulation.rs, force_loop, pair branch)"]
     fn simulation_pair_torque_uses_radius_lever(
         k in 12usize..24, raw in raw_coeffs(), s in pair_state(),
         steps in 0usize..6, integrator in any_integrator()
@@ -616,13 +552,7 @@ proptest! {
 fn simulation_no_force_without_overlap() {
     for k in 0..24 {
         let law = law_of(k);
-        let raw = RawCoeffs {
-            log_kn: 0.5,
-            kt_ratio: 0.5,
-            zeta_n: 0.5,
-            zeta_t: 0.5,
-            mu: 0.5,
-        };
+        let raw = RawCoeffs { log_kn: 0.5, kt_ratio: 0.5, zeta_n: 0.5, zeta_t: 0.5, mu: 0.5 };
         let s = PairState {
             xi: Vec3::new(0.001, 0.002, 0.003),
             ri: 1e-3,

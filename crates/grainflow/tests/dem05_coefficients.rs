@@ -22,10 +22,7 @@ fn dem05(normal: NormalModel) -> Simulation {
             let mut p = lsd_params(1.72e7, 1.0, 0.092);
             p.kt_fac = 1.48 / 1.72;
             (
-                vec![
-                    phase("alumina", 0.005, 4000.0),
-                    phase("anvil", 0.005, 5000.0),
-                ],
+                vec![phase("alumina", 0.005, 4000.0), phase("anvil", 0.005, 5000.0)],
                 vec![wall_material("anvil", None, None)],
                 p,
                 p,
@@ -57,22 +54,8 @@ fn dem05(normal: NormalModel) -> Simulation {
     cfg.time_step = TimeStepRule::Mfix { factor: 50.0 };
     cfg.t_stop = 0.0025;
     let init: [ParticleInit; 2] = [
-        particle(
-            32,
-            0,
-            0.0025,
-            4000.0,
-            Vec3::new(0.25, 0.0555, 0.25),
-            Vec3::new(0.0, -3.9, 0.0),
-        ),
-        particle(
-            63,
-            1,
-            0.0025,
-            5000.0,
-            Vec3::new(0.25, 0.0475, 0.25),
-            Vec3::ZERO,
-        ),
+        particle(32, 0, 0.0025, 4000.0, Vec3::new(0.25, 0.0555, 0.25), Vec3::new(0.0, -3.9, 0.0)),
+        particle(63, 1, 0.0025, 5000.0, Vec3::new(0.25, 0.0475, 0.25), Vec3::ZERO),
     ];
     simulation(cfg, &init)
 }
@@ -81,22 +64,13 @@ fn dem05(normal: NormalModel) -> Simulation {
 fn assert_printed_6(what: &str, value: f64, printed: f64) {
     let unit = 10f64.powf(printed.abs().log10().floor() - 5.0);
     let diff = (value - printed).abs();
-    eprintln!(
-        "{what}: {value:.9e} vs printed {printed:e} (|diff| {diff:.3e}, half unit {:.1e})",
-        0.5 * unit
-    );
-    assert!(
-        diff <= 0.5 * unit,
-        "{what}: {value:e} does not round to the printed {printed:e}"
-    );
+    eprintln!("{what}: {value:.9e} vs printed {printed:e} (|diff| {diff:.3e}, half unit {:.1e})", 0.5 * unit);
+    assert!(diff <= 0.5 * unit, "{what}: {value:e} does not round to the printed {printed:e}");
 }
 
 fn assert_rel(what: &str, value: f64, expected: f64, tol: f64) {
     let err = rel_err(value, expected);
-    assert!(
-        err <= tol,
-        "{what}: {value:e} vs {expected:e}, relative error {err:e} > {tol:e}"
-    );
+    assert!(err <= tol, "{what}: {value:e} vs {expected:e}, relative error {err:e} > {tol:e}");
 }
 
 fn e_star(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
@@ -159,38 +133,18 @@ fn dem05_hertz_stiffnesses() {
     for (name, c, es, gs, rs, kn_printed, kt_printed) in cases {
         assert_printed_6(&format!("{name} K_n"), c.kn, kn_printed);
         assert_printed_6(&format!("{name} K_t"), c.kt, kt_printed);
-        assert_rel(
-            &format!("{name} K_n"),
-            c.kn,
-            4.0 / 3.0 * es * rs.sqrt(),
-            FORMULA_TOL,
-        );
-        assert_rel(
-            &format!("{name} K_t"),
-            c.kt,
-            8.0 * gs * rs.sqrt(),
-            FORMULA_TOL,
-        );
+        assert_rel(&format!("{name} K_n"), c.kn, 4.0 / 3.0 * es * rs.sqrt(), FORMULA_TOL);
+        assert_rel(&format!("{name} K_t"), c.kt, 8.0 * gs * rs.sqrt(), FORMULA_TOL);
         assert_eq!(c.eta_n, 0.0, "{name}: e_n = 1 means no normal damping");
         assert_eq!(c.eta_t, 0.0, "{name}: e_t = 1 means no tangential damping");
         assert_eq!(c.mu, 0.092);
     }
     assert_rel("1-1 m_eff", t.pair(0, 0).m_eff, m1 / 2.0, FORMULA_TOL);
-    assert_rel(
-        "1-2 m_eff",
-        t.pair(0, 1).m_eff,
-        m1 * m2 / (m1 + m2),
-        FORMULA_TOL,
-    );
+    assert_rel("1-2 m_eff", t.pair(0, 1).m_eff, m1 * m2 / (m1 + m2), FORMULA_TOL);
     assert_rel("1-wall m_eff", t.wall(0, 0).m_eff, m1, FORMULA_TOL);
     // Phase 2 against the wall: same material on both sides, R* = R.
     let c = t.wall(1, 0);
-    assert_rel(
-        "2-wall K_n",
-        c.kn,
-        4.0 / 3.0 * e_star(70e9, 0.25, 70e9, 0.25) * r.sqrt(),
-        FORMULA_TOL,
-    );
+    assert_rel("2-wall K_n", c.kn, 4.0 / 3.0 * e_star(70e9, 0.25, 70e9, 0.25) * r.sqrt(), FORMULA_TOL);
 }
 
 /// LSD: k_n = 1.72e7 N/m and k_t = KT_FAC·k_n = 1.48e7 N/m everywhere, no damping at e_n = 1.
@@ -234,26 +188,13 @@ fn dem05_time_step() {
             "{normal:?}: DTSOLID {:e} does not round to {dt_printed:e}",
             ts.dt
         );
-        assert_rel(
-            &format!("{normal:?} TCOLL"),
-            ts.tcoll.unwrap(),
-            tcoll,
-            FORMULA_TOL,
-        );
-        assert_rel(
-            &format!("{normal:?} DTSOLID"),
-            ts.dt,
-            tcoll / 50.0,
-            FORMULA_TOL,
-        );
+        assert_rel(&format!("{normal:?} TCOLL"), ts.tcoll.unwrap(), tcoll, FORMULA_TOL);
+        assert_rel(&format!("{normal:?} DTSOLID"), ts.dt, tcoll / 50.0, FORMULA_TOL);
         assert_eq!(ts.steps, steps, "{normal:?} step count");
         assert_eq!(sim.total_steps(), steps);
         // The run ends at N·DTSOLID ≥ t_stop, less than one step past it.
         let end = steps as f64 * ts.dt;
-        assert!(
-            end >= 0.0025 && end - ts.dt < 0.0025,
-            "{normal:?}: end {end:e}"
-        );
+        assert!(end >= 0.0025 && end - ts.dt < 0.0025, "{normal:?}: end {end:e}");
     }
 }
 
@@ -284,11 +225,7 @@ fn mfix_time_step_with_damping_ignores_walls() {
     let phases = vec![phase("a", 0.004, 3000.0), phase("b", 0.006, 2000.0)];
     let (ma, mb) = (sphere_mass(0.002, 3000.0), sphere_mass(0.003, 2000.0));
     // (k_n, e_n) for 1-1, 1-2, 2-2, and m_eff of each.
-    let pairs = [
-        (1e5, 0.9, ma / 2.0),
-        (3e5, 0.3, ma * mb / (ma + mb)),
-        (2e5, 0.6, mb / 2.0),
-    ];
+    let pairs = [(1e5, 0.9, ma / 2.0), (3e5, 0.3, ma * mb / (ma + mb)), (2e5, 0.6, mb / 2.0)];
     let eta = |k: f64, m: f64, e: f64| {
         let l: f64 = e.ln();
         2.0 * (k * m).sqrt() * l.abs() / (PI * PI + l * l).sqrt()
@@ -303,10 +240,7 @@ fn mfix_time_step_with_damping_ignores_walls() {
             phases.clone(),
             vec![wall_material("w", None, None)],
             Wall::domain_box(Vec3::ZERO, Vec3::ONE, 0),
-            pairs
-                .iter()
-                .map(|&(k, e, _)| lsd_params(k, e, 0.3))
-                .collect(),
+            pairs.iter().map(|&(k, e, _)| lsd_params(k, e, 0.3)).collect(),
             vec![lsd_params(1e9, 0.5, 0.3); 2],
             Integrator::Euler,
             1.0,
@@ -315,14 +249,7 @@ fn mfix_time_step_with_damping_ignores_walls() {
         cfg.t_stop = 0.01;
         Simulation::new(
             cfg,
-            grainflow::Particles::from_init(&[particle(
-                1,
-                0,
-                0.002,
-                3000.0,
-                Vec3::splat(0.5),
-                Vec3::ZERO,
-            )]),
+            grainflow::Particles::from_init(&[particle(1, 0, 0.002, 3000.0, Vec3::splat(0.5), Vec3::ZERO)]),
         )
     };
     let sim = build(20.0).expect("valid");
@@ -332,8 +259,5 @@ fn mfix_time_step_with_damping_ignores_walls() {
     let steps = ts.steps as f64;
     assert!(steps * ts.dt >= 0.01 && (steps - 1.0) * ts.dt < 0.01);
     assert!(build(10.0).is_ok());
-    assert!(
-        build(9.9).is_err(),
-        "DTSOLID_FACTOR below 10 must be rejected"
-    );
+    assert!(build(9.9).is_err(), "DTSOLID_FACTOR below 10 must be rejected");
 }

@@ -56,12 +56,7 @@ fn tcoll() -> f64 {
 }
 
 /// The elastic, frictionless gas: one phase, box walls, gravity along −y, velocity Verlet.
-fn gas_sim(
-    init: &[ParticleInit],
-    steps_per_tcoll: f64,
-    walls: Vec<Wall>,
-    gravity: Vec3,
-) -> Simulation {
+fn gas_sim(init: &[ParticleInit], steps_per_tcoll: f64, walls: Vec<Wall>, gravity: Vec3) -> Simulation {
     let p = lsd_params(KN, 1.0, 0.0);
     let mut cfg = config(
         ContactLaw::mfix(NormalModel::LinearSpringDashpot),
@@ -91,12 +86,7 @@ struct ContactLedger {
 
 impl ContactLedger {
     fn new() -> Self {
-        ContactLedger {
-            pairs: HashSet::new(),
-            walls: HashSet::new(),
-            started: 0,
-            sum_ec: 0.0,
-        }
+        ContactLedger { pairs: HashSet::new(), walls: HashSet::new(), started: 0, sum_ec: 0.0 }
     }
 
     /// Looks at every candidate pair of the neighbour list (which holds every contact: the
@@ -158,10 +148,7 @@ fn single_contact_error(init: &[ParticleInit], walls: Vec<Wall>, gravity: Vec3, 
         ledger.update(&sim);
         worst = worst.max((sim.diagnostics().total_energy() - e0).abs());
     }
-    assert_eq!(
-        ledger.started, 1,
-        "exactly one contact in a calibration run"
-    );
+    assert_eq!(ledger.started, 1, "exactly one contact in a calibration run");
     worst / ledger.sum_ec
 }
 
@@ -189,30 +176,15 @@ fn calibrate(n: f64) -> f64 {
         }
         // Walls with gravity: floor (gravity presses), side wall, ceiling (gravity pulls away),
         // slow and fast, normal and oblique.
-        for &(normal, v, tangential) in &[
-            (Vec3::Y, 1.0, 0.0),
-            (Vec3::Y, 0.05, 0.3),
-            (Vec3::X, 0.5, 0.5),
-            (-Vec3::Y, 1.0, 0.2),
-        ] {
+        for &(normal, v, tangential) in
+            &[(Vec3::Y, 1.0, 0.0), (Vec3::Y, 0.05, 0.3), (Vec3::X, 0.5, 0.5), (-Vec3::Y, 1.0, 0.2)]
+        {
             let point = Vec3::splat(0.01);
             let t = normal.cross(Vec3::Z).normalize_or(Vec3::X);
             let x = point + (RADIUS + frac * v * dt) * normal;
-            let init = [particle(
-                1,
-                0,
-                RADIUS,
-                DENSITY,
-                x,
-                -v * normal + tangential * t,
-            )];
+            let init = [particle(1, 0, RADIUS, DENSITY, x, -v * normal + tangential * t)];
             let wall = vec![Wall::plane("w", point, normal, 0)];
-            eps = eps.max(single_contact_error(
-                &init,
-                wall,
-                Vec3::new(0.0, -G, 0.0),
-                n,
-            ));
+            eps = eps.max(single_contact_error(&init, wall, Vec3::new(0.0, -G, 0.0), n));
         }
     }
     eps
@@ -227,15 +199,8 @@ fn random_gas(n_particles: usize, speed: f64, seed: u64) -> Vec<ParticleInit> {
     let hi = Vec3::splat(BOX - RADIUS * 1.01);
     while init.len() < n_particles {
         let x = rng.in_box(lo, hi);
-        if init
-            .iter()
-            .all(|q| (q.position - x).length() > 2.0 * RADIUS * 1.01)
-        {
-            let v = Vec3::new(
-                rng.range(-speed, speed),
-                rng.range(-speed, speed),
-                rng.range(-speed, speed),
-            );
+        if init.iter().all(|q| (q.position - x).length() > 2.0 * RADIUS * 1.01) {
+            let v = Vec3::new(rng.range(-speed, speed), rng.range(-speed, speed), rng.range(-speed, speed));
             let mut q = particle(init.len() as u32 + 1, 0, RADIUS, DENSITY, x, v);
             q.omega = 100.0 * rng.unit();
             init.push(q);
@@ -254,8 +219,8 @@ fn run_gas(n_particles: usize, steps: usize, n: f64, eps: f64, seed: u64) -> (f6
     // Floating-point rounding: the energy sums ~4N terms (ε·4N ≈ 1e-13 relative at N = 300)
     // and the state takes ~1e-16 relative per step, a random walk of ≈ 3e-14 over 1e5 steps;
     // 1e-12 of the energy's terms covers both with a margin.
-    let rounding = 1e-12
-        * (d0.kinetic_translational + d0.kinetic_rotational + d0.potential.abs() + d0.elastic);
+    let rounding =
+        1e-12 * (d0.kinetic_translational + d0.kinetic_rotational + d0.potential.abs() + d0.elastic);
     let mut ledger = ContactLedger::new();
     ledger.update(&sim);
     let (mut worst_ratio, mut worst_rel) = (0.0f64, 0.0f64);
@@ -288,15 +253,8 @@ fn single_contact_energy_error_is_second_order() {
     let e50 = calibrate(50.0);
     let e100 = calibrate(100.0);
     let w = PI / 50.0; // ω_pair·Δt at 50 steps per contact time
-    eprintln!(
-        "eps(50) = {e50:e} = {:.3}·(ωΔt)², eps(100) = {e100:e}",
-        e50 / (w * w)
-    );
-    assert!(
-        e50 > 0.0 && e50 <= w * w,
-        "eps(50) = {e50:e} vs (ωΔt)² = {:e}",
-        w * w
-    );
+    eprintln!("eps(50) = {e50:e} = {:.3}·(ωΔt)², eps(100) = {e100:e}", e50 / (w * w));
+    assert!(e50 > 0.0 && e50 <= w * w, "eps(50) = {e50:e} vs (ωΔt)² = {:e}", w * w);
     let ratio = e50 / e100;
     assert!((2.8..=5.2).contains(&ratio), "eps(50)/eps(100) = {ratio}");
 }
@@ -307,13 +265,8 @@ fn elastic_gas_conserves_energy() {
     let n = 50.0;
     let eps = calibrate(n);
     let (ratio, rel, contacts) = run_gas(250, 20_000, n, eps, 7);
-    eprintln!(
-        "eps = {eps:e}; {contacts} contacts; max |dE|/bound = {ratio:.3}, max |dE|/E0 = {rel:e}"
-    );
-    assert!(
-        contacts >= 100,
-        "too few contacts ({contacts}) to test anything"
-    );
+    eprintln!("eps = {eps:e}; {contacts} contacts; max |dE|/bound = {ratio:.3}, max |dE|/E0 = {rel:e}");
+    assert!(contacts >= 100, "too few contacts ({contacts}) to test anything");
 }
 
 /// 300 particles for longer (tens of thousands of contacts), at two time steps.

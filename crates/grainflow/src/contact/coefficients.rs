@@ -32,15 +32,7 @@ pub struct ContactParams {
 impl Default for ContactParams {
     /// MFIX's defaults; `kn`, `et` unset, e_n = 1, μ = 0.
     fn default() -> Self {
-        ContactParams {
-            kn: None,
-            kt_fac: 2.0 / 7.0,
-            etat_fac: 0.5,
-            en: 1.0,
-            et: None,
-            mu: 0.0,
-            mu_roll: 0.0,
-        }
+        ContactParams { kn: None, kt_fac: 2.0 / 7.0, etat_fac: 0.5, en: 1.0, et: None, mu: 0.0, mu_roll: 0.0 }
     }
 }
 
@@ -138,13 +130,7 @@ impl CoeffTable {
                             "phase",
                         )?;
                         let (ra, rb) = (phases[m].radius(), phases[l].radius());
-                        Some(HertzInputs {
-                            e1: ea,
-                            nu1: na,
-                            e2: eb,
-                            nu2: nb,
-                            r_star: ra * rb / (ra + rb),
-                        })
+                        Some(HertzInputs { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: ra * rb / (ra + rb) })
                     }
                 };
                 let c = derive(law, &what, p, m_eff, elastic)?;
@@ -156,10 +142,7 @@ impl CoeffTable {
         for m in 0..n {
             for w in 0..nw {
                 let p = &wall_params[m * nw + w];
-                let what = format!(
-                    "contact '{}'-wall '{}'",
-                    phases[m].name, wall_materials[w].name
-                );
+                let what = format!("contact '{}'-wall '{}'", phases[m].name, wall_materials[w].name);
                 let elastic = match law.normal {
                     NormalModel::LinearSpringDashpot => None,
                     NormalModel::Hertz => {
@@ -170,30 +153,15 @@ impl CoeffTable {
                             "phase",
                         )?;
                         let wm = &wall_materials[w];
-                        let (eb, nb) = elastic_of(
-                            &wm.name,
-                            wm.youngs_modulus,
-                            wm.poisson_ratio,
-                            "wall material",
-                        )?;
-                        Some(HertzInputs {
-                            e1: ea,
-                            nu1: na,
-                            e2: eb,
-                            nu2: nb,
-                            r_star: phases[m].radius(),
-                        })
+                        let (eb, nb) =
+                            elastic_of(&wm.name, wm.youngs_modulus, wm.poisson_ratio, "wall material")?;
+                        Some(HertzInputs { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: phases[m].radius() })
                     }
                 };
                 walls[m * nw + w] = derive(law, &what, p, phases[m].mass(), elastic)?;
             }
         }
-        Ok(CoeffTable {
-            n_phases: n,
-            n_wall_materials: nw,
-            pairs,
-            walls,
-        })
+        Ok(CoeffTable { n_phases: n, n_wall_materials: nw, pairs, walls })
     }
 
     /// Coefficients of the phase pair (a, b).
@@ -222,12 +190,7 @@ struct HertzInputs {
     r_star: f64,
 }
 
-fn elastic_of(
-    name: &str,
-    e: Option<f64>,
-    nu: Option<f64>,
-    kind: &str,
-) -> Result<(f64, f64), EngineError> {
+fn elastic_of(name: &str, e: Option<f64>, nu: Option<f64>, kind: &str) -> Result<(f64, f64), EngineError> {
     let e = e.ok_or_else(|| EngineError::MissingParameter {
         what: format!("{kind} '{name}' youngs_modulus"),
         model: "hertz".into(),

@@ -30,12 +30,7 @@ pub fn pair_contact(xi: Vec3, xj: Vec3, ri: f64, rj: f64) -> Option<ContactGeome
     }
     let d = d2.sqrt();
     let lever_i = (d2 + ri * ri - rj * rj) / (2.0 * d);
-    Some(ContactGeometry {
-        normal: dvec / d,
-        overlap: rsum - d,
-        lever_i,
-        lever_j: d - lever_i,
-    })
+    Some(ContactGeometry { normal: dvec / d, overlap: rsum - d, lever_i, lever_j: d - lever_i })
 }
 
 /// Geometry against a plane through `point` whose unit normal `wall_normal` points into the
@@ -48,12 +43,7 @@ pub fn wall_contact(x: Vec3, r: f64, point: Vec3, wall_normal: Vec3) -> Option<C
     if overlap < 0.0 {
         return None;
     }
-    Some(ContactGeometry {
-        normal: -wall_normal,
-        overlap,
-        lever_i: d,
-        lever_j: 0.0,
-    })
+    Some(ContactGeometry { normal: -wall_normal, overlap, lever_i: d, lever_j: 0.0 })
 }
 
 /// Relative velocity at the contact point: v_r = v_i − v_j + (a_i·ω_i + a_j·ω_j) × n.

@@ -60,12 +60,7 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     let (fn_el, fn_damp, k, damp_t) = if HERTZ {
         let sd = delta.sqrt();
         let qd = sd.sqrt();
-        (
-            c.kn * delta * sd,
-            c.eta_n * qd * v_n,
-            c.kt * sd,
-            c.eta_t * qd,
-        )
+        (c.kn * delta * sd, c.eta_n * qd * v_n, c.kt * sd, c.eta_t * qd)
     } else {
         (c.kn * delta, c.eta_n * v_n, c.kt, c.eta_t)
     };
@@ -116,11 +111,7 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
             let len = s.length();
             if len > 0.0 {
                 let dir = s / len;
-                *history = if k > 0.0 {
-                    (limit / k) * dir
-                } else {
-                    Vec3::ZERO
-                };
+                *history = if k > 0.0 { (limit / k) * dir } else { Vec3::ZERO };
                 -limit * dir
             } else {
                 *history = Vec3::ZERO;
@@ -131,11 +122,7 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
             trial
         }
     };
-    ContactForce {
-        normal: f_n,
-        tangential: f_t,
-        elastic_normal: fn_el,
-    }
+    ContactForce { normal: f_n, tangential: f_t, elastic_normal: fn_el }
 }
 
 /// Dispatches [`contact_force`] on a runtime [`ContactLaw`]. For tests and one-off use; the
@@ -158,9 +145,7 @@ pub fn contact_force_dyn(
             contact_force::<false, true>(law.history, c, g, v_r, history, dt)
         }
         (Hertz, MfixTotal) => contact_force::<true, false>(law.history, c, g, v_r, history, dt),
-        (Hertz, IncrementalMindlin) => {
-            contact_force::<true, true>(law.history, c, g, v_r, history, dt)
-        }
+        (Hertz, IncrementalMindlin) => contact_force::<true, true>(law.history, c, g, v_r, history, dt),
     }
 }
 
@@ -171,11 +156,7 @@ pub fn rolling_torque(mu_roll: f64, elastic_normal: f64, omega: Vec3) -> Vec3 {
         return Vec3::ZERO;
     }
     let w = omega.length();
-    if w > 0.0 {
-        (-mu_roll * elastic_normal / w) * omega
-    } else {
-        Vec3::ZERO
-    }
+    if w > 0.0 { (-mu_roll * elastic_normal / w) * omega } else { Vec3::ZERO }
 }
 
 /// Elastic energy stored in the normal spring: ½·k_n·δ² (LSD) or (2/5)·K_n·δ^2.5 (Hertz), J.

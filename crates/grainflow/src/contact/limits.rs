@@ -22,16 +22,8 @@ impl Range {
     /// True if `v` is finite and inside the range.
     pub fn contains(&self, v: f64) -> bool {
         v.is_finite()
-            && (if self.lo_open {
-                v > self.lo
-            } else {
-                v >= self.lo
-            })
-            && (if self.hi_open {
-                v < self.hi
-            } else {
-                v <= self.hi
-            })
+            && (if self.lo_open { v > self.lo } else { v >= self.lo })
+            && (if self.hi_open { v < self.hi } else { v <= self.hi })
     }
 
     /// `Ok` if `v` is inside, else an [`EngineError::InvalidValue`] naming `who` and `key`.
@@ -45,13 +37,7 @@ impl Range {
 }
 
 const fn range(lo: f64, lo_open: bool, hi: f64, hi_open: bool, valid: &'static str) -> Range {
-    Range {
-        lo,
-        lo_open,
-        hi,
-        hi_open,
-        valid,
-    }
+    Range { lo, lo_open, hi, hi_open, valid }
 }
 
 /// Normal restitution e_n.

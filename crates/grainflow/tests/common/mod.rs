@@ -6,8 +6,8 @@
 use grainflow::contact::ContactParams;
 use grainflow::state::ParticleInit;
 use grainflow::{
-    ContactLaw, Integrator, Particles, Phase, Simulation, SimulationConfig, TimeStepRule, Vec3,
-    Wall, WallMaterial,
+    ContactLaw, Integrator, Particles, Phase, Simulation, SimulationConfig, TimeStepRule, Vec3, Wall,
+    WallMaterial,
 };
 use std::f64::consts::PI;
 
@@ -18,53 +18,27 @@ pub fn sphere_mass(r: f64, rho: f64) -> f64 {
 
 /// A phase without elastic constants (LSD).
 pub fn phase(name: &str, diameter: f64, density: f64) -> Phase {
-    Phase {
-        name: name.into(),
-        diameter,
-        density,
-        youngs_modulus: None,
-        poisson_ratio: None,
-    }
+    Phase { name: name.into(), diameter, density, youngs_modulus: None, poisson_ratio: None }
 }
 
 /// A phase with elastic constants (Hertz).
 pub fn elastic_phase(name: &str, diameter: f64, density: f64, e: f64, nu: f64) -> Phase {
-    Phase {
-        name: name.into(),
-        diameter,
-        density,
-        youngs_modulus: Some(e),
-        poisson_ratio: Some(nu),
-    }
+    Phase { name: name.into(), diameter, density, youngs_modulus: Some(e), poisson_ratio: Some(nu) }
 }
 
 /// A wall material, with or without elastic constants.
 pub fn wall_material(name: &str, e: Option<f64>, nu: Option<f64>) -> WallMaterial {
-    WallMaterial {
-        name: name.into(),
-        youngs_modulus: e,
-        poisson_ratio: nu,
-    }
+    WallMaterial { name: name.into(), youngs_modulus: e, poisson_ratio: nu }
 }
 
 /// LSD contact inputs: k_n, e_n, μ; MFIX defaults otherwise.
 pub fn lsd_params(kn: f64, en: f64, mu: f64) -> ContactParams {
-    ContactParams {
-        kn: Some(kn),
-        en,
-        mu,
-        ..Default::default()
-    }
+    ContactParams { kn: Some(kn), en, mu, ..Default::default() }
 }
 
 /// Hertz contact inputs: e_n, e_t, μ.
 pub fn hertz_params(en: f64, et: f64, mu: f64) -> ContactParams {
-    ContactParams {
-        en,
-        et: Some(et),
-        mu,
-        ..Default::default()
-    }
+    ContactParams { en, et: Some(et), mu, ..Default::default() }
 }
 
 /// A configuration with zero gravity, an explicit time step and a very long run (tests call
@@ -98,15 +72,7 @@ pub fn config(
 
 /// One particle's initial data.
 pub fn particle(id: u32, phase: u32, radius: f64, density: f64, x: Vec3, v: Vec3) -> ParticleInit {
-    ParticleInit {
-        id,
-        phase,
-        radius,
-        density,
-        position: x,
-        velocity: v,
-        omega: Vec3::ZERO,
-    }
+    ParticleInit { id, phase, radius, density, position: x, velocity: v, omega: Vec3::ZERO }
 }
 
 /// Builds a simulation, panicking with the engine's message on a set-up error.
@@ -150,11 +116,7 @@ impl Rng {
 
     /// A point uniformly distributed in the box [lo, hi].
     pub fn in_box(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(
-            self.range(lo.x, hi.x),
-            self.range(lo.y, hi.y),
-            self.range(lo.z, hi.z),
-        )
+        Vec3::new(self.range(lo.x, hi.x), self.range(lo.y, hi.y), self.range(lo.z, hi.z))
     }
 
     /// A uniformly distributed unit vector.
