@@ -1,34 +1,30 @@
-//! `grainflow verify dem05 [--out DIR] [--converged] [--integrator NAME]`
+//! `grainflow verify [CASE ...] [--out DIR] [--list] [--converged] [--integrator NAME]`
 
+use crate::EXIT_BAD_INPUT;
 use clap::{Args, ValueEnum};
 use grainflow::Integrator;
-use grainflow_verify::dem05;
+use grainflow_verify::check::markdown_table;
+use grainflow_verify::suite::{self, SuiteOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Debug, Args)]
 pub struct VerifyArgs {
-    /// The case to verify.
-    #[arg(value_enum)]
-    case: CaseName,
-    /// Output folder; results go to DIR/<case>/.
+    /// Cases to run (default: all); see --list.
+    cases: Vec<String>,
+    /// List the cases, one line each, and exit.
+    #[arg(long)]
+    list: bool,
+    /// Output folder: each case writes DIR/<case>/, the suite writes DIR/report.html.
     #[arg(long, default_value = "results")]
     out: PathBuf,
-    /// Also rerun both models with a much smaller time step (2.5e-9 s, about 5 000 steps per
-    /// contact), to separate the model from MFIX's coarse time stepping, and run the checks
-    /// that need it.
+    /// Also run the converged variants (DEM05: both models again at dt = 2.5e-9 s, about
+    /// 5 000 steps per contact), separating the model from MFIX's coarse time stepping.
     #[arg(long)]
     converged: bool,
-    /// Integrator of the converged runs (MFIX's own runs always use the case's
-    /// Adams–Bashforth).
+    /// Integrator of the converged runs (MFIX's own runs keep the case's integrator).
     #[arg(long, value_enum, requires = "converged")]
     integrator: Option<IntegratorName>,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum CaseName {
-    /// MFIX DEM05: oblique particle collision (LSD and Hertz, wall and particle).
-    Dem05,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -39,8 +35,20 @@ enum IntegratorName {
 }
 
 pub fn main(args: VerifyArgs) -> ExitCode {
-    let CaseName::Dem05 = args.case;
-    let options = dem05::Options {
+    if args.list {
+        for c in suite::cases() {
+            println!("{:<12} {}", c.name, c.summary);
+        }
+        return ExitCode::SUCCESS;
+    }
+    let entries = match suite::select(&args.cases) {
+        Ok(e) => e,
+        Err(msg) => {
+            eprintln!("error: {msg}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let options = SuiteOptions {
         converged: args.converged,
         integrator: args.integrator.map(|i| match i {
             IntegratorName::Euler => Integrator::Euler,
@@ -48,27 +56,31 @@ pub fn main(args: VerifyArgs) -> ExitCode {
             IntegratorName::VelocityVerlet => Integrator::VelocityVerlet,
         }),
     };
-    let result = dem05::evaluate(options).and_then(|report| {
-        let files = dem05::write(&report, &args.out)?;
-        Ok((report, files))
-    });
-    match result {
-        Ok((report, files)) => {
-            print!("{}", dem05::summary_markdown(&report));
-            println!("\nwritten:");
-            for f in files {
-                println!("  {}", f.display());
-            }
-            if report.passed() {
-                ExitCode::SUCCESS
-            } else {
-                eprintln!("error: DEM05 verification failed (see the checks marked FAIL)");
-                ExitCode::FAILURE
-            }
-        }
+    let outcomes = match suite::run(&entries, &args.out, &options) {
+        Ok(o) => o,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            return ExitCode::FAILURE;
         }
+    };
+    for o in &outcomes {
+        println!("== {}: {} ({:.2} s)\n", o.name, o.title, o.wall_seconds);
+        println!("{}", markdown_table(&o.checks));
+    }
+    let report = match suite::write_report(&outcomes, &args.out) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let total: usize = outcomes.iter().map(|o| o.checks.len()).sum();
+    let failed: Vec<&str> = outcomes.iter().filter(|o| !o.passed()).map(|o| o.name).collect();
+    println!("{} case(s), {total} checks; report: {}", outcomes.len(), report.display());
+    if failed.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        eprintln!("error: verification failed in {} (see the checks marked FAIL)", failed.join(", "));
+        ExitCode::FAILURE
     }
 }

@@ -2,10 +2,17 @@
 //! or experimental reference, writes CSV files and figures, and reports its checks.
 
 pub mod check;
+pub mod chung_ooi;
+pub mod dem01;
+pub mod dem02;
+pub mod dem03;
+pub mod dem04;
 pub mod dem05;
 pub mod error;
 pub mod kharaz;
 pub mod plot;
+pub mod rolling;
+pub mod suite;
 
 pub use check::{Check, CheckKind};
 pub use error::VerifyError;

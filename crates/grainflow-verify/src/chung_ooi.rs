@@ -1,0 +1,1 @@
+//! Verification case chung_ooi (being written).

@@ -1,0 +1,1 @@
+//! Verification case dem01 (being written).

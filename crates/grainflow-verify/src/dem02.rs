@@ -1,0 +1,1 @@
+//! Verification case dem02 (being written).

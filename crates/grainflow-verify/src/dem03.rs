@@ -1,0 +1,1 @@
+//! Verification case dem03 (being written).

@@ -1,0 +1,1 @@
+//! Verification case dem04 (being written).

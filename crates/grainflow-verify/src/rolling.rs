@@ -1,0 +1,1 @@
+//! Verification case rolling (being written).
