@@ -4,7 +4,9 @@ use crate::error::CaseError;
 use crate::particles;
 use crate::raw::*;
 use grainflow::contact::limits::{self, Range};
-use grainflow::contact::{ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalModel, TangentialModel};
+use grainflow::contact::{
+    ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel,
+};
 use grainflow::simulation::STANDARD_GRAVITY;
 use grainflow::state::ParticleInit;
 use grainflow::{
@@ -271,7 +273,15 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         LeverArm::RadicalPlane,
         &[("mfix", LeverArm::RadicalPlane), ("radius", LeverArm::Radius)],
     )?;
-    let law = ContactLaw { normal, tangential, history, lever };
+    let damping = choose(
+        "[contact]",
+        "damping",
+        contact.damping.as_deref(),
+        NormalDamping::Mfix,
+        &[("mfix", NormalDamping::Mfix), ("exact_restitution", NormalDamping::ExactRestitution)],
+    )?;
+    let clip_attraction = contact.clip_attraction.unwrap_or(false);
+    let law = ContactLaw { normal, tangential, history, lever, damping, clip_attraction };
     if normal == NormalModel::Hertz {
         for p in &phases {
             let table = format!("[[phases]] '{}'", p.name);

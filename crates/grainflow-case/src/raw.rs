@@ -125,6 +125,13 @@ pub struct RawContact {
     /// Lever arm of the tangential force: "mfix" (centre to radical plane: R − δ/2 between
     /// equal spheres, R − δ at a wall) or "radius" (R). Default "mfix".
     pub lever_arm: Option<String>,
+    /// Normal damping from restitution: "mfix" (MFIX's formula for both laws) or
+    /// "exact_restitution" (solved so that a normal impact rebounds with exactly e_n).
+    /// Default "mfix".
+    pub damping: Option<String>,
+    /// Floor the normal force at zero so the dashpot never pulls at the end of a contact.
+    /// Default false (MFIX).
+    pub clip_attraction: Option<bool>,
     /// Defaults for every phase pair.
     #[serde(default)]
     pub particle: RawContactParams,

@@ -37,7 +37,9 @@ pub mod state;
 pub mod timestep;
 pub mod wall;
 
-pub use contact::{ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalModel, TangentialModel};
+pub use contact::{
+    ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel,
+};
 pub use error::EngineError;
 pub use integrate::Integrator;
 pub use material::{Phase, WallMaterial};

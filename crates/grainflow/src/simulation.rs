@@ -315,6 +315,7 @@ impl Simulation {
         let dt = if advance_history { self.time_step.dt } else { 0.0 };
         let frame = self.law.history;
         let lever = self.law.lever;
+        let clip = self.law.clip_attraction;
         let p = &mut self.particles;
         let nl = &mut self.neighbors;
         // Walls first, as MFIX does.
@@ -330,7 +331,7 @@ impl Simulation {
             let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
             let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
             let mut h = nl.wall_history[k];
-            let f = contact_force::<HERTZ, INCREMENTAL>(frame, c, &g, v_r, &mut h, dt);
+            let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, c, &g, v_r, &mut h, dt);
             if advance_history {
                 nl.wall_history[k] = h;
             }
@@ -350,7 +351,7 @@ impl Simulation {
             let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
             let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
             let mut h = nl.pair_history[k];
-            let f = contact_force::<HERTZ, INCREMENTAL>(frame, c, &g, v_r, &mut h, dt);
+            let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, c, &g, v_r, &mut h, dt);
             if advance_history {
                 nl.pair_history[k] = h;
             }

@@ -1,7 +1,7 @@
 //! Contact coefficients derived from the inputs (reference: MFIX-DEM model §3).
 
 use super::limits;
-use super::{ContactLaw, NormalModel};
+use super::{ContactLaw, NormalDamping, NormalModel};
 use crate::error::EngineError;
 use crate::material::{Phase, WallMaterial};
 
@@ -62,6 +62,16 @@ pub fn damping_coefficient(k: f64, m: f64, e: f64) -> f64 {
     }
     let l = e.ln();
     2.0 * (k * m).sqrt() * l.abs() / (std::f64::consts::PI.powi(2) + l * l).sqrt()
+}
+
+/// η_n for stiffness `k`, effective mass `m` and restitution `e`, by the law's damping rule.
+fn normal_damping(law: &ContactLaw, k: f64, m: f64, e: f64) -> f64 {
+    match law.damping {
+        NormalDamping::Mfix => damping_coefficient(k, m, e),
+        NormalDamping::ExactRestitution => {
+            super::damping::exact_damping_ratio(law.normal, e, law.clip_attraction) * (k * m).sqrt()
+        }
+    }
 }
 
 /// Coefficients for every phase pair and every phase–wall-material pair.
@@ -221,7 +231,7 @@ fn derive(
                 model: "lsd".into(),
             })?;
             limits::KN.check(what, "kn", kn)?;
-            let eta_n = damping_coefficient(kn, m_eff, p.en);
+            let eta_n = normal_damping(law, kn, m_eff, p.en);
             Ok(ContactCoeffs {
                 kn,
                 kt: p.kt_fac * kn,
@@ -248,7 +258,7 @@ fn derive(
             Ok(ContactCoeffs {
                 kn,
                 kt,
-                eta_n: damping_coefficient(kn, m_eff, p.en),
+                eta_n: normal_damping(law, kn, m_eff, p.en),
                 eta_t: damping_coefficient(kt, 2.0 / 7.0 * m_eff, et),
                 mu: p.mu,
                 mu_roll: p.mu_roll,

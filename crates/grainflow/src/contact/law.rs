@@ -36,6 +36,7 @@ impl ContactForce {
 
 /// Normal and tangential force of one contact, updating the stored tangential `history`.
 ///
+/// `clip` floors the normal force at zero (no attraction at the end of a contact).
 /// `HERTZ` selects the Hertzian normal law and stiffness scaling; `INCREMENTAL` the
 /// incremental Mindlin spring (history = elastic tangential force) instead of MFIX's total
 /// displacement (history = tangential displacement s).
@@ -45,6 +46,7 @@ impl ContactForce {
 #[inline(always)]
 pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     frame: HistoryFrame,
+    clip: bool,
     c: &ContactCoeffs,
     g: &ContactGeometry,
     v_r: Vec3,
@@ -64,8 +66,12 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     } else {
         (c.kn * delta, c.eta_n * v_n, c.kt, c.eta_t)
     };
-    let f_n = -(fn_el + fn_damp) * n;
-    let fn_mag = (fn_el + fn_damp).abs();
+    let mut fn_total = fn_el + fn_damp;
+    if clip && fn_total < 0.0 {
+        fn_total = 0.0;
+    }
+    let f_n = -fn_total * n;
+    let fn_mag = fn_total.abs();
 
     let mut h = *history;
     match frame {
@@ -139,13 +145,17 @@ pub fn contact_force_dyn(
     use TangentialModel::*;
     match (law.normal, law.tangential) {
         (LinearSpringDashpot, MfixTotal) => {
-            contact_force::<false, false>(law.history, c, g, v_r, history, dt)
+            contact_force::<false, false>(law.history, law.clip_attraction, c, g, v_r, history, dt)
         }
         (LinearSpringDashpot, IncrementalMindlin) => {
-            contact_force::<false, true>(law.history, c, g, v_r, history, dt)
+            contact_force::<false, true>(law.history, law.clip_attraction, c, g, v_r, history, dt)
         }
-        (Hertz, MfixTotal) => contact_force::<true, false>(law.history, c, g, v_r, history, dt),
-        (Hertz, IncrementalMindlin) => contact_force::<true, true>(law.history, c, g, v_r, history, dt),
+        (Hertz, MfixTotal) => {
+            contact_force::<true, false>(law.history, law.clip_attraction, c, g, v_r, history, dt)
+        }
+        (Hertz, IncrementalMindlin) => {
+            contact_force::<true, true>(law.history, law.clip_attraction, c, g, v_r, history, dt)
+        }
     }
 }
 

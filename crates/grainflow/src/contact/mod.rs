@@ -9,6 +9,7 @@
 //! monomorphised for it (no dynamic dispatch per contact).
 
 pub mod coefficients;
+pub mod damping;
 pub mod geometry;
 pub mod law;
 pub mod limits;
@@ -60,6 +61,17 @@ pub enum LeverArm {
     Radius,
 }
 
+/// How the normal damping coefficient follows from the restitution coefficient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NormalDamping {
+    /// MFIX: η_n = 2√(K_n M)·|ln e|/√(π² + ln²e) for both laws (exact only for the linear law
+    /// without clipping).
+    Mfix,
+    /// η_n = α(e)·√(K_n M), with α solved so that a normal impact rebounds with exactly e,
+    /// for the chosen law and clipping (see [`damping`]).
+    ExactRestitution,
+}
+
 /// A complete contact law: normal model, tangential model and history treatment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ContactLaw {
@@ -71,6 +83,11 @@ pub struct ContactLaw {
     pub history: HistoryFrame,
     /// Lever arm of the tangential force.
     pub lever: LeverArm,
+    /// Normal damping from restitution.
+    pub damping: NormalDamping,
+    /// Clip the normal force at zero, so that the dashpot never pulls the bodies together at
+    /// the end of a contact (MFIX does not clip).
+    pub clip_attraction: bool,
 }
 
 impl ContactLaw {
@@ -81,6 +98,8 @@ impl ContactLaw {
             tangential: TangentialModel::MfixTotal,
             history: HistoryFrame::Mfix,
             lever: LeverArm::RadicalPlane,
+            damping: NormalDamping::Mfix,
+            clip_attraction: false,
         }
     }
 
