@@ -29,6 +29,8 @@ pub struct Case {
     pub particles: Particles,
     /// Output settings.
     pub output: OutputSettings,
+    /// The domain box (lower and upper corner), m.
+    pub domain: (Vec3, Vec3),
     /// Things the user should know (e.g. parameters the chosen model does not use).
     pub warnings: Vec<String>,
 }
@@ -40,6 +42,8 @@ pub struct OutputSettings {
     pub interval: Option<f64>,
     /// Write particle snapshots.
     pub snapshots: bool,
+    /// Interval between VTK frames, s; `None` = no VTK output.
+    pub vtk_interval: Option<f64>,
 }
 
 /// Reads and validates a case file; particle files are read relative to its folder.
@@ -489,7 +493,18 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
             }
         })
         .transpose()?;
-    let output = OutputSettings { interval, snapshots: raw.output.snapshots.unwrap_or(true) };
+    let vtk_interval = raw
+        .output
+        .vtk_interval
+        .map(|v| {
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err(CaseError::invalid("[output]", "vtk_interval", v, "must be a positive time in s"))
+            }
+        })
+        .transpose()?;
+    let output = OutputSettings { interval, snapshots: raw.output.snapshots.unwrap_or(true), vtk_interval };
 
     // Particles.
     let praw =
@@ -662,7 +677,7 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         skin,
         motion,
     };
-    Ok(Case { title: raw.title, config, particles, output, warnings })
+    Ok(Case { title: raw.title, config, particles, output, domain: (min, max), warnings })
 }
 
 /// Range checks of one contact table, and warnings for keys the model does not use.

@@ -11,6 +11,7 @@ pub mod output;
 pub mod particles;
 pub mod raw;
 pub mod run;
+pub mod vtk;
 
 pub use case::{Case, OutputSettings, load, parse};
 pub use error::CaseError;

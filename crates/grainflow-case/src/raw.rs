@@ -207,6 +207,9 @@ pub struct RawOutput {
     pub interval: Option<f64>,
     /// Write particle snapshots (CSV) at every output. Default true.
     pub snapshots: Option<bool>,
+    /// Interval between VTK frames (particles, contacts, walls for ParaView), s, rounded to
+    /// whole steps. Default: no VTK output.
+    pub vtk_interval: Option<f64>,
 }
 
 /// `[particles]`

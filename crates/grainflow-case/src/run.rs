@@ -1,7 +1,9 @@
 //! Running a case with its outputs: what `grainflow run` does, without the terminal.
 
-use crate::case::Case;
+use crate::case::{Case, OutputSettings};
 use crate::output::{TimeSeriesWriter, snapshot_csv, write_atomic};
+use crate::vtk::VtkSeries;
+use grainflow::Vec3;
 use grainflow::{Diagnostics, Simulation};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -50,16 +52,18 @@ pub fn output_every(interval: Option<f64>, dt: f64, total_steps: u64) -> u64 {
     }
 }
 
-/// Runs `case` to its end, writing `out/timeseries.csv` and, if enabled,
-/// `out/snapshots/particles_<step>.csv` at every output (including the first and last step).
-/// `on_output` is called after each output with the simulation (for progress reports).
+/// Runs `case` to its end, writing `out/timeseries.csv`, if enabled
+/// `out/snapshots/particles_<step>.csv` at every output (including the first and last step),
+/// and if `vtk_interval` is set a VTK series in `out/vtk/`. `on_progress` is called about a
+/// thousand times over the run, and after the last step, with the simulation.
 pub fn run_case(
     case: Case,
     out: &Path,
-    mut on_output: impl FnMut(&Simulation),
+    mut on_progress: impl FnMut(&Simulation),
 ) -> Result<RunSummary, RunError> {
+    let (output, domain) = (case.output, case.domain);
     let sim = Simulation::new(case.config, case.particles)?;
-    run_simulation(sim, case.output.interval, case.output.snapshots, out, &mut on_output)
+    run_simulation(sim, output, domain, out, &mut on_progress)
 }
 
 /// Why a run stopped early.
@@ -75,11 +79,12 @@ pub enum RunError {
 
 fn run_simulation(
     mut sim: Simulation,
-    interval: Option<f64>,
-    snapshots: bool,
+    output: OutputSettings,
+    domain: (Vec3, Vec3),
     out: &Path,
-    on_output: &mut dyn FnMut(&Simulation),
+    on_progress: &mut dyn FnMut(&Simulation),
 ) -> Result<RunSummary, RunError> {
+    let OutputSettings { interval, snapshots, vtk_interval } = output;
     let io_err = |path: &Path| {
         let path = path.to_path_buf();
         move |source| OutputError { path, source }
@@ -93,6 +98,25 @@ fn run_simulation(
     let mut ts = TimeSeriesWriter::create(&ts_path).map_err(io_err(&ts_path))?;
     let every = output_every(interval, sim.dt(), sim.total_steps());
     let mut files = vec![ts_path.clone()];
+    let vtk_dir = out.join("vtk");
+    let mut vtk = match vtk_interval {
+        Some(iv) => Some((
+            VtkSeries::create(&vtk_dir, sim.walls(), domain.0, domain.1).map_err(io_err(&vtk_dir))?,
+            output_every(Some(iv), sim.dt(), sim.total_steps()),
+        )),
+        None => None,
+    };
+    let mut write_vtk = |sim: &Simulation, force: bool| -> Result<(), OutputError> {
+        if let Some((series, k)) = vtk.as_mut() {
+            if force || sim.step_index() % *k == 0 {
+                series
+                    .write(sim.step_index(), sim.time(), sim.particles(), &sim.contacts())
+                    .map_err(io_err(&vtk_dir))?;
+            }
+        }
+        Ok(())
+    };
+    let progress_every = sim.total_steps().div_ceil(1000).max(1);
     let mut outputs = 0;
     let emit = |sim: &Simulation,
                 ts: &mut TimeSeriesWriter,
@@ -108,20 +132,30 @@ fn run_simulation(
         Ok(d)
     };
     let first = emit(&sim, &mut ts, &mut files)?;
+    write_vtk(&sim, true)?;
     outputs += 1;
-    on_output(&sim);
+    on_progress(&sim);
     let start = Instant::now();
     let mut last = first;
     while !sim.finished() {
         sim.step();
-        if sim.step_index() % every == 0 || sim.finished() {
+        let end = sim.finished();
+        if sim.step_index() % every == 0 || end {
             last = emit(&sim, &mut ts, &mut files)?;
             outputs += 1;
-            on_output(&sim);
+        }
+        write_vtk(&sim, end)?;
+        if sim.step_index() % progress_every == 0 || end {
+            on_progress(&sim);
         }
     }
     let wall = start.elapsed().as_secs_f64();
     ts.finish().map_err(io_err(&ts_path))?;
+    if vtk.is_some() {
+        files.push(vtk_dir.join("particles.pvd"));
+        files.push(vtk_dir.join("contacts.pvd"));
+        files.push(vtk_dir.join("walls.vtp"));
+    }
     let steps = sim.step_index();
     Ok(RunSummary {
         steps,

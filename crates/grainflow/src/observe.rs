@@ -13,11 +13,11 @@ pub struct Diagnostics {
     pub kinetic_rotational: f64,
     /// Gravitational potential energy −Σm·g·x (zero at the origin), J.
     pub potential: f64,
-    /// Elastic energy in the normal springs of the contacts of the last force evaluation, J.
+    /// Elastic energy in the normal springs of the current contacts, J.
     pub elastic: f64,
-    /// Number of particle–particle and particle–wall contacts in the last force evaluation.
+    /// Number of particle–particle and particle–wall contacts of the current state.
     pub contacts: usize,
-    /// Largest overlap divided by the smaller radius of the contact, in the last evaluation.
+    /// Largest overlap divided by the smaller radius of the contact, of the current state.
     pub max_overlap_ratio: f64,
 }
 

@@ -1,8 +1,10 @@
 //! The simulation: set-up from a [`SimulationConfig`] and the time loop.
 
-use crate::contact::geometry::{pair_contact, relative_velocity, wall_contact};
-use crate::contact::law::{contact_force, normal_spring_energy, rolling_torque};
-use crate::contact::{CoeffTable, ContactLaw, ContactParams, LeverArm, NormalModel, TangentialModel};
+use crate::contact::geometry::{ContactGeometry, pair_contact, relative_velocity, wall_contact};
+use crate::contact::law::{contact_force, contact_force_dyn, normal_spring_energy, rolling_torque};
+use crate::contact::{
+    CoeffTable, ContactCoeffs, ContactLaw, ContactParams, LeverArm, NormalModel, TangentialModel,
+};
 use crate::error::EngineError;
 use crate::integrate::{self, Integrator};
 use crate::material::{Phase, WallMaterial};
@@ -321,13 +323,10 @@ impl Simulation {
         // Walls first, as MFIX does.
         for (k, &[i, w]) in nl.wall_pairs.iter().enumerate() {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
-            let Some(mut g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal) else {
+            let Some(g) = wall_geometry(p, i, wall, lever) else {
                 nl.wall_history[k] = Vec3::ZERO;
                 continue;
             };
-            if lever == LeverArm::Radius {
-                g.lever_i = p.radius[i];
-            }
             let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
             let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
             let mut h = nl.wall_history[k];
@@ -341,13 +340,10 @@ impl Simulation {
         }
         for (k, &[i, j]) in nl.pairs.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
-            let Some(mut g) = pair_contact(p.position[i], p.position[j], p.radius[i], p.radius[j]) else {
+            let Some(g) = pair_geometry(p, i, j, lever) else {
                 nl.pair_history[k] = Vec3::ZERO;
                 continue;
             };
-            if lever == LeverArm::Radius {
-                (g.lever_i, g.lever_j) = (p.radius[i], p.radius[j]);
-            }
             let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
             let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
             let mut h = nl.pair_history[k];
@@ -363,6 +359,45 @@ impl Simulation {
             p.torque[j] +=
                 f.torque(g.lever_j, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[j]);
         }
+    }
+
+    /// Every contact of the current state with its forces, as the next force evaluation would
+    /// see them without advancing the tangential springs (for output: force chains).
+    pub fn contacts(&self) -> Vec<ContactInfo> {
+        let p = &self.particles;
+        let lever = self.law.lever;
+        let mut out = Vec::new();
+        let mut record =
+            |i: usize, other: ContactPartner, g: ContactGeometry, c: &ContactCoeffs, v_r: Vec3, h: Vec3| {
+                let mut h = h;
+                let f = contact_force_dyn(&self.law, c, &g, v_r, &mut h, 0.0);
+                out.push(ContactInfo {
+                    particle: i,
+                    other,
+                    point: p.position[i] + g.lever_i * g.normal,
+                    normal: g.normal,
+                    overlap: g.overlap,
+                    normal_force: f.normal.length(),
+                    tangential_force: f.tangential.length(),
+                });
+            };
+        for (k, &[i, w]) in self.neighbors.wall_pairs.iter().enumerate() {
+            let (i, wall) = (i as usize, &self.walls[w as usize]);
+            if let Some(g) = wall_geometry(p, i, wall, lever) {
+                let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+                let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
+                record(i, ContactPartner::Wall(w as usize), g, c, v_r, self.neighbors.wall_history[k]);
+            }
+        }
+        for (k, &[i, j]) in self.neighbors.pairs.iter().enumerate() {
+            let (i, j) = (i as usize, j as usize);
+            if let Some(g) = pair_geometry(p, i, j, lever) {
+                let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+                let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
+                record(i, ContactPartner::Particle(j), g, c, v_r, self.neighbors.pair_history[k]);
+            }
+        }
+        out
     }
 
     /// Energies, contacts and overlaps of the current state.
@@ -399,6 +434,54 @@ impl Simulation {
         }
         d
     }
+}
+
+/// The other side of a contact.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactPartner {
+    /// A particle slot.
+    Particle(usize),
+    /// A wall index.
+    Wall(usize),
+}
+
+/// One contact of the current state, for output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactInfo {
+    /// Slot of the particle the normal points from.
+    pub particle: usize,
+    /// The other particle, or the wall.
+    pub other: ContactPartner,
+    /// Contact point (on the radical plane, or on the wall), m.
+    pub point: Vec3,
+    /// Unit normal from `particle` towards the other.
+    pub normal: Vec3,
+    /// Overlap, m.
+    pub overlap: f64,
+    /// Magnitude of the normal force, N.
+    pub normal_force: f64,
+    /// Magnitude of the tangential force, N.
+    pub tangential_force: f64,
+}
+
+/// Pair geometry of slots i, j with the law's lever arm, if they touch.
+#[inline(always)]
+fn pair_geometry(p: &Particles, i: usize, j: usize, lever: LeverArm) -> Option<ContactGeometry> {
+    let mut g = pair_contact(p.position[i], p.position[j], p.radius[i], p.radius[j])?;
+    if lever == LeverArm::Radius {
+        (g.lever_i, g.lever_j) = (p.radius[i], p.radius[j]);
+    }
+    Some(g)
+}
+
+/// Geometry of slot i against a wall with the law's lever arm, if they touch.
+#[inline(always)]
+fn wall_geometry(p: &Particles, i: usize, wall: &Wall, lever: LeverArm) -> Option<ContactGeometry> {
+    let mut g = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal)?;
+    if lever == LeverArm::Radius {
+        g.lever_i = p.radius[i];
+    }
+    Some(g)
 }
 
 fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
