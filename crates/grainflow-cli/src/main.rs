@@ -4,12 +4,18 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod example;
 mod run;
 mod verify;
 
 /// grainflow — a discrete element method engine for granular flows (MFIX-DEM compatible).
 #[derive(Debug, Parser)]
-#[command(name = "grainflow", version, about, long_about = None)]
+#[command(
+    name = "grainflow",
+    version,
+    about = "grainflow — a discrete element method (DEM) engine for granular flows, MFIX-DEM compatible",
+    after_help = "Quick start:\n  grainflow example settling-bed\n  grainflow run settling-bed/case.toml --out settling-bed/out\n  grainflow verify dem05\n\nCase-file keys, units and defaults: docs/case-file.md. Exit codes: 0 success, 1 a verification check or an output failed, 2 bad input."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -19,9 +25,12 @@ struct Cli {
 enum Command {
     /// Run a case file (TOML) and write its time series and particle snapshots.
     Run(run::RunArgs),
-    /// Run a verification case, compare with theory and experiment, write CSV, figures and
-    /// a summary; exits non-zero if a check fails.
+    /// Run verification cases (all, or those named), compare with analytical solutions,
+    /// reference codes and experiments; write CSV, figures, summaries and report.html; exit
+    /// non-zero if a check fails.
     Verify(verify::VerifyArgs),
+    /// Write a ready-to-run example case into a new folder (list them without a name).
+    Example(example::ExampleArgs),
 }
 
 /// Exit code for input the program cannot use.
@@ -43,5 +52,6 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Run(args) => run::main(args),
         Command::Verify(args) => verify::main(args),
+        Command::Example(args) => example::main(args),
     }
 }

@@ -3,6 +3,7 @@
 use crate::EXIT_BAD_INPUT;
 use clap::Args;
 use grainflow::Simulation;
+use grainflow_case::CaseError;
 use grainflow_case::run::{RunError, run_case};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -93,7 +94,11 @@ pub fn main(args: RunArgs) -> ExitCode {
     let case = match grainflow_case::load(&args.case) {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("error: {e}");
+            // Syntax and read errors name the file already; the others name table and key.
+            match e {
+                CaseError::Syntax(_) | CaseError::Read { .. } => eprintln!("error: {e}"),
+                _ => eprintln!("error: {}: {e}", args.case.display()),
+            }
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
