@@ -63,3 +63,55 @@ fn examples_run_and_write_their_outputs() {
     }
     assert!(checked > 20, "only {checked} free-fall rows");
 }
+
+#[test]
+fn progress_is_plain_lines_off_a_terminal_and_silent_with_quiet() {
+    let case = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/bouncing-ball/case.toml");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let run = |quiet: bool| {
+        let mut cmd = grainflow();
+        cmd.args(["run", case, "--out"]).arg(dir.path());
+        if quiet {
+            cmd.arg("--quiet");
+        }
+        let out = cmd.output().expect("runs");
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let loud = run(false);
+    // Output captured by a pipe is not a terminal: one line per 10 % of the run.
+    let lines: Vec<&str> =
+        loud.lines().filter(|l| l.contains("particle-steps/s") && l.contains("ETA")).collect();
+    assert_eq!(lines.len(), 10, "{loud}");
+    assert!(lines[9].trim_start().starts_with("100%"), "{loud}");
+    assert!(run(true).lines().all(|l| !l.contains("particle-steps/s")));
+}
+
+#[test]
+fn example_writes_a_runnable_case_and_never_overwrites() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let target = dir.path().join("ball");
+    let write =
+        || grainflow().args(["example", "bouncing-ball", "--dir"]).arg(&target).output().expect("runs");
+    assert!(write().status.success());
+    let case = target.join("case.toml");
+    std::fs::write(&case, std::fs::read_to_string(&case).expect("case") + "\n# my edit\n").expect("edit");
+    let again = write();
+    assert_eq!(again.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&again.stderr).contains("exists already"));
+    assert!(
+        std::fs::read_to_string(&case).expect("case").ends_with("# my edit\n"),
+        "the user's file was overwritten"
+    );
+    let run = grainflow()
+        .arg("run")
+        .arg(&case)
+        .arg("--out")
+        .arg(target.join("out"))
+        .arg("-q")
+        .output()
+        .expect("runs");
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let unknown = grainflow().args(["example", "no-such-example"]).output().expect("runs");
+    assert_eq!(unknown.status.code(), Some(2));
+}
