@@ -64,8 +64,31 @@ pub fn parse(
     origin: &str,
     read_file: &dyn Fn(&str) -> Result<String, CaseError>,
 ) -> Result<Case, CaseError> {
-    let raw: RawCase = toml::from_str(text).map_err(|e| CaseError::Syntax(format!("{origin}: {e}")))?;
+    let raw: RawCase =
+        toml::from_str(text).map_err(|e| CaseError::Syntax(did_you_mean(format!("{origin}: {e}"))))?;
     validate(raw, read_file)
+}
+
+/// Adds "did you mean `x`?" to serde's "unknown field `y`, expected one of `a`, `b`, …" when
+/// one of the expected keys is close to the unknown one.
+fn did_you_mean(message: String) -> String {
+    let Some(start) = message.find("unknown field `") else { return message };
+    let rest = &message[start + 15..];
+    let Some(end) = rest.find('`') else { return message };
+    let unknown = &rest[..end];
+    let Some(list) = rest.find("expected one of ").map(|k| &rest[k + 16..]) else { return message };
+    let best = list
+        .split(',')
+        .map(|w| w.trim().trim_matches(|c: char| c == '`' || c.is_whitespace() || c == '.'))
+        .filter(|w| !w.is_empty())
+        .map(|w| (strsim::damerau_levenshtein(unknown, w), w))
+        .min();
+    match best {
+        Some((d, w)) if d <= 2.max(unknown.len() / 3) => {
+            format!("{}\ndid you mean `{w}`?", message.trim_end())
+        }
+        _ => message,
+    }
 }
 
 fn require<T>(v: Option<T>, table: &str, key: &str, hint: &str) -> Result<T, CaseError> {

@@ -71,6 +71,16 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
             &["unknown field `friction`", "expected one of"],
         ),
         ("unknown table", format!("{BASE}\n[solver]\nx = 1\n"), &["unknown field `solver`"]),
+        (
+            "misspelt key",
+            edit("t_stop = 0.01", "t_stpo = 0.01"),
+            &["unknown field `t_stpo`", "did you mean `t_stop`?"],
+        ),
+        (
+            "misspelt table",
+            edit("[contact.particle]", "[contact.particles]"),
+            &["unknown field `particles`", "did you mean `particle`?"],
+        ),
         ("wrong type", edit("t_stop = 0.01", "t_stop = \"soon\""), &["t_stop", "invalid type"]),
         ("missing version", edit("version = 1", ""), &["top level", "version"]),
         ("wrong version", edit("version = 1", "version = 7"), &["version", "= 7", "version 1"]),
