@@ -685,6 +685,28 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         }
     }
 
+    let max_overlap = praw.max_initial_overlap.unwrap_or(DEFAULT_MAX_INITIAL_OVERLAP);
+    if !(max_overlap.is_finite() && max_overlap >= 0.0) {
+        return Err(CaseError::invalid(
+            "[particles]",
+            "max_initial_overlap",
+            max_overlap,
+            "must be a fraction >= 0 of the radius",
+        ));
+    }
+    check_geometry(&particles, &walls, (min, max), max_overlap)?;
+    let force_dt = time.force_dt.unwrap_or(false);
+    check_stability(
+        time_step,
+        &law,
+        &phases,
+        &wall_materials,
+        &pair_params,
+        &wall_params,
+        force_dt,
+        &mut warnings,
+    )?;
+
     let config = SimulationConfig {
         phases,
         wall_materials,
@@ -701,6 +723,122 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         motion,
     };
     Ok(Case { title: raw.title, config, particles, output, domain: (min, max), warnings })
+}
+
+/// Default of `[particles] max_initial_overlap`.
+pub const DEFAULT_MAX_INITIAL_OVERLAP: f64 = 0.05;
+
+/// Particles must start inside the domain box, in front of every wall, and overlap no wall
+/// or other particle by more than `max_overlap` of the (smaller) radius: a larger overlap
+/// releases a burst of elastic energy at the first step.
+fn check_geometry(
+    p: &Particles,
+    walls: &[Wall],
+    (lo, hi): (Vec3, Vec3),
+    max_overlap: f64,
+) -> Result<(), CaseError> {
+    let at = |i: usize| {
+        let x = p.position[i];
+        format!("particle {} at ({:.6e}, {:.6e}, {:.6e}) m", p.id[i], x.x, x.y, x.z)
+    };
+    for i in 0..p.len() {
+        let x = p.position[i];
+        if x.cmplt(lo).any() || x.cmpgt(hi).any() {
+            return Err(CaseError::Geometry(format!(
+                "{} is outside the domain box [{:?}, {:?}]; move it inside or enlarge [domain]",
+                at(i),
+                lo.to_array(),
+                hi.to_array()
+            )));
+        }
+        for w in walls {
+            let d = w.distance(x);
+            if d < 0.0 {
+                return Err(CaseError::Geometry(format!(
+                    "{} is behind wall '{}' (its centre is {:.3e} m on the wall's far side)",
+                    at(i),
+                    w.name,
+                    -d
+                )));
+            }
+            let overlap = p.radius[i] - d;
+            if overlap > max_overlap * p.radius[i] {
+                return Err(CaseError::Geometry(format!(
+                    "{} overlaps wall '{}' by {:.3e} m = {:.3} of its radius; the limit is [particles] max_initial_overlap = {max_overlap}",
+                    at(i),
+                    w.name,
+                    overlap,
+                    overlap / p.radius[i]
+                )));
+            }
+        }
+    }
+    let mut nl = grainflow::neighbor::NeighborList::new(0.0);
+    nl.build(p, &[]);
+    for &[i, j] in &nl.pairs {
+        let (i, j) = (i as usize, j as usize);
+        let overlap = p.radius[i] + p.radius[j] - (p.position[j] - p.position[i]).length();
+        let r = p.radius[i].min(p.radius[j]);
+        if overlap > max_overlap * r {
+            return Err(CaseError::Geometry(format!(
+                "{} and particle {} overlap by {:.3e} m = {:.3} of the smaller radius; the limit is [particles] max_initial_overlap = {max_overlap}",
+                at(i),
+                p.id[j],
+                overlap,
+                overlap / r
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// An explicit time step above the contact law's stability limit is refused unless forced;
+/// MFIX's rule above it (possible only through stiff walls, which MFIX leaves out) warns.
+fn check_stability(
+    rule: TimeStepRule,
+    law: &ContactLaw,
+    phases: &[Phase],
+    wall_materials: &[WallMaterial],
+    pair_params: &[ContactParams],
+    wall_params: &[ContactParams],
+    force: bool,
+    warnings: &mut Vec<String>,
+) -> Result<(), CaseError> {
+    let table = grainflow::contact::CoeffTable::build(law, phases, wall_materials, pair_params, wall_params)?;
+    let limit = grainflow::timestep::stability_limit(law, phases, wall_materials, &table);
+    match rule {
+        TimeStepRule::Fixed(dt) if dt > limit.dt_max => {
+            let text = format!(
+                "dt = {dt:e} s is above the stability limit {:.4e} s of the {} model ({}); a safe choice is dt = {:.4e} s, or leave dt out for MFIX's rule",
+                limit.dt_max,
+                law.normal_name(),
+                limit.reason,
+                limit.dt_safe
+            );
+            if force {
+                warnings.push(format!("[time]: {text} (running anyway: force_dt = true)"));
+                Ok(())
+            } else {
+                Err(CaseError::invalid(
+                    "[time]",
+                    "dt",
+                    dt,
+                    format!("{text}; set force_dt = true to run anyway"),
+                ))
+            }
+        }
+        TimeStepRule::Mfix { factor } => {
+            let dt = grainflow::timestep::choose(rule, law, phases, &table, 1.0)?.dt;
+            if dt > limit.dt_max {
+                warnings.push(format!(
+                    "[time]: MFIX's rule (TCOLL/{factor}) gives dt = {dt:.4e} s, above the stability limit {:.4e} s ({}); consider dt = {:.4e} s",
+                    limit.dt_max, limit.reason, limit.dt_safe
+                ));
+            }
+            Ok(())
+        }
+        TimeStepRule::Fixed(_) => Ok(()),
+    }
 }
 
 /// Range checks of one contact table, and warnings for keys the model does not use.

@@ -50,6 +50,10 @@ pub enum CaseError {
         /// What is wrong and what is expected.
         message: String,
     },
+    /// Particles and walls are placed so that the run cannot start well (outside the domain,
+    /// behind a wall, overlapping too much).
+    #[error("{0}")]
+    Geometry(String),
     /// The engine refused the set-up.
     #[error("{0}")]
     Engine(#[from] grainflow::EngineError),

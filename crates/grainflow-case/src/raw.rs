@@ -188,6 +188,8 @@ pub struct RawTime {
     pub dtsolid_factor: Option<f64>,
     /// "euler" (MFIX's default), "adams_bashforth" or "velocity_verlet". Default "euler".
     pub integrator: Option<String>,
+    /// Run even with an explicit `dt` above the contact law's stability limit. Default false.
+    pub force_dt: Option<bool>,
 }
 
 /// `[neighbor]`
@@ -221,6 +223,9 @@ pub struct RawParticles {
     /// "mfix" (legacy particle_input.dat) or "csv". Default from the extension: .csv → csv,
     /// anything else → mfix.
     pub format: Option<String>,
+    /// Largest initial overlap allowed, as a fraction of the smaller radius (particle pairs)
+    /// or of the radius (walls). Default 0.05.
+    pub max_initial_overlap: Option<f64>,
     /// Particles listed inline.
     #[serde(default)]
     pub list: Vec<RawParticle>,

@@ -106,3 +106,72 @@ pub fn choose(
     }
     Ok(TimeStepChoice { dt, steps: step_count(span, dt), tcoll, explanation })
 }
+
+/// The largest time step the contact law tolerates, and the contact that sets it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StabilityLimit {
+    /// Largest safe Δt, s.
+    pub dt_max: f64,
+    /// A time step comfortably inside it, s (what to suggest).
+    pub dt_safe: f64,
+    /// Which contact or phase sets the limit, and by which rule.
+    pub reason: String,
+}
+
+/// Stability limit of explicit integration for the contact law:
+/// - linear spring–dashpot: Δt ≤ t_c/10, t_c the collision time of the stiffest contact over
+///   all phase pairs **and** phase–wall pairs (MFIX's rule leaves the walls out); the
+///   suggestion is t_c/50, MFIX's default;
+/// - Hertz: Δt ≤ 0.3·T_R with the Rayleigh time T_R = πR√(ρ/G)/(0.1631ν + 0.8766) of the
+///   smallest phase (Thornton's and Li et al.'s criterion); the suggestion is 0.1·T_R.
+pub fn stability_limit(
+    law: &ContactLaw,
+    phases: &[Phase],
+    wall_materials: &[crate::material::WallMaterial],
+    table: &CoeffTable,
+) -> StabilityLimit {
+    match law.normal {
+        NormalModel::LinearSpringDashpot => {
+            let mut best = (f64::INFINITY, String::new());
+            for m in 0..phases.len() {
+                for l in m..phases.len() {
+                    let c = table.pair(m, l);
+                    let t = collision_time(c.kn, c.eta_n, c.m_eff);
+                    if t < best.0 {
+                        best = (t, format!("contact '{}'-'{}'", phases[m].name, phases[l].name));
+                    }
+                }
+                for (w, wm) in wall_materials.iter().enumerate() {
+                    let c = table.wall(m, w);
+                    let t = collision_time(c.kn, c.eta_n, c.m_eff);
+                    if t < best.0 {
+                        best = (t, format!("contact '{}'-wall '{}'", phases[m].name, wm.name));
+                    }
+                }
+            }
+            StabilityLimit {
+                dt_max: best.0 / 10.0,
+                dt_safe: best.0 / 50.0,
+                reason: format!("collision time {:.4e} s of the {} (limit t_c/10)", best.0, best.1),
+            }
+        }
+        NormalModel::Hertz => {
+            let mut best = (f64::INFINITY, String::new());
+            for ph in phases {
+                if let (Some(e), Some(nu)) = (ph.youngs_modulus, ph.poisson_ratio) {
+                    let g = e / (2.0 * (1.0 + nu));
+                    let t =
+                        std::f64::consts::PI * ph.radius() * (ph.density / g).sqrt() / (0.1631 * nu + 0.8766);
+                    if t < best.0 {
+                        best = (t, format!("phase '{}'", ph.name));
+                    }
+                }
+            }
+            StabilityLimit {
+                dt_max: 0.3 * best.0,
+                dt_safe: 0.1 * best.0,
+                reason: format!("Rayleigh time {:.4e} s of {} (limit 0.3·T_R)", best.0, best.1),
+            }
+        }
+    }
+}
