@@ -31,6 +31,9 @@ pub struct Case {
     pub output: OutputSettings,
     /// The domain box (lower and upper corner), m.
     pub domain: (Vec3, Vec3),
+    /// SHA-256 of the case text and every file it read, hex: ties outputs and checkpoints to
+    /// their inputs.
+    pub hash: String,
     /// Things the user should know (e.g. parameters the chosen model does not use).
     pub warnings: Vec<String>,
 }
@@ -64,9 +67,24 @@ pub fn parse(
     origin: &str,
     read_file: &dyn Fn(&str) -> Result<String, CaseError>,
 ) -> Result<Case, CaseError> {
+    use sha2::{Digest, Sha256};
     let raw: RawCase =
         toml::from_str(text).map_err(|e| CaseError::Syntax(did_you_mean(format!("{origin}: {e}"))))?;
-    validate(raw, read_file)
+    // The hash covers the case text and every file it reads, in the order read.
+    let hasher = std::cell::RefCell::new(Sha256::new());
+    hasher.borrow_mut().update(text.as_bytes());
+    let hashing_read = |name: &str| {
+        let content = read_file(name)?;
+        let mut h = hasher.borrow_mut();
+        h.update(b"\0file\0");
+        h.update(name.as_bytes());
+        h.update(b"\0");
+        h.update(content.as_bytes());
+        Ok(content)
+    };
+    let mut case = validate(raw, &hashing_read)?;
+    case.hash = hasher.into_inner().finalize().iter().map(|b| format!("{b:02x}")).collect();
+    Ok(case)
 }
 
 /// Adds "did you mean `x`?" to serde's "unknown field `y`, expected one of `a`, `b`, …" when
@@ -722,7 +740,15 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         skin,
         motion,
     };
-    Ok(Case { title: raw.title, config, particles, output, domain: (min, max), warnings })
+    Ok(Case {
+        title: raw.title,
+        config,
+        particles,
+        output,
+        domain: (min, max),
+        hash: String::new(),
+        warnings,
+    })
 }
 
 /// Default of `[particles] max_initial_overlap`.

@@ -61,6 +61,14 @@ impl TimeSeriesWriter {
         )
     }
 
+    /// Appends rows already formatted (an earlier run's, kept across a restart).
+    pub fn write_raw_rows(&mut self, rows: &[String]) -> io::Result<()> {
+        for r in rows {
+            writeln!(self.out, "{r}")?;
+        }
+        Ok(())
+    }
+
     /// Completes the file and moves it into place.
     pub fn finish(self) -> io::Result<()> {
         let f = self.out.into_inner().map_err(|e| e.into_error())?;

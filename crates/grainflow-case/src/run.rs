@@ -1,27 +1,74 @@
 //! Running a case with its outputs: what `grainflow run` does, without the terminal.
+//!
+//! Besides the outputs, the loop keeps the run trustworthy:
+//! - **checkpoints** (`RunOptions::checkpoint_every`) written atomically to
+//!   `out/checkpoint.gfc` (the previous one survives a crash mid-write), from which
+//!   [`RunOptions::restart`] continues bit for bit;
+//! - **health checks** every [`HEALTH_EVERY`] steps and at every output: a non-finite value, a
+//!   particle outside the domain box or an overlap above [`HEALTH_MAX_OVERLAP`] of the radius
+//!   stops the run with a message naming the particle, the step, the likely cause and a fix,
+//!   after writing the last good state (kept at every output and every 10·`HEALTH_EVERY`
+//!   steps) to `out/checkpoint-last-good.gfc`;
+//! - **interruption**: when the `stop` flag is raised (SIGINT/SIGTERM in the program) the step
+//!   in progress finishes, a checkpoint is written and the outputs are closed properly.
 
 use crate::case::{Case, OutputSettings};
-use crate::output::{TimeSeriesWriter, snapshot_csv, write_atomic};
+use crate::output::{TIMESERIES_HEADER, TimeSeriesWriter, snapshot_csv, write_atomic};
 use crate::vtk::VtkSeries;
-use grainflow::Vec3;
-use grainflow::{Diagnostics, Simulation};
+use grainflow::{Diagnostics, Simulation, Vec3};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
-/// What a finished run reports.
+/// Steps between health checks (also made at every output).
+pub const HEALTH_EVERY: u64 = 100;
+/// Largest overlap, as a fraction of the smaller radius, before a run is stopped as unhealthy.
+pub const HEALTH_MAX_OVERLAP: f64 = 0.5;
+/// File name of the running checkpoint in the output folder.
+pub const CHECKPOINT_FILE: &str = "checkpoint.gfc";
+/// File name of the last good state written when a run fails its health check.
+pub const LAST_GOOD_FILE: &str = "checkpoint-last-good.gfc";
+
+/// How often to write a checkpoint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CheckpointEvery {
+    /// Every so many steps.
+    Steps(u64),
+    /// Every so much wall-clock time.
+    WallTime(Duration),
+}
+
+/// Options of a run beyond the case itself.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Periodic checkpoints (one is always written when a run is interrupted).
+    pub checkpoint_every: Option<CheckpointEvery>,
+    /// Continue from this checkpoint instead of the case's initial state.
+    pub restart: Option<PathBuf>,
+    /// Accept a checkpoint written for a different version of the case (e.g. after fixing
+    /// the time step that made a run fail); the particles must still match.
+    pub accept_changed_case: bool,
+    /// Raised from outside (a signal handler) to stop after the current step.
+    pub stop: Option<Arc<AtomicBool>>,
+}
+
+/// What a finished (or interrupted) run reports.
 #[derive(Debug, Clone)]
 pub struct RunSummary {
-    /// Steps taken.
+    /// Steps taken in this invocation.
     pub steps: u64,
+    /// Step the run started from (0, or the checkpoint's).
+    pub start_step: u64,
     /// Δt, s.
     pub dt: f64,
     /// Which time-step rule gave Δt, in words.
     pub time_step_explanation: String,
-    /// Outputs written (time-series rows).
+    /// Outputs written (time-series rows) in this invocation.
     pub outputs: usize,
     /// Steps between outputs.
     pub output_every: u64,
-    /// Diagnostics at the start and at the end.
+    /// Diagnostics at the start.
     pub first: Diagnostics,
     /// Diagnostics at the end.
     pub last: Diagnostics,
@@ -29,11 +76,15 @@ pub struct RunSummary {
     pub wall_seconds: f64,
     /// Particle-steps per wall-clock second.
     pub particle_steps_per_second: f64,
+    /// True when the run was stopped by the `stop` flag before its end.
+    pub interrupted: bool,
+    /// The checkpoint written when interrupted or periodically, if any.
+    pub checkpoint: Option<PathBuf>,
     /// Files written.
     pub files: Vec<PathBuf>,
 }
 
-/// A failure while running: only output can fail once a case is valid.
+/// A file that could not be written.
 #[derive(Debug, thiserror::Error)]
 #[error("cannot write {path}: {source}")]
 pub struct OutputError {
@@ -41,29 +92,6 @@ pub struct OutputError {
     pub path: PathBuf,
     /// Why.
     pub source: std::io::Error,
-}
-
-/// Steps between outputs for an interval: the interval rounded to whole steps (at least 1);
-/// no interval gives about 100 outputs over the run.
-pub fn output_every(interval: Option<f64>, dt: f64, total_steps: u64) -> u64 {
-    match interval {
-        Some(iv) => ((iv / dt).round() as u64).max(1),
-        None => total_steps.div_ceil(100).max(1),
-    }
-}
-
-/// Runs `case` to its end, writing `out/timeseries.csv`, if enabled
-/// `out/snapshots/particles_<step>.csv` at every output (including the first and last step),
-/// and if `vtk_interval` is set a VTK series in `out/vtk/`. `on_progress` is called about a
-/// thousand times over the run, and after the last step, with the simulation.
-pub fn run_case(
-    case: Case,
-    out: &Path,
-    mut on_progress: impl FnMut(&Simulation),
-) -> Result<RunSummary, RunError> {
-    let (output, domain) = (case.output, case.domain);
-    let sim = Simulation::new(case.config, case.particles)?;
-    run_simulation(sim, output, domain, out, &mut on_progress)
 }
 
 /// Why a run stopped early.
@@ -75,49 +103,159 @@ pub enum RunError {
     /// Output failed.
     #[error("{0}")]
     Output(#[from] OutputError),
+    /// The restart checkpoint could not be read or used.
+    #[error("cannot restart from {path}: {message}")]
+    Restart {
+        /// The checkpoint.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+    /// The run went numerically wrong; the last good state was saved.
+    #[error("{message}\nThe last good state (step {good_step}) is in {}; fix the case and continue from it with --restart {} --accept-changed-case.", saved.display(), saved.display())]
+    Unhealthy {
+        /// What went wrong, where, why and what to do.
+        message: String,
+        /// Step of the saved state.
+        good_step: u64,
+        /// Where it was saved.
+        saved: PathBuf,
+    },
+}
+
+/// Steps between outputs for an interval: the interval rounded to whole steps (at least 1);
+/// no interval gives about 100 outputs over the run.
+pub fn output_every(interval: Option<f64>, dt: f64, total_steps: u64) -> u64 {
+    match interval {
+        Some(iv) => ((iv / dt).round() as u64).max(1),
+        None => total_steps.div_ceil(100).max(1),
+    }
+}
+
+/// Runs `case` to its end (or until `options.stop` is raised), writing `out/timeseries.csv`,
+/// if enabled `out/snapshots/particles_<step>.csv` at every output (including the first and
+/// last step), and if `vtk_interval` is set a VTK series in `out/vtk/`. `on_progress` is
+/// called about a thousand times over the run, and after the last step, with the simulation.
+pub fn run_case(
+    case: Case,
+    out: &Path,
+    options: &RunOptions,
+    mut on_progress: impl FnMut(&Simulation),
+) -> Result<RunSummary, RunError> {
+    let (output, domain, hash) = (case.output, case.domain, case.hash.clone());
+    let sim = match &options.restart {
+        None => Simulation::new(case.config, case.particles)?,
+        Some(path) => {
+            let restart_err = |message: String| RunError::Restart { path: path.clone(), message };
+            let bytes = std::fs::read(path).map_err(|e| restart_err(e.to_string()))?;
+            let expected = (!options.accept_changed_case).then_some(hash.as_str());
+            Simulation::restore(case.config, &bytes, expected).map_err(|e| {
+                let hint = if matches!(
+                    e,
+                    grainflow::checkpoint::RestoreError::Checkpoint(
+                        grainflow::checkpoint::CheckpointError::WrongCase { .. }
+                    )
+                ) {
+                    " (if you changed the case on purpose, add --accept-changed-case)"
+                } else {
+                    ""
+                };
+                restart_err(format!("{e}{hint}"))
+            })?
+        }
+    };
+    run_simulation(sim, output, domain, &hash, out, options, &mut on_progress)
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
+    move |source| OutputError { path: path.to_path_buf(), source }
+}
+
+/// The rows of an earlier time series up to and including `step`, so that a restarted run
+/// keeps them.
+fn earlier_rows(path: &Path, step: u64) -> Vec<String> {
+    let Ok(text) = std::fs::read_to_string(path) else { return Vec::new() };
+    let mut lines = text.lines();
+    if lines.next() != Some(TIMESERIES_HEADER) {
+        return Vec::new();
+    }
+    lines
+        .take_while(|l| l.split(',').next().and_then(|s| s.parse::<u64>().ok()).is_some_and(|s| s < step))
+        .map(str::to_string)
+        .collect()
+}
+
+/// The first problem of the current state, if any: non-finite values, a particle outside
+/// the domain box, an overlap beyond [`HEALTH_MAX_OVERLAP`].
+pub fn health_problem(sim: &Simulation, domain: (Vec3, Vec3)) -> Option<String> {
+    let p = sim.particles();
+    let step = sim.step_index();
+    for i in 0..p.len() {
+        let (x, v, w) = (p.position[i], p.velocity[i], p.omega[i]);
+        if !(x.is_finite() && v.is_finite() && w.is_finite()) {
+            return Some(format!(
+                "step {step}: particle {} has a non-finite position, velocity or spin. Likely cause: the time step is too large for the contact stiffness (or a stiffness or density is extreme). Fix: reduce dt (leave it out for MFIX's rule) or lower k_n / E.",
+                p.id[i]
+            ));
+        }
+        let (lo, hi) = domain;
+        if x.cmplt(lo).any() || x.cmpgt(hi).any() {
+            return Some(format!(
+                "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.",
+                p.id[i],
+                x.x,
+                x.y,
+                x.z,
+                v.length()
+            ));
+        }
+    }
+    let d = sim.diagnostics();
+    if d.max_overlap_ratio > HEALTH_MAX_OVERLAP {
+        return Some(format!(
+            "step {step}: an overlap reached {:.2} of the particle radius (limit {HEALTH_MAX_OVERLAP}). Likely cause: the contact stiffness is too low for the loads and speeds (or dt too large). Fix: raise k_n (or E), or reduce the impact speeds; check that dt resolves the collision time (t_c/dt ≥ 20).",
+            d.max_overlap_ratio
+        ));
+    }
+    None
 }
 
 fn run_simulation(
     mut sim: Simulation,
     output: OutputSettings,
     domain: (Vec3, Vec3),
+    hash: &str,
     out: &Path,
+    options: &RunOptions,
     on_progress: &mut dyn FnMut(&Simulation),
 ) -> Result<RunSummary, RunError> {
     let OutputSettings { interval, snapshots, vtk_interval } = output;
-    let io_err = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| OutputError { path, source }
-    };
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let snap_dir = out.join("snapshots");
     if snapshots {
         std::fs::create_dir_all(&snap_dir).map_err(io_err(&snap_dir))?;
     }
+    let start_step = sim.step_index();
     let ts_path = out.join("timeseries.csv");
+    let kept = if start_step > 0 { earlier_rows(&ts_path, start_step) } else { Vec::new() };
     let mut ts = TimeSeriesWriter::create(&ts_path).map_err(io_err(&ts_path))?;
+    ts.write_raw_rows(&kept).map_err(io_err(&ts_path))?;
     let every = output_every(interval, sim.dt(), sim.total_steps());
     let mut files = vec![ts_path.clone()];
     let vtk_dir = out.join("vtk");
     let mut vtk = match vtk_interval {
         Some(iv) => Some((
-            VtkSeries::create(&vtk_dir, sim.walls(), domain.0, domain.1).map_err(io_err(&vtk_dir))?,
+            VtkSeries::resume(&vtk_dir, sim.walls(), domain.0, domain.1, start_step)
+                .map_err(io_err(&vtk_dir))?,
             output_every(Some(iv), sim.dt(), sim.total_steps()),
         )),
         None => None,
     };
-    let mut write_vtk = |sim: &Simulation, force: bool| -> Result<(), OutputError> {
-        if let Some((series, k)) = vtk.as_mut() {
-            if force || sim.step_index() % *k == 0 {
-                series
-                    .write(sim.step_index(), sim.time(), sim.particles(), &sim.contacts())
-                    .map_err(io_err(&vtk_dir))?;
-            }
-        }
-        Ok(())
+    let checkpoint_path = out.join(CHECKPOINT_FILE);
+    let write_checkpoint = |sim: &Simulation| -> Result<(), OutputError> {
+        write_atomic(&checkpoint_path, &sim.checkpoint(hash)).map_err(io_err(&checkpoint_path))
     };
     let progress_every = sim.total_steps().div_ceil(1000).max(1);
-    let mut outputs = 0;
     let emit = |sim: &Simulation,
                 ts: &mut TimeSeriesWriter,
                 files: &mut Vec<PathBuf>|
@@ -131,34 +269,97 @@ fn run_simulation(
         }
         Ok(d)
     };
-    let first = emit(&sim, &mut ts, &mut files)?;
-    write_vtk(&sim, true)?;
-    outputs += 1;
+    let mut write_vtk = |sim: &Simulation, force: bool| -> Result<(), OutputError> {
+        if let Some((series, k)) = vtk.as_mut() {
+            if force || sim.step_index() % *k == 0 {
+                series
+                    .write(sim.step_index(), sim.time(), sim.particles(), &sim.contacts())
+                    .map_err(io_err(&vtk_dir))?;
+            }
+        }
+        Ok(())
+    };
+
+    if let Some(problem) = health_problem(&sim, domain) {
+        return Err(RunError::Engine(grainflow::EngineError::BadReference(problem)));
+    }
+    let mut last_good = (sim.step_index(), sim.checkpoint(hash));
+    // A fresh run writes its initial state; a restarted one continues the output schedule of
+    // the run it continues (whose rows up to here were kept), so its files match an
+    // uninterrupted run's.
+    let (first, mut outputs) = if start_step == 0 || start_step % every == 0 {
+        (emit(&sim, &mut ts, &mut files)?, 1)
+    } else {
+        (sim.diagnostics(), 0)
+    };
+    write_vtk(&sim, start_step == 0 || start_step % every == 0)?;
     on_progress(&sim);
     let start = Instant::now();
+    let mut last_checkpoint = Instant::now();
+    let mut checkpoint = None;
     let mut last = first;
+    let mut interrupted = false;
     while !sim.finished() {
         sim.step();
+        let step = sim.step_index();
         let end = sim.finished();
-        if sim.step_index() % every == 0 || end {
+        let output_now = step % every == 0 || end;
+        if step % HEALTH_EVERY == 0 || output_now {
+            if let Some(message) = health_problem(&sim, domain) {
+                let saved = out.join(LAST_GOOD_FILE);
+                write_atomic(&saved, &last_good.1).map_err(io_err(&saved))?;
+                ts.finish().map_err(io_err(&ts_path))?;
+                return Err(RunError::Unhealthy { message, good_step: last_good.0, saved });
+            }
+            // Keeping a copy of the state costs a pass over it: refresh it at outputs and
+            // every tenth check, not at every check.
+            if output_now || step % (10 * HEALTH_EVERY) == 0 {
+                last_good = (step, sim.checkpoint(hash));
+            }
+        }
+        if output_now {
             last = emit(&sim, &mut ts, &mut files)?;
             outputs += 1;
         }
         write_vtk(&sim, end)?;
-        if sim.step_index() % progress_every == 0 || end {
+        if step % progress_every == 0 || end {
             on_progress(&sim);
+        }
+        let due = match options.checkpoint_every {
+            Some(CheckpointEvery::Steps(n)) => n > 0 && step % n == 0,
+            Some(CheckpointEvery::WallTime(d)) => last_checkpoint.elapsed() >= d,
+            None => false,
+        };
+        let stop = options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
+        if (due || stop) && !end {
+            write_checkpoint(&sim)?;
+            checkpoint = Some(checkpoint_path.clone());
+            last_checkpoint = Instant::now();
+        }
+        if stop && !end {
+            if !output_now {
+                last = emit(&sim, &mut ts, &mut files)?;
+                outputs += 1;
+            }
+            interrupted = true;
+            on_progress(&sim);
+            break;
         }
     }
     let wall = start.elapsed().as_secs_f64();
     ts.finish().map_err(io_err(&ts_path))?;
+    if let Some(c) = &checkpoint {
+        files.push(c.clone());
+    }
     if vtk.is_some() {
         files.push(vtk_dir.join("particles.pvd"));
         files.push(vtk_dir.join("contacts.pvd"));
         files.push(vtk_dir.join("walls.vtp"));
     }
-    let steps = sim.step_index();
+    let steps = sim.step_index() - start_step;
     Ok(RunSummary {
         steps,
+        start_step,
         dt: sim.dt(),
         time_step_explanation: sim.time_step().explanation.clone(),
         outputs,
@@ -171,6 +372,8 @@ fn run_simulation(
         } else {
             0.0
         },
+        interrupted,
+        checkpoint,
         files,
     })
 }

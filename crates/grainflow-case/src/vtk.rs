@@ -273,6 +273,30 @@ impl VtkSeries {
         Ok(VtkSeries { dir: dir.to_path_buf(), particles: Vec::new(), contacts: Vec::new() })
     }
 
+    /// Continues a series from an earlier run in `dir`: frames before `step` are kept in the
+    /// collections (a restarted run continues where the checkpoint was written).
+    pub fn resume(dir: &Path, walls: &[Wall], lo: Vec3, hi: Vec3, step: u64) -> io::Result<Self> {
+        let mut series = Self::create(dir, walls, lo, hi)?;
+        let keep = |collection: &str| -> Vec<(f64, String)> {
+            let Ok(text) = std::fs::read_to_string(dir.join(collection)) else { return Vec::new() };
+            text.lines()
+                .filter_map(|l| {
+                    let attr = |name: &str| {
+                        let start = l.find(&format!("{name}=\""))? + name.len() + 2;
+                        l[start..].split('"').next()
+                    };
+                    let file = attr("file")?.to_string();
+                    let t: f64 = attr("timestep")?.parse().ok()?;
+                    let s: u64 = file.rsplit('_').next()?.trim_end_matches(".vtp").parse().ok()?;
+                    (s < step).then_some((t, file))
+                })
+                .collect()
+        };
+        series.particles = keep("particles.pvd");
+        series.contacts = keep("contacts.pvd");
+        Ok(series)
+    }
+
     /// Adds one frame.
     pub fn write(&mut self, step: u64, time: f64, p: &Particles, contacts: &[ContactInfo]) -> io::Result<()> {
         let pf = format!("particles_{step:09}.vtp");

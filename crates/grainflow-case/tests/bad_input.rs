@@ -304,9 +304,11 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
 
 #[test]
 fn forced_dt_runs_with_a_warning_and_looser_overlap_limit_accepts() {
-    let case = parse_text(&edit("t_stop = 0.01", "t_stop = 0.01\ndt = 1e-3\nforce_dt = true")).expect("forced");
+    let case =
+        parse_text(&edit("t_stop = 0.01", "t_stop = 0.01\ndt = 1e-3\nforce_dt = true")).expect("forced");
     assert!(case.warnings.iter().any(|w| w.contains("running anyway")), "{:?}", case.warnings);
-    let text = edit("position = [0.05, 0.05, 0.05]", "position = [0.05, 0.0015, 0.05]").replace("[[particles.list]]", "[particles]\nmax_initial_overlap = 0.3\n[[particles.list]]");
+    let text = edit("position = [0.05, 0.05, 0.05]", "position = [0.05, 0.0015, 0.05]")
+        .replace("[[particles.list]]", "[particles]\nmax_initial_overlap = 0.3\n[[particles.list]]");
     parse_text(&text).expect("a 25 % wall overlap is allowed under a 30 % limit");
 }
 

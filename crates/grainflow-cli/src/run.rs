@@ -4,11 +4,15 @@ use crate::EXIT_BAD_INPUT;
 use clap::Args;
 use grainflow::Simulation;
 use grainflow_case::CaseError;
-use grainflow_case::run::{RunError, run_case};
+use grainflow_case::run::{CheckpointEvery, RunError, RunOptions, RunSummary, run_case};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
+use std::path::Path;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 use std::time::Instant;
 
 /// Progress of a run: a bar with particle-steps per second, simulated time and ETA on a
@@ -88,6 +92,45 @@ pub struct RunArgs {
     /// No progress bar or progress lines (the summary is still printed).
     #[arg(long, short)]
     quiet: bool,
+    /// Write OUT/checkpoint.gfc every N steps ("5000") or every so much wall-clock time
+    /// ("90s", "15min", "2h"); written atomically, the previous one survives a crash.
+    #[arg(long, value_name = "STEPS|TIME", value_parser = parse_checkpoint_every)]
+    checkpoint_every: Option<CheckpointEvery>,
+    /// Continue from a checkpoint of this case (bit-identical to an uninterrupted run); the
+    /// time series written so far in OUT is kept.
+    #[arg(long, value_name = "FILE")]
+    restart: Option<PathBuf>,
+    /// With --restart: accept a checkpoint written before the case file was changed (e.g.
+    /// after fixing the time step of a failed run); particles must still match.
+    #[arg(long, requires = "restart")]
+    accept_changed_case: bool,
+}
+
+/// Exit code of a run stopped by SIGINT/SIGTERM (128 + SIGINT, the shell's convention).
+const EXIT_INTERRUPTED: u8 = 130;
+
+fn parse_checkpoint_every(s: &str) -> Result<CheckpointEvery, String> {
+    let t = s.trim();
+    if let Ok(n) = t.parse::<u64>() {
+        return if n > 0 {
+            Ok(CheckpointEvery::Steps(n))
+        } else {
+            Err("the step count must be at least 1".into())
+        };
+    }
+    let (num, unit) = t.split_at(t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len()));
+    let scale = match unit {
+        "s" => 1.0,
+        "min" => 60.0,
+        "h" => 3600.0,
+        _ => return Err(format!("'{s}' is neither a step count nor a time like 90s, 15min or 2h")),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => {
+            Ok(CheckpointEvery::WallTime(Duration::from_secs_f64(v * scale)))
+        }
+        _ => Err(format!("'{s}' is neither a step count nor a time like 90s, 15min or 2h")),
+    }
 }
 
 pub fn main(args: RunArgs) -> ExitCode {
@@ -108,9 +151,35 @@ pub fn main(args: RunArgs) -> ExitCode {
     let n = case.particles.len();
     let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
     println!("grainflow {}: {title}", env!("CARGO_PKG_VERSION"));
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // A second signal while the checkpoint is being written is ignored: the flag is set.
+        if let Err(e) = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst)) {
+            eprintln!(
+                "warning: cannot catch SIGINT/SIGTERM ({e}); an interrupted run will not write a checkpoint"
+            );
+        }
+    }
+    let options = RunOptions {
+        checkpoint_every: args.checkpoint_every,
+        restart: args.restart.clone(),
+        accept_changed_case: args.accept_changed_case,
+        stop: Some(stop),
+    };
+    let info = RunInfo { case: &args.case, hash: case.hash.clone(), restart: args.restart.as_deref() };
     let mut progress = Progress::new(args.quiet);
-    let result = run_case(case, &args.out, |sim| progress.update(sim));
+    let result = run_case(case, &args.out, &options, |sim| progress.update(sim));
     progress.finish();
+    let status = match &result {
+        Ok(s) if s.interrupted => "interrupted",
+        Ok(_) => "completed",
+        Err(RunError::Unhealthy { .. }) => "failed: numerical health check",
+        Err(_) => "failed",
+    };
+    if let Err(e) = info.write(&args.out, status, result.as_ref().ok()) {
+        eprintln!("warning: cannot write {}: {e}", args.out.join("run-info.toml").display());
+    }
     match result {
         Ok(s) => {
             println!("{}", s.time_step_explanation);
@@ -137,7 +206,23 @@ pub fn main(args: RunArgs) -> ExitCode {
                 "wall time {:.3} s, {:.3e} particle-steps/s",
                 s.wall_seconds, s.particle_steps_per_second
             );
+            if s.interrupted {
+                let at = s.checkpoint.as_ref().map_or("(no checkpoint)".into(), |c| c.display().to_string());
+                eprintln!(
+                    "interrupted at step {}: state saved in {at}; continue with --restart {at}",
+                    s.start_step + s.steps
+                );
+                return ExitCode::from(EXIT_INTERRUPTED);
+            }
             ExitCode::SUCCESS
+        }
+        Err(e @ RunError::Restart { .. }) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_BAD_INPUT)
+        }
+        Err(e @ RunError::Unhealthy { .. }) => {
+            eprintln!("error: the run went wrong and was stopped: {e}");
+            ExitCode::FAILURE
         }
         Err(RunError::Engine(e)) => {
             eprintln!("error: {}: {e}", args.case.display());
@@ -147,5 +232,39 @@ pub fn main(args: RunArgs) -> ExitCode {
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// `OUT/run-info.toml`: what produced the outputs, so that a result can be traced and
+/// reproduced: program version, case file and the hash of everything it read, thread count,
+/// time step, steps, and how the run ended.
+struct RunInfo<'a> {
+    case: &'a Path,
+    hash: String,
+    restart: Option<&'a Path>,
+}
+
+impl RunInfo<'_> {
+    fn write(&self, out: &Path, status: &str, summary: Option<&RunSummary>) -> std::io::Result<()> {
+        let mut s = format!(
+            "# Written by grainflow run; describes the outputs in this folder.\ngrainflow_version = \"{}\"\ncase_file = {:?}\ncase_sha256 = \"{}\"\nthreads = 1\nstatus = \"{status}\"\n",
+            env!("CARGO_PKG_VERSION"),
+            self.case.display().to_string(),
+            self.hash
+        );
+        if let Some(r) = self.restart {
+            s.push_str(&format!("restarted_from = {:?}\n", r.display().to_string()));
+        }
+        if let Some(x) = summary {
+            s.push_str(&format!(
+                "dt = {:e}\nfirst_step = {}\nlast_step = {}\nwall_seconds = {:.3}\n",
+                x.dt,
+                x.start_step,
+                x.start_step + x.steps,
+                x.wall_seconds
+            ));
+        }
+        std::fs::create_dir_all(out)?;
+        grainflow_case::output::write_atomic(&out.join("run-info.toml"), s.as_bytes())
     }
 }

@@ -24,6 +24,7 @@
 //!
 //! [`Simulation`] ties the stages together; [`timestep`] holds MFIX's time-step rule.
 
+pub mod checkpoint;
 pub mod contact;
 pub mod error;
 pub mod integrate;

@@ -73,6 +73,22 @@ pub(crate) fn resolve(rules: &[PrescribedMotion], p: &Particles) -> Result<Vec<R
         .collect()
 }
 
+/// The anchor (initial position) of each resolved rule.
+pub(crate) fn anchors(rules: &[ResolvedMotion]) -> Vec<Vec3> {
+    rules.iter().map(|r| r.anchor).collect()
+}
+
+/// Sets the anchors from a checkpoint.
+pub(crate) fn set_anchors(rules: &mut [ResolvedMotion], anchors: &[Vec3]) -> Result<(), String> {
+    if rules.len() != anchors.len() {
+        return Err(format!("{} prescribed-motion anchors for {} rules", anchors.len(), rules.len()));
+    }
+    for (r, a) in rules.iter_mut().zip(anchors) {
+        r.anchor = *a;
+    }
+    Ok(())
+}
+
 /// The runs of consecutive slots not under prescribed motion, in order.
 pub(crate) fn free_runs(rules: &[ResolvedMotion], n: usize) -> Vec<std::ops::Range<usize>> {
     let mut prescribed = vec![false; n];

@@ -43,6 +43,29 @@ pub struct NeighborList {
     new_pairs: Vec<(u64, [u32; 2])>,
 }
 
+/// Everything of a [`NeighborList`] that a checkpoint must carry.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct NeighborState {
+    /// Skin, m.
+    pub skin: f64,
+    /// Whether the list was built.
+    pub built: bool,
+    /// Candidate pairs (slots).
+    pub pairs: Vec<[u32; 2]>,
+    /// Their (id, id) keys.
+    pub pair_keys: Vec<u64>,
+    /// Their tangential histories.
+    pub pair_history: Vec<Vec3>,
+    /// Candidate particle–wall pairs (slot, wall).
+    pub wall_pairs: Vec<[u32; 2]>,
+    /// Their (id, wall) keys.
+    pub wall_keys: Vec<u64>,
+    /// Their tangential histories.
+    pub wall_history: Vec<Vec3>,
+    /// Positions at the last build.
+    pub reference: Vec<Vec3>,
+}
+
 const HALF_SHELL: [(i64, i64, i64); 13] = [
     (1, 0, 0),
     (-1, 1, 0),
@@ -73,6 +96,45 @@ impl NeighborList {
     /// The skin distance, m.
     pub fn skin(&self) -> f64 {
         self.skin
+    }
+
+    /// The state a checkpoint carries.
+    pub fn state(&self) -> NeighborState {
+        NeighborState {
+            skin: self.skin,
+            built: self.built,
+            pairs: self.pairs.clone(),
+            pair_keys: self.pair_keys.clone(),
+            pair_history: self.pair_history.clone(),
+            wall_pairs: self.wall_pairs.clone(),
+            wall_keys: self.wall_keys.clone(),
+            wall_history: self.wall_history.clone(),
+            reference: self.reference.clone(),
+        }
+    }
+
+    /// Restores a checkpointed state; `n` particles and `n_walls` walls must fit it.
+    pub fn set_state(&mut self, s: NeighborState, n: usize, n_walls: usize) -> Result<(), String> {
+        let lens_ok = s.pairs.len() == s.pair_keys.len()
+            && s.pairs.len() == s.pair_history.len()
+            && s.wall_pairs.len() == s.wall_keys.len()
+            && s.wall_pairs.len() == s.wall_history.len()
+            && (s.reference.len() == n || !s.built);
+        let in_range = s.pairs.iter().flatten().all(|&i| (i as usize) < n)
+            && s.wall_pairs.iter().all(|&[i, w]| (i as usize) < n && (w as usize) < n_walls);
+        if !(lens_ok && in_range) {
+            return Err("the neighbour list does not fit the particles and walls of the case".into());
+        }
+        self.skin = s.skin;
+        self.built = s.built;
+        self.pairs = s.pairs;
+        self.pair_keys = s.pair_keys;
+        self.pair_history = s.pair_history;
+        self.wall_pairs = s.wall_pairs;
+        self.wall_keys = s.wall_keys;
+        self.wall_history = s.wall_history;
+        self.reference = s.reference;
+        Ok(())
     }
 
     /// Counters of the search.

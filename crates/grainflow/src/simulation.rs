@@ -61,7 +61,11 @@ pub struct Simulation {
     integrator: Integrator,
     time_step: TimeStepChoice,
     gravity: Vec3,
-    t_start: f64,
+    /// Time at step `step_base`: t_start, or the time of a checkpoint restored with another
+    /// time step.
+    t_base: f64,
+    step_base: u64,
+    t_stop: f64,
     step: u64,
     neighbors: NeighborList,
     motion: Vec<ResolvedMotion>,
@@ -149,7 +153,9 @@ impl Simulation {
             integrator: config.integrator,
             time_step,
             gravity: config.gravity,
-            t_start: config.t_start,
+            t_base: config.t_start,
+            step_base: 0,
+            t_stop: config.t_stop,
             step: 0,
             neighbors,
             motion,
@@ -222,12 +228,54 @@ impl Simulation {
 
     /// Simulated time, s: t_0 + steps·Δt.
     pub fn time(&self) -> f64 {
-        self.t_start + self.step as f64 * self.time_step.dt
+        self.t_base + (self.step - self.step_base) as f64 * self.time_step.dt
     }
 
     /// The neighbour list (with the contact histories).
     pub fn neighbors(&self) -> &NeighborList {
         &self.neighbors
+    }
+
+    /// (steps taken, Adams–Bashforth history present, forces of the current state held).
+    pub(crate) fn counters(&self) -> (u64, bool, bool) {
+        (self.step, self.history_started, self.forces_current)
+    }
+
+    /// (current time, Δt, start time of the run's clock) for checkpoints.
+    pub(crate) fn timing(&self) -> (f64, f64, f64) {
+        (self.time(), self.time_step.dt, if self.step_base == 0 { self.t_base } else { f64::NAN })
+    }
+
+    /// The initial positions prescribed particles return to.
+    pub(crate) fn motion_anchors(&self) -> Vec<Vec3> {
+        motion::anchors(&self.motion)
+    }
+
+    /// Applies the dynamic state read from a checkpoint (after `new` built the rest). `timing`
+    /// is the checkpoint's (time, Δt, t_start): with the same Δt and start the step count
+    /// carries the time exactly; otherwise (the case was changed) the clock is rebased at the
+    /// checkpoint's time and the remaining steps are counted anew.
+    pub(crate) fn restore_dynamic_state(
+        &mut self,
+        timing: (f64, f64, f64),
+        step: u64,
+        history_started: bool,
+        forces_current: bool,
+        neighbors: crate::neighbor::NeighborState,
+        anchors: &[Vec3],
+    ) -> Result<(), String> {
+        self.neighbors.set_state(neighbors, self.particles.len(), self.walls.len())?;
+        motion::set_anchors(&mut self.motion, anchors)?;
+        self.step = step;
+        let (time, dt, t_start) = timing;
+        if dt != self.time_step.dt || t_start != self.t_base {
+            self.t_base = time;
+            self.step_base = step;
+            self.time_step.steps = step + crate::timestep::step_count(self.t_stop - time, self.time_step.dt);
+        }
+        self.history_started = history_started;
+        self.forces_current = forces_current;
+        Ok(())
     }
 
     /// Advances one step: contact forces, integration, prescribed motion.

@@ -1,0 +1,295 @@
+//! Checkpoints: the complete dynamic state of a simulation as bytes, so that a restarted run
+//! continues bit for bit as if it had never stopped — positions, velocities, spins, contact
+//! histories, Adams–Bashforth history, neighbour list, prescribed-motion anchors, step count.
+//!
+//! Layout (little-endian): magic `GRAINFLW`, format version (u32), then a length-prefixed
+//! payload and its FNV-1a 64 checksum. The payload starts with the case hash given by the
+//! caller, so a checkpoint is never applied to another case by mistake. Writing the bytes to a
+//! file (atomically) is the caller's business.
+
+use crate::math::Vec3;
+use crate::neighbor::NeighborState;
+use crate::simulation::{Simulation, SimulationConfig};
+use crate::state::Particles;
+use thiserror::Error;
+
+/// The checkpoint format this build writes and reads.
+pub const FORMAT_VERSION: u32 = 1;
+const MAGIC: &[u8; 8] = b"GRAINFLW";
+
+/// Why a checkpoint cannot be used.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CheckpointError {
+    /// Not a grainflow checkpoint at all.
+    #[error("not a grainflow checkpoint (the file does not start with the checkpoint signature)")]
+    NotACheckpoint,
+    /// Written by a different format version.
+    #[error("checkpoint format version {found}; this grainflow reads version {expected}")]
+    Version {
+        /// Version in the file.
+        found: u32,
+        /// Version this build reads.
+        expected: u32,
+    },
+    /// Shorter than its header says.
+    #[error("the checkpoint is truncated ({0}); it was probably being written when the run stopped")]
+    Truncated(&'static str),
+    /// Contents do not match their checksum.
+    #[error("the checkpoint is corrupted (checksum mismatch)")]
+    Corrupted,
+    /// Written for another case, or the case changed since.
+    #[error("the checkpoint was written for a different case file (case hash {found}, this case {expected})")]
+    WrongCase {
+        /// Hash in the checkpoint.
+        found: String,
+        /// Hash of the case given.
+        expected: String,
+    },
+    /// Consistent bytes that do not fit the case (particle count, ids, …).
+    #[error("the checkpoint does not fit the case: {0}")]
+    Mismatch(String),
+}
+
+fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in bytes {
+        h ^= *b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+#[derive(Default)]
+struct Enc(Vec<u8>);
+
+impl Enc {
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        self.u64(b.len() as u64);
+        self.0.extend_from_slice(b);
+    }
+    fn u32s(&mut self, v: &[u32]) {
+        self.u64(v.len() as u64);
+        for x in v {
+            self.0.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    fn u64s(&mut self, v: &[u64]) {
+        self.u64(v.len() as u64);
+        for x in v {
+            self.u64(*x);
+        }
+    }
+    fn f64s(&mut self, v: &[f64]) {
+        self.u64(v.len() as u64);
+        for x in v {
+            self.f64(*x);
+        }
+    }
+    fn vec3s(&mut self, v: &[Vec3]) {
+        self.u64(v.len() as u64);
+        for x in v {
+            for c in x.to_array() {
+                self.f64(c);
+            }
+        }
+    }
+    fn pairs(&mut self, v: &[[u32; 2]]) {
+        let flat: Vec<u32> = v.iter().flatten().copied().collect();
+        self.u32s(&flat);
+    }
+}
+
+struct Dec<'a>(&'a [u8]);
+
+impl<'a> Dec<'a> {
+    fn take(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], CheckpointError> {
+        let all: &'a [u8] = self.0;
+        if all.len() < n {
+            return Err(CheckpointError::Truncated(what));
+        }
+        let (a, b) = all.split_at(n);
+        self.0 = b;
+        Ok(a)
+    }
+    fn u64(&mut self, what: &'static str) -> Result<u64, CheckpointError> {
+        let b = self.take(8, what)?;
+        Ok(u64::from_le_bytes(b.try_into().map_err(|_| CheckpointError::Truncated(what))?))
+    }
+    fn f64(&mut self, what: &'static str) -> Result<f64, CheckpointError> {
+        Ok(f64::from_bits(self.u64(what)?))
+    }
+    fn len(&mut self, elem: usize, what: &'static str) -> Result<usize, CheckpointError> {
+        let n = self.u64(what)? as usize;
+        if n.checked_mul(elem).is_none_or(|bytes| bytes > self.0.len()) {
+            return Err(CheckpointError::Truncated(what));
+        }
+        Ok(n)
+    }
+    fn bytes(&mut self, what: &'static str) -> Result<Vec<u8>, CheckpointError> {
+        let n = self.len(1, what)?;
+        Ok(self.take(n, what)?.to_vec())
+    }
+    fn u32s(&mut self, what: &'static str) -> Result<Vec<u32>, CheckpointError> {
+        let n = self.len(4, what)?;
+        let b = self.take(4 * n, what)?;
+        Ok(b.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+    }
+    fn u64s(&mut self, what: &'static str) -> Result<Vec<u64>, CheckpointError> {
+        let n = self.len(8, what)?;
+        (0..n).map(|_| self.u64(what)).collect()
+    }
+    fn f64s(&mut self, what: &'static str) -> Result<Vec<f64>, CheckpointError> {
+        let n = self.len(8, what)?;
+        (0..n).map(|_| self.f64(what)).collect()
+    }
+    fn vec3s(&mut self, what: &'static str) -> Result<Vec<Vec3>, CheckpointError> {
+        let n = self.len(24, what)?;
+        (0..n).map(|_| Ok(Vec3::new(self.f64(what)?, self.f64(what)?, self.f64(what)?))).collect()
+    }
+    fn pairs(&mut self, what: &'static str) -> Result<Vec<[u32; 2]>, CheckpointError> {
+        let flat = self.u32s(what)?;
+        if flat.len() % 2 != 0 {
+            return Err(CheckpointError::Mismatch(format!("{what}: odd length")));
+        }
+        Ok(flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
+    }
+}
+
+impl Simulation {
+    /// The simulation's complete dynamic state as checkpoint bytes, tagged with `case_hash`.
+    pub fn checkpoint(&self, case_hash: &str) -> Vec<u8> {
+        let mut e = Enc::default();
+        e.bytes(case_hash.as_bytes());
+        let (step, history_started, forces_current) = self.counters();
+        e.u64(step);
+        let (time, dt, t_start) = self.timing();
+        e.f64(time);
+        e.f64(dt);
+        e.f64(t_start);
+        e.u64(history_started as u64);
+        e.u64(forces_current as u64);
+        let p = self.particles();
+        e.u32s(&p.id);
+        e.u32s(&p.phase);
+        for v in [&p.radius, &p.mass, &p.inertia, &p.inv_mass, &p.inv_inertia] {
+            e.f64s(v);
+        }
+        for v in [&p.position, &p.velocity, &p.omega, &p.force, &p.torque, &p.accel_prev, &p.alpha_prev] {
+            e.vec3s(v);
+        }
+        let n = self.neighbors().state();
+        e.f64(n.skin);
+        e.u64(n.built as u64);
+        e.pairs(&n.pairs);
+        e.u64s(&n.pair_keys);
+        e.vec3s(&n.pair_history);
+        e.pairs(&n.wall_pairs);
+        e.u64s(&n.wall_keys);
+        e.vec3s(&n.wall_history);
+        e.vec3s(&n.reference);
+        e.vec3s(&self.motion_anchors());
+        let payload = e.0;
+        let mut out = Vec::with_capacity(payload.len() + 32);
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        out.extend_from_slice(&payload);
+        out.extend_from_slice(&fnv1a(&payload).to_le_bytes());
+        out
+    }
+
+    /// Rebuilds a simulation of `config` from checkpoint bytes written for `case_hash`
+    /// (`None`: accept a checkpoint of a changed case, e.g. after fixing a time step; the
+    /// particles must still match).
+    pub fn restore(
+        config: SimulationConfig,
+        bytes: &[u8],
+        case_hash: Option<&str>,
+    ) -> Result<Simulation, RestoreError> {
+        let mut d = Dec(bytes);
+        if d.0.len() < 8 || &d.0[..8] != MAGIC {
+            return Err(CheckpointError::NotACheckpoint.into());
+        }
+        d.take(8, "signature")?;
+        let version = u32::from_le_bytes(
+            d.take(4, "version")?.try_into().map_err(|_| CheckpointError::Truncated("version"))?,
+        );
+        if version != FORMAT_VERSION {
+            return Err(CheckpointError::Version { found: version, expected: FORMAT_VERSION }.into());
+        }
+        let len = d.u64("length")? as usize;
+        if d.0.len() < len + 8 {
+            return Err(CheckpointError::Truncated("payload").into());
+        }
+        let payload = d.take(len, "payload")?;
+        let sum = d.u64("checksum")?;
+        if fnv1a(payload) != sum {
+            return Err(CheckpointError::Corrupted.into());
+        }
+        let mut d = Dec(payload);
+        let found = String::from_utf8_lossy(&d.bytes("case hash")?).into_owned();
+        if let Some(expected) = case_hash {
+            if found != expected {
+                return Err(CheckpointError::WrongCase { found, expected: expected.into() }.into());
+            }
+        }
+        let step = d.u64("step")?;
+        let timing = (d.f64("time")?, d.f64("time step")?, d.f64("start time")?);
+        let history_started = d.u64("flags")? != 0;
+        let forces_current = d.u64("flags")? != 0;
+        let mut p = Particles {
+            id: d.u32s("ids")?,
+            phase: d.u32s("phases")?,
+            radius: d.f64s("radii")?,
+            mass: d.f64s("masses")?,
+            inertia: d.f64s("inertia")?,
+            inv_mass: d.f64s("inverse masses")?,
+            inv_inertia: d.f64s("inverse inertia")?,
+            ..Default::default()
+        };
+        for v in [
+            &mut p.position,
+            &mut p.velocity,
+            &mut p.omega,
+            &mut p.force,
+            &mut p.torque,
+            &mut p.accel_prev,
+            &mut p.alpha_prev,
+        ] {
+            *v = d.vec3s("particle vectors")?;
+        }
+        let neighbors = NeighborState {
+            skin: d.f64("skin")?,
+            built: d.u64("flags")? != 0,
+            pairs: d.pairs("pairs")?,
+            pair_keys: d.u64s("pair keys")?,
+            pair_history: d.vec3s("pair history")?,
+            wall_pairs: d.pairs("wall pairs")?,
+            wall_keys: d.u64s("wall keys")?,
+            wall_history: d.vec3s("wall history")?,
+            reference: d.vec3s("reference positions")?,
+        };
+        let anchors = d.vec3s("motion anchors")?;
+        let mut sim = Simulation::new(config, p)?;
+        sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
+            .map_err(CheckpointError::Mismatch)?;
+        Ok(sim)
+    }
+}
+
+/// Why a restart failed: the checkpoint, or the engine's set-up checks.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum RestoreError {
+    /// The checkpoint itself.
+    #[error("{0}")]
+    Checkpoint(#[from] CheckpointError),
+    /// The restored state failed the engine's checks.
+    #[error("{0}")]
+    Engine(#[from] crate::error::EngineError),
+}
