@@ -61,222 +61,29 @@ fn base_case_is_valid() {
     assert!(case.warnings.is_empty());
 }
 
+/// The corpus in `tests/bad_cases/`: each file is a case with one defect and, in its
+/// `# expect:` lines, the pieces its message must contain (table, key, value, what is valid).
+/// Particle files named by the cases live beside them.
 #[test]
-fn each_bad_input_names_table_key_value_and_what_is_valid() {
-    let cases: Vec<(&str, String, &[&str])> = vec![
-        ("syntax error", edit("t_stop = 0.01", "t_stop = = 0.01"), &["case.toml", "line"]),
-        (
-            "unknown key",
-            edit("mu = 0.3\n[contact.wall]", "mu = 0.3\nfriction = 0.3\n[contact.wall]"),
-            &["unknown field `friction`", "expected one of"],
-        ),
-        ("unknown table", format!("{BASE}\n[solver]\nx = 1\n"), &["unknown field `solver`"]),
-        (
-            "misspelt key",
-            edit("t_stop = 0.01", "t_stpo = 0.01"),
-            &["unknown field `t_stpo`", "did you mean `t_stop`?"],
-        ),
-        (
-            "misspelt table",
-            edit("[contact.particle]", "[contact.particles]"),
-            &["unknown field `particles`", "did you mean `particle`?"],
-        ),
-        ("wrong type", edit("t_stop = 0.01", "t_stop = \"soon\""), &["t_stop", "invalid type"]),
-        ("missing version", edit("version = 1", ""), &["top level", "version"]),
-        ("wrong version", edit("version = 1", "version = 7"), &["version", "= 7", "version 1"]),
-        ("missing t_stop", edit("t_stop = 0.01", ""), &["[time]", "t_stop"]),
-        ("missing [time]", edit("[time]\nt_stop = 0.01", ""), &["[time]", "missing"]),
-        ("missing domain max", edit("max = [0.1, 0.1, 0.1]", ""), &["[domain]", "max"]),
-        (
-            "inverted domain",
-            edit("max = [0.1, 0.1, 0.1]", "max = [0.1, -0.1, 0.1]"),
-            &["[domain]", "max", "exceed min"],
-        ),
-        (
-            "negative diameter",
-            edit("diameter = 0.004", "diameter = -0.004"),
-            &["[[phases]] 'glass'", "diameter", "-0.004", "positive"],
-        ),
-        (
-            "zero density",
-            edit("density = 2500.0", "density = 0.0"),
-            &["[[phases]] 'glass'", "density", "= 0", "positive"],
-        ),
-        (
-            "en above 1",
-            edit("en = 0.9\nmu = 0.3\n[contact.wall]", "en = 1.5\nmu = 0.3\n[contact.wall]"),
-            &["[contact.particle]", "`en` = 1.5", "(0, 1]"],
-        ),
-        (
-            "en zero",
-            edit("en = 0.9\nmu = 0.3\n[time]", "en = 0.0\nmu = 0.3\n[time]"),
-            &["[contact.wall]", "`en` = 0", "(0, 1]"],
-        ),
-        (
-            "poisson too high",
-            edit("poisson_ratio = 0.25", "poisson_ratio = 0.5"),
-            &["[[phases]] 'glass'", "poisson_ratio", "0.5", "(-1, 0.5)"],
-        ),
-        (
-            "wall poisson too low",
-            edit("poisson_ratio = 0.3", "poisson_ratio = -1.0"),
-            &["[[wall_materials]] 'steel'", "poisson_ratio", "-1", "(-1, 0.5)"],
-        ),
-        (
-            "kt_fac above 1",
-            edit(
-                "kn = 1000.0\nen = 0.9\nmu = 0.3\n[contact.wall]",
-                "kn = 1000.0\nkt_fac = 1.2\nen = 0.9\nmu = 0.3\n[contact.wall]",
-            ),
-            &["[contact.particle]", "kt_fac", "1.2", "[0, 1]"],
-        ),
-        (
-            "negative mu",
-            edit("mu = 0.3\n[time]", "mu = -0.1\n[time]"),
-            &["[contact.wall]", "`mu` = -0.1", ">= 0"],
-        ),
-        (
-            "negative kn",
-            edit("kn = 1000.0\nen = 0.9\nmu = 0.3\n[time]", "kn = -5.0\nen = 0.9\nmu = 0.3\n[time]"),
-            &["[contact.wall]", "`kn` = -5", "positive"],
-        ),
-        (
-            "LSD without kn",
-            edit("kn = 1000.0\nen = 0.9\nmu = 0.3\n[contact.wall]", "en = 0.9\nmu = 0.3\n[contact.wall]"),
-            &["[contact.particle]", "kn", "N/m"],
-        ),
-        (
-            "Hertz without et",
-            edit("model = \"lsd\"", "model = \"hertz\""),
-            &["[contact.particle]", "et", "hertz"],
-        ),
-        (
-            "unknown model",
-            edit("model = \"lsd\"", "model = \"hooke\""),
-            &["[contact]", "model", "\"hooke\"", "\"lsd\", \"hertz\""],
-        ),
-        (
-            "unknown integrator",
-            edit("t_stop = 0.01", "t_stop = 0.01\nintegrator = \"rk4\""),
-            &["[time]", "integrator", "\"rk4\"", "\"euler\""],
-        ),
-        (
-            "dt and factor",
-            edit("t_stop = 0.01", "t_stop = 0.01\ndt = 1e-6\ndtsolid_factor = 50"),
-            &["[time]", "dtsolid_factor", "not both"],
-        ),
-        (
-            "factor below 10",
-            edit("t_stop = 0.01", "t_stop = 0.01\ndtsolid_factor = 5"),
-            &["[time]", "dtsolid_factor", "5", "at least 10"],
-        ),
-        ("negative dt", edit("t_stop = 0.01", "t_stop = 0.01\ndt = -1e-6"), &["[time]", "dt", "positive"]),
-        (
-            "t_stop before start",
-            edit("t_stop = 0.01", "t_stop = 0.01\nt_start = 0.02"),
-            &["[time]", "t_stop", "after t_start"],
-        ),
-        (
-            "unknown phase of a particle",
-            edit("phase = \"glass\"\nposition", "phase = \"sand\"\nposition"),
-            &["[[particles.list]] #1", "phase", "\"sand\"", "\"glass\""],
-        ),
-        (
-            "particle without position",
-            edit("position = [0.05, 0.05, 0.05]", ""),
-            &["[[particles.list]] #1", "position"],
-        ),
-        (
-            "no particles",
-            edit("[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]", "[particles]"),
-            &["[particles]", "at least one particle"],
-        ),
-        (
-            "duplicate phase",
-            edit(
-                "[[wall_materials]]",
-                "[[phases]]\nname = \"glass\"\ndiameter = 0.002\ndensity = 1000.0\n[[wall_materials]]",
-            ),
-            &["[[phases]] 'glass'", "name", "unique"],
-        ),
-        (
-            "pair override with unknown phase",
-            format!("{BASE}\n[[contact.pairs]]\nphases = [\"glass\", \"sand\"]\nen = 0.5\n"),
-            &["[[contact.pairs]]", "phases", "\"sand\""],
-        ),
-        (
-            "selector in the wrong table",
-            edit(
-                "kn = 1000.0\nen = 0.9\nmu = 0.3\n[contact.wall]",
-                "phase = \"glass\"\nkn = 1000.0\nen = 0.9\nmu = 0.3\n[contact.wall]",
-            ),
-            &["[contact.particle]", "phase", "[[contact.walls]]"],
-        ),
-        (
-            "missing particle file",
-            edit(
-                "[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]",
-                "[particles]\nfile = \"nowhere.dat\"",
-            ),
-            &["cannot read", "nowhere.dat"],
-        ),
-        (
-            "mfix file with an unknown phase",
-            edit(
-                "[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]",
-                "[particles]\nfile = \"bad.dat\"",
-            ),
-            &["bad.dat, line 2", "no phase has diameter", "9999"],
-        ),
-        (
-            "mfix file with 7 columns",
-            edit(
-                "[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]",
-                "[particles]\nfile = \"short.dat\"",
-            ),
-            &["short.dat, line 1", "expected 8 numbers", "found 7"],
-        ),
-        (
-            "csv with an unknown column",
-            edit(
-                "[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]",
-                "[particles]\nfile = \"bad.csv\"",
-            ),
-            &["bad.csv, line 1", "unknown column 'colour'"],
-        ),
-        (
-            "csv with text for a number",
-            edit(
-                "[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]",
-                "[particles]\nfile = \"text.csv\"",
-            ),
-            &["text.csv, line 2", "y = 'abc'", "not a number"],
-        ),
-        (
-            "follow without a leader",
-            format!("{BASE}\n[[motion]]\nparticles = 1\nrule = \"follow\"\naxes = [\"x\"]\n"),
-            &["[[motion]] #1", "leader"],
-        ),
-        (
-            "follow a missing particle",
-            format!("{BASE}\n[[motion]]\nparticles = 1\nrule = \"follow\"\nleader = 5\naxes = [\"x\"]\n"),
-            &["[[motion]] #1", "`leader` = 5", "which no particle has"],
-        ),
-        (
-            "hold a missing particle",
-            format!("{BASE}\n[[motion]]\nparticles = [1, 3]\nrule = \"hold\"\n"),
-            &["[[motion]] #1", "`particles` = 2", "no particle has this id"],
-        ),
-        (
-            "bad axis",
-            format!("{BASE}\n[[motion]]\nparticles = 1\nrule = \"follow\"\nleader = 1\naxes = [\"w\"]\n"),
-            &["[[motion]] #1", "axes", "\"w\""],
-        ),
-    ];
+fn each_bad_case_file_gives_its_message_never_a_panic() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_cases");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("tests/bad_cases")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 30, "only {} bad cases", files.len());
     let mut failures = Vec::new();
-    for (name, text, expected) in &cases {
-        let outcome = std::panic::catch_unwind(|| parse_text(text));
-        let msg = match outcome {
+    for path in &files {
+        let text = std::fs::read_to_string(path).expect("readable");
+        let expected: Vec<&str> = text.lines().filter_map(|l| l.strip_prefix("# expect: ")).collect();
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if expected.is_empty() {
+            failures.push(format!("{name}: no `# expect:` line"));
+            continue;
+        }
+        let msg = match std::panic::catch_unwind(|| grainflow_case::load(path)) {
             Err(_) => {
                 failures.push(format!("{name}: panicked"));
                 continue;
@@ -287,7 +94,7 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
             }
             Ok(Err(e)) => e.to_string(),
         };
-        for want in *expected {
+        for want in expected {
             if !msg.contains(want) {
                 failures.push(format!("{name}: message lacks '{want}':\n    {msg}"));
             }
@@ -295,9 +102,9 @@ fn each_bad_input_names_table_key_value_and_what_is_valid() {
     }
     assert!(
         failures.is_empty(),
-        "{} of {} bad inputs misreported:\n{}",
+        "{} problems in {} bad cases:\n{}",
         failures.len(),
-        cases.len(),
+        files.len(),
         failures.join("\n")
     );
 }
