@@ -59,11 +59,33 @@ pub struct CaseEntry {
 
 /// Every case, in report order.
 pub fn cases() -> Vec<CaseEntry> {
-    vec![CaseEntry {
-        name: "dem05",
-        summary: "MFIX DEM05: oblique particle collision, LSD and Hertz, against MFIX's output, theory and Kharaz et al. (2001)",
-        run: crate::dem05::run_case,
-    }]
+    vec![
+        CaseEntry {
+            name: "dem01",
+            summary: "MFIX DEM01: falling particle with one wall collision (LSD), EULER and ADAMS_BASHFORTH, against the three-stage closed form",
+            run: crate::dem01::run_case,
+        },
+        CaseEntry {
+            name: "dem02",
+            summary: "MFIX DEM02: bouncing particle heights (LSD) against the hard sphere, with the gravity-during-contact bound and the exact soft-sphere contact",
+            run: crate::dem02::run_case,
+        },
+        CaseEntry {
+            name: "dem03",
+            summary: "MFIX DEM03: two stacked, compressed particles between walls against an RK4 reference, with a step-halving study",
+            run: crate::dem03::run_case,
+        },
+        CaseEntry {
+            name: "dem04",
+            summary: "MFIX DEM04: ball slipping on a rough floor until it rolls (2/7, 5/7, 5/7)",
+            run: crate::dem04::run_case,
+        },
+        CaseEntry {
+            name: "dem05",
+            summary: "MFIX DEM05: oblique particle collision, LSD and Hertz, against MFIX's output, theory and Kharaz et al. (2001)",
+            run: crate::dem05::run_case,
+        },
+    ]
 }
 
 /// Looks up cases by name; unknown names are an error listing the known ones.
