@@ -85,6 +85,21 @@ pub fn cases() -> Vec<CaseEntry> {
             summary: "MFIX DEM05: oblique particle collision, LSD and Hertz, against MFIX's output, theory and Kharaz et al. (2001)",
             run: crate::dem05::run_case,
         },
+        CaseEntry {
+            name: "chung_ooi",
+            summary: "Chung & Ooi (2011) tests 1–8: Hertz–Mindlin impacts against closed forms (Hertz, restitution, gross sliding, spin)",
+            run: crate::chung_ooi::run_case,
+        },
+        CaseEntry {
+            name: "rolling_plane",
+            summary: "sphere sliding into rolling on a plane: t* = 2u₀/(7μg), v* = (5v₀ + 2Rω₀)/7, then constant speed",
+            run: crate::rolling::run_plane,
+        },
+        CaseEntry {
+            name: "rolling_incline",
+            summary: "sphere released on an incline: rolls iff tan α ≤ 3.5μ (a = (5/7)g sin α), else slides",
+            run: crate::rolling::run_incline,
+        },
     ]
 }
 

@@ -54,7 +54,26 @@ pub fn restitution(model: NormalModel, alpha: f64, clip: bool) -> f64 {
 }
 
 /// The damping ratio α = η/√(MK) that gives restitution `e` in (0, 1] exactly.
+///
+/// α depends only on (law, e, clipping), and solving for it takes some 60 integrations, so
+/// solutions are remembered for the life of the process.
 pub fn exact_damping_ratio(model: NormalModel, e: f64, clip: bool) -> f64 {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    static SOLVED: OnceLock<Mutex<HashMap<(bool, u64, bool), f64>>> = OnceLock::new();
+    let key = (model == NormalModel::Hertz, e.to_bits(), clip);
+    let memo = SOLVED.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(alpha) = memo.lock().ok().and_then(|m| m.get(&key).copied()) {
+        return alpha;
+    }
+    let alpha = solve_damping_ratio(model, e, clip);
+    if let Ok(mut m) = memo.lock() {
+        m.insert(key, alpha);
+    }
+    alpha
+}
+
+fn solve_damping_ratio(model: NormalModel, e: f64, clip: bool) -> f64 {
     if e >= 1.0 {
         return 0.0;
     }
