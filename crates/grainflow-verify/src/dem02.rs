@@ -45,7 +45,7 @@
 use crate::check::Check;
 use crate::dem01::{FloorContact, GRAVITY, H0, RADIUS, set_kn_en};
 use crate::error::VerifyError;
-use crate::plot::{self, Color, Figure, LineStyle, MarkerShape, Panel, Series};
+use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
 use crate::suite::{CaseOutcome, SuiteOptions, case_dir, summary_markdown, write_file};
 use grainflow::Simulation;
 use grainflow_case::Case;
@@ -419,9 +419,7 @@ pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, Veri
     let out = case_dir(dir, "dem02")?;
     let mut files = Vec::new();
     write_file(out.join("dem02.csv"), &csv(&report.runs), &mut files)?;
-    let (png, svg) = (out.join("dem02.png"), out.join("dem02.svg"));
-    plot::write_figure(&figure(&report.runs), &png, &svg)?;
-    files.extend([png.clone(), svg]);
+    let png = crate::suite::write_figure(&out, "dem02", &figure(&report.runs), &mut files)?;
     let title = "bouncing particle height (MFIX DEM02)";
     write_file(out.join("summary.md"), &summary_markdown(title, &report.checks), &mut files)?;
     // The size of the gravity effect on the first bounce, softest and stiffest spring, e_n = 0.5.

@@ -31,7 +31,7 @@
 
 use crate::check::Check;
 use crate::error::VerifyError;
-use crate::plot::{self, Color, Figure, LineStyle, MarkerShape, Panel, Series};
+use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
 use crate::suite::{CaseOutcome, SuiteOptions, case_dir, summary_markdown, write_file};
 use grainflow::contact::damping_coefficient;
 use grainflow::{Simulation, TimeStepRule};
@@ -552,9 +552,8 @@ pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, Veri
     let out = case_dir(dir, "dem03")?;
     let mut files = Vec::new();
     write_file(out.join("dem03.csv"), &csv(&report.runs), &mut files)?;
-    let (png, svg) = (out.join("dem03.png"), out.join("dem03.svg"));
-    plot::write_figure(&figure(&report.runs, &report.convergence), &png, &svg)?;
-    files.extend([png.clone(), svg]);
+    let png =
+        crate::suite::write_figure(&out, "dem03", &figure(&report.runs, &report.convergence), &mut files)?;
     let title = "two stacked, compressed particles (MFIX DEM03)";
     write_file(out.join("summary.md"), &summary_markdown(title, &report.checks), &mut files)?;
     let z = report.runs.first().map_or(f64::NAN, |r| r.system.omega_max() * r.dt);

@@ -38,7 +38,7 @@
 
 use crate::check::Check;
 use crate::error::VerifyError;
-use crate::plot::{self, Color, Figure, LineStyle, MarkerShape, Panel, Series};
+use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
 use crate::suite::{CaseOutcome, SuiteOptions, case_dir, summary_markdown, write_file};
 use grainflow::Simulation;
 use grainflow_case::Case;
@@ -431,9 +431,7 @@ pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, Veri
     let out = case_dir(dir, "dem04")?;
     let mut files = Vec::new();
     write_file(out.join("dem04.csv"), &csv(&report.runs), &mut files)?;
-    let (png, svg) = (out.join("dem04.png"), out.join("dem04.svg"));
-    plot::write_figure(&figure(&report.runs), &png, &svg)?;
-    files.extend([png.clone(), svg]);
+    let png = crate::suite::write_figure(&out, "dem04", &figure(&report.runs), &mut files)?;
     let title = "ball slipping on a rough surface (MFIX DEM04)";
     write_file(out.join("summary.md"), &summary_markdown(title, &report.checks), &mut files)?;
     let ratio = report.runs.first().map_or(f64::NAN, |r| 1.0 / (r.omega0 * r.dt));

@@ -239,6 +239,19 @@ img {{ max-width: 100%; border: 1px solid #ddd; margin: 0.5em 0; }}
     Ok(path)
 }
 
+/// Draws `fig` as `<out>/<stem>.png` and `.svg`, records both in `files`, returns the PNG.
+pub fn write_figure(
+    out: &Path,
+    stem: &str,
+    fig: &crate::plot::Figure,
+    files: &mut Vec<PathBuf>,
+) -> Result<PathBuf, VerifyError> {
+    let (png, svg) = (out.join(format!("{stem}.png")), out.join(format!("{stem}.svg")));
+    crate::plot::write_figure(fig, &png, &svg)?;
+    files.extend([png.clone(), svg]);
+    Ok(png)
+}
+
 /// A case's `summary.md`: title, the checks as a table, the count of failures.
 pub fn summary_markdown(title: &str, checks: &[Check]) -> String {
     let failed = checks.iter().filter(|c| !c.passed()).count();

@@ -60,7 +60,9 @@ pub fn restitution(model: NormalModel, alpha: f64, clip: bool) -> f64 {
 pub fn exact_damping_ratio(model: NormalModel, e: f64, clip: bool) -> f64 {
     use std::collections::HashMap;
     use std::sync::{Mutex, OnceLock};
-    static SOLVED: OnceLock<Mutex<HashMap<(bool, u64, bool), f64>>> = OnceLock::new();
+    /// (Hertz?, bits of e, clipped?) → α.
+    type Solved = HashMap<(bool, u64, bool), f64>;
+    static SOLVED: OnceLock<Mutex<Solved>> = OnceLock::new();
     let key = (model == NormalModel::Hertz, e.to_bits(), clip);
     let memo = SOLVED.get_or_init(|| Mutex::new(HashMap::new()));
     if let Some(alpha) = memo.lock().ok().and_then(|m| m.get(&key).copied()) {
