@@ -183,12 +183,25 @@ img {{ max-width: 100%; border: 1px solid #ddd; margin: 0.5em 0; }}
 </style></head><body>
 <h1>grainflow verification report</h1>
 <p>grainflow {version}: {n} case(s), {total} checks, <span class="{cls}">{failed} failed</span>.</p>
-<table><tr><th>case</th><th>check</th><th>measured error</th><th>tolerance</th><th>status</th><th>detail</th></tr>
 "#,
         version = env!("CARGO_PKG_VERSION"),
         n = outcomes.len(),
         cls = if failed == 0 { "PASS" } else { "FAIL" },
     );
+    h.push_str("<table><tr><th>case</th><th>what it verifies</th><th>checks</th><th>failed</th><th>time (s)</th></tr>\n");
+    for o in outcomes {
+        let f = o.checks.iter().filter(|c| !c.passed()).count();
+        let _ = writeln!(
+            h,
+            r##"<tr><td><a href="#{n}">{n}</a></td><td>{t}</td><td class="num">{c}</td><td class="num {cls}">{f}</td><td class="num">{s:.2}</td></tr>"##,
+            n = o.name,
+            t = escape(&o.title),
+            c = o.checks.len(),
+            cls = if f == 0 { "PASS" } else { "FAIL" },
+            s = o.wall_seconds
+        );
+    }
+    h.push_str("</table>\n<h2>All checks</h2>\n<table><tr><th>case</th><th>check</th><th>measured error</th><th>tolerance</th><th>status</th><th>detail</th></tr>\n");
     let num = |v: f64| if v.is_nan() { "–".to_string() } else { format!("{v:.4e}") };
     for o in outcomes {
         for c in &o.checks {
