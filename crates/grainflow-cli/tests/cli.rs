@@ -187,3 +187,62 @@ fn interrupted_run_restarts_bit_identically() {
         read(&format!("part/snapshots/{}", name.to_string_lossy()))
     );
 }
+
+/// A run that blows up (forced time step 30× the safe one) stops with a message naming the
+/// particle, the step, the cause and a fix, exits 1 (never success), saves the last good
+/// state, and that state restarts once the case is fixed.
+#[test]
+fn unstable_run_stops_with_a_diagnosis_and_saves_the_last_good_state() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/settling-bed");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let good = std::fs::read_to_string(format!("{root}/case.toml"))
+        .expect("example")
+        .replace("particles.csv", &format!("{root}/particles.csv"))
+        .replace("t_stop = 0.5", "t_stop = 0.05");
+    let bad = good.replace("integrator = \"euler\"", "integrator = \"euler\"\ndt = 4e-4\nforce_dt = true");
+    assert_ne!(good, bad);
+    let (good_path, bad_path) = (dir.path().join("good.toml"), dir.path().join("bad.toml"));
+    std::fs::write(&good_path, good).expect("write");
+    std::fs::write(&bad_path, bad).expect("write");
+    let out = dir.path().join("out");
+    let run = grainflow().arg("run").arg(&bad_path).arg("--out").arg(&out).arg("-q").output().expect("runs");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    for want in ["step ", "particle ", "Likely cause", "Fix:", "checkpoint-last-good.gfc"] {
+        assert!(stderr.contains(want), "missing '{want}': {stderr}");
+    }
+    let info = std::fs::read_to_string(out.join("run-info.toml")).expect("run info");
+    assert!(info.contains("status = \"failed: numerical health check\""), "{info}");
+    let saved = out.join("checkpoint-last-good.gfc");
+    let resumed = grainflow()
+        .arg("run")
+        .arg(&good_path)
+        .arg("--out")
+        .arg(dir.path().join("resumed"))
+        .args(["-q", "--accept-changed-case", "--restart"])
+        .arg(&saved)
+        .output()
+        .expect("runs");
+    assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
+}
+
+/// The same case run twice gives byte-identical outputs.
+#[test]
+fn runs_are_reproducible_to_the_byte() {
+    let case = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/bouncing-ball/case.toml");
+    let dir = tempfile::tempdir().expect("temp dir");
+    for out in ["a", "b"] {
+        let r =
+            grainflow().args(["run", case, "-q", "--out"]).arg(dir.path().join(out)).output().expect("runs");
+        assert!(r.status.success());
+    }
+    let read = |p: &str| std::fs::read(dir.path().join(p)).expect("file");
+    assert_eq!(read("a/timeseries.csv"), read("b/timeseries.csv"));
+    let info = String::from_utf8(read("a/run-info.toml")).expect("utf-8");
+    assert!(
+        info.contains("threads = 1")
+            && info.contains("grainflow_version")
+            && info.contains("case_sha256 = \""),
+        "{info}"
+    );
+}
