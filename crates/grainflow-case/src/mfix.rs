@@ -1,0 +1,1 @@
+//! MFIX keyword input decks (mfix.dat / .mfx) (being written).
