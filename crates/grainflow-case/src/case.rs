@@ -67,12 +67,23 @@ pub fn parse(
     origin: &str,
     read_file: &dyn Fn(&str) -> Result<String, CaseError>,
 ) -> Result<Case, CaseError> {
-    use sha2::{Digest, Sha256};
     let raw: RawCase =
         toml::from_str(text).map_err(|e| CaseError::Syntax(did_you_mean(format!("{origin}: {e}"))))?;
+    from_raw(raw, text, read_file)
+}
+
+/// Validates a case built in memory rather than read from TOML (an MFIX deck translated by
+/// [`crate::mfix`]) exactly as [`parse`] validates a case file. `source` is the text the case
+/// was made from: the case hash covers it and every file read through `read_file`.
+pub fn from_raw(
+    raw: RawCase,
+    source: &str,
+    read_file: &dyn Fn(&str) -> Result<String, CaseError>,
+) -> Result<Case, CaseError> {
+    use sha2::{Digest, Sha256};
     // The hash covers the case text and every file it reads, in the order read.
     let hasher = std::cell::RefCell::new(Sha256::new());
-    hasher.borrow_mut().update(text.as_bytes());
+    hasher.borrow_mut().update(source.as_bytes());
     let hashing_read = |name: &str| {
         let content = read_file(name)?;
         let mut h = hasher.borrow_mut();
@@ -260,13 +271,52 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
             )
         })
     };
+    let mut axes = [false; 3];
+    for a in domain.periodic.iter().flatten() {
+        let k = ["x", "y", "z"].iter().position(|n| n == a).ok_or_else(|| {
+            CaseError::invalid(
+                "[domain]",
+                "periodic",
+                format!("\"{a}\""),
+                "each periodic axis must be \"x\", \"y\" or \"z\"",
+            )
+        })?;
+        axes[k] = true;
+    }
+    let periodic = axes.iter().any(|&a| a).then_some(grainflow::Periodic { lo: min, hi: max, axes });
+    let faces = ["x_min", "x_max", "y_min", "y_max", "z_min", "z_max"];
+    let wanted: Vec<bool> = match &domain.walls {
+        WallSelection::All(all) => (0..6).map(|k| *all && !axes[k / 2]).collect(),
+        WallSelection::Faces(list) => {
+            let mut w = vec![false; 6];
+            for f in list {
+                let k = faces.iter().position(|n| n == f).ok_or_else(|| {
+                    CaseError::invalid(
+                        "[domain]",
+                        "walls",
+                        format!("\"{f}\""),
+                        "faces are \"x_min\", \"x_max\", \"y_min\", \"y_max\", \"z_min\", \"z_max\"",
+                    )
+                })?;
+                if axes[k / 2] {
+                    return Err(CaseError::invalid(
+                        "[domain]",
+                        "walls",
+                        format!("\"{f}\""),
+                        "a periodic axis has no walls",
+                    ));
+                }
+                w[k] = true;
+            }
+            w
+        }
+    };
     let mut walls = Vec::new();
-    if domain.walls {
-        walls.extend(Wall::domain_box(
-            min,
-            max,
-            material_index(&domain.wall_material, "[domain]", "wall_material")?,
-        ));
+    if wanted.iter().any(|&w| w) {
+        let m = material_index(&domain.wall_material, "[domain]", "wall_material")?;
+        walls.extend(
+            Wall::domain_box(min, max, m).into_iter().zip(&wanted).filter(|(_, w)| **w).map(|(wall, _)| wall),
+        );
     }
     for (k, w) in raw.walls.iter().enumerate() {
         let name = w.name.clone().unwrap_or_else(|| format!("wall {}", k + 1));
@@ -552,19 +602,27 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         require(raw.particles, "top level", "[particles]", "a particle file and/or [[particles.list]]")?;
     let mut init: Vec<ParticleInit> = Vec::new();
     if let Some(file) = &praw.file {
+        let lower = file.to_ascii_lowercase();
         let format = praw.format.clone().unwrap_or_else(|| {
-            if file.to_ascii_lowercase().ends_with(".csv") { "csv".into() } else { "mfix".into() }
+            if lower.ends_with(".csv") {
+                "csv".into()
+            } else if lower.ends_with(".data") {
+                "lammps".into()
+            } else {
+                "mfix".into()
+            }
         });
         let text = read_file(file)?;
         init = match format.as_str() {
             "mfix" => particles::read_mfix(&text, file, &phases)?,
             "csv" => particles::read_csv(&text, file, &phases)?,
+            "lammps" => crate::lammps::read_data(&text, file, &phases)?,
             other => {
                 return Err(CaseError::invalid(
                     "[particles]",
                     "format",
                     format!("\"{other}\""),
-                    "must be \"mfix\" or \"csv\"",
+                    "must be \"mfix\", \"csv\" or \"lammps\"",
                 ));
             }
         };
@@ -713,6 +771,10 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         ));
     }
     check_geometry(&particles, &walls, (min, max), max_overlap)?;
+    if let Some(per) = &periodic {
+        let skin = skin.unwrap_or_else(|| grainflow::simulation::default_skin(particles.max_radius()));
+        per.check(particles.max_radius(), skin, &walls)?;
+    }
     let force_dt = time.force_dt.unwrap_or(false);
     check_stability(
         time_step,
@@ -739,6 +801,7 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         gravity,
         skin,
         motion,
+        periodic,
     };
     Ok(Case {
         title: raw.title,

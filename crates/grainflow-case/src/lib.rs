@@ -7,6 +7,7 @@
 
 pub mod case;
 pub mod error;
+pub mod lammps;
 pub mod mfix;
 pub mod output;
 pub mod particles;

@@ -1,272 +1,349 @@
 //! The case file as written: serde structures with every key, its unit and its default.
 //! `docs/case-file.md` documents the same keys; a test checks that the two agree.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// The whole case file.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawCase {
     /// Case-file format version. Required; this program reads version 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub version: Option<i64>,
     /// Free text describing the case.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub title: String,
     /// The domain box and its walls. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub domain: Option<RawDomain>,
     /// Body forces.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
     pub physics: RawPhysics,
     /// Solids phases (materials of the particles). At least one.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub phases: Vec<RawPhase>,
     /// Wall materials. If absent, one material named "wall" exists.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub wall_materials: Vec<RawWallMaterial>,
     /// Extra infinite plane walls.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub walls: Vec<RawWall>,
     /// The contact model and its parameters. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub contact: Option<RawContact>,
     /// Time stepping. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub time: Option<RawTime>,
     /// Neighbour search.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
     pub neighbor: RawNeighbor,
     /// Output.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
     pub output: RawOutput,
     /// The particles. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub particles: Option<RawParticles>,
     /// Prescribed particle motion.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub motion: Vec<RawMotion>,
 }
 
 /// `[domain]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawDomain {
     /// Lower corner of the box, m. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub min: Option<[f64; 3]>,
     /// Upper corner of the box, m. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max: Option<[f64; 3]>,
-    /// Whether the six faces of the box are walls (MFIX's default). Default true.
-    #[serde(default = "yes")]
-    pub walls: bool,
+    /// Which faces of the box are walls: `true` (all six, MFIX's default; faces on periodic
+    /// axes excepted), `false` (none), or a list of faces such as ["x_min", "z_min"].
+    #[serde(default)]
+    pub walls: WallSelection,
+    /// Periodic axes, e.g. ["x", "y"]. Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub periodic: Option<Vec<String>>,
     /// Material of the six box walls. Default: the first wall material.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub wall_material: Option<String>,
 }
 
-fn yes() -> bool {
-    true
+/// `[domain] walls`: all faces, none, or the named ones.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum WallSelection {
+    /// All six faces (true) or none (false).
+    All(bool),
+    /// The named faces: "x_min", "x_max", "y_min", "y_max", "z_min", "z_max".
+    Faces(Vec<String>),
+}
+
+impl Default for WallSelection {
+    fn default() -> Self {
+        WallSelection::All(true)
+    }
 }
 
 /// `[physics]`
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawPhysics {
     /// Gravitational acceleration, m/s². Default [0, -9.80665, 0] (MFIX's default).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub gravity: Option<[f64; 3]>,
 }
 
 /// `[[phases]]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawPhase {
     /// Name, used by particles and contact tables. Required, unique.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Reference diameter, m. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub diameter: Option<f64>,
     /// Density, kg/m³. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub density: Option<f64>,
     /// Young's modulus, Pa. Required by the Hertz model.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub youngs_modulus: Option<f64>,
     /// Poisson's ratio, in (-1, 0.5). Required by the Hertz model.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub poisson_ratio: Option<f64>,
 }
 
 /// `[[wall_materials]]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawWallMaterial {
     /// Name. Required, unique.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Young's modulus, Pa. Required by the Hertz model.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub youngs_modulus: Option<f64>,
     /// Poisson's ratio, in (-1, 0.5). Required by the Hertz model.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub poisson_ratio: Option<f64>,
 }
 
 /// `[[walls]]`: an infinite plane.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawWall {
     /// Name for messages. Default "wall N".
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// A point on the plane, m. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub point: Option<[f64; 3]>,
     /// Normal pointing from the wall into the particle space (any length > 0). Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub normal: Option<[f64; 3]>,
     /// Wall material name. Default: the first wall material.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
 }
 
 /// `[contact]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawContact {
     /// "lsd" (linear spring–dashpot, MFIX's default) or "hertz". Default "lsd".
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub model: Option<String>,
     /// "mfix" (total displacement, MFIX 21.3) or "incremental_mindlin". Default "mfix".
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub tangential: Option<String>,
     /// "mfix" (stored displacement kept as is), "project" or "rotate". Default "mfix".
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub history: Option<String>,
     /// Lever arm of the tangential force: "mfix" (centre to radical plane: R − δ/2 between
     /// equal spheres, R − δ at a wall) or "radius" (R). Default "mfix".
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub lever_arm: Option<String>,
     /// Normal damping from restitution: "mfix" (MFIX's formula for both laws) or
     /// "exact_restitution" (solved so that a normal impact rebounds with exactly e_n).
     /// Default "mfix".
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub damping: Option<String>,
     /// Floor the normal force at zero so the dashpot never pulls at the end of a contact.
     /// Default false (MFIX).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub clip_attraction: Option<bool>,
     /// Defaults for every phase pair.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
     pub particle: RawContactParams,
     /// Defaults for every phase–wall-material pair.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
     pub wall: RawContactParams,
     /// Values for one phase pair, overriding `[contact.particle]`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub pairs: Vec<RawContactParams>,
     /// Values for one phase and one wall material, overriding `[contact.wall]`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub walls: Vec<RawContactParams>,
 }
 
 /// Contact parameters; every key optional so that tables can be layered. The same table form
 /// serves `[contact.particle]`, `[contact.wall]`, `[[contact.pairs]]` (which also take
 /// `phases`) and `[[contact.walls]]` (which also take `phase` and `material`).
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawContactParams {
     /// `[[contact.pairs]]` only: the two phase names (may be equal).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub phases: Option<[String; 2]>,
     /// `[[contact.walls]]` only: the phase name.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub phase: Option<String>,
     /// `[[contact.walls]]` only: the wall material name. Default: the first wall material.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
     /// Normal stiffness, N/m (LSD; required there).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub kn: Option<f64>,
     /// Tangential/normal stiffness ratio, in [0, 1] (LSD). Default 2/7.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub kt_fac: Option<f64>,
     /// Tangential/normal damping ratio, in [0, 1] (LSD). Default 0.5.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub etat_fac: Option<f64>,
     /// Normal restitution, in (0, 1]. Default 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub en: Option<f64>,
     /// Tangential restitution, in (0, 1] (Hertz; required there).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub et: Option<f64>,
     /// Coulomb friction coefficient, >= 0. Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub mu: Option<f64>,
     /// Rolling friction length, m, >= 0. Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub mu_roll: Option<f64>,
 }
 
 /// `[time]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawTime {
     /// End time, s. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub t_stop: Option<f64>,
     /// Start time, s. Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub t_start: Option<f64>,
     /// Explicit time step, s. Default: MFIX's rule (TCOLL / dtsolid_factor).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub dt: Option<f64>,
     /// MFIX's DTSOLID_FACTOR, >= 10. Default 50. Not allowed together with `dt`.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub dtsolid_factor: Option<f64>,
     /// "euler" (MFIX's default), "adams_bashforth" or "velocity_verlet". Default "euler".
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub integrator: Option<String>,
     /// Run even with an explicit `dt` above the contact law's stability limit. Default false.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub force_dt: Option<bool>,
 }
 
 /// `[neighbor]`
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawNeighbor {
     /// Verlet-list skin, m, >= 0. Default 0.2 × the largest radius.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub skin: Option<f64>,
 }
 
 /// `[output]`
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawOutput {
     /// Interval between outputs, s (rounded to a whole number of steps). Default: 100
     /// outputs over the run.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub interval: Option<f64>,
     /// Write particle snapshots (CSV) at every output. Default true.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub snapshots: Option<bool>,
     /// Interval between VTK frames (particles, contacts, walls for ParaView), s, rounded to
     /// whole steps. Default: no VTK output.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub vtk_interval: Option<f64>,
 }
 
 /// `[particles]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawParticles {
     /// A particle file, relative to the case file's folder.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,
     /// "mfix" (legacy particle_input.dat) or "csv". Default from the extension: .csv → csv,
     /// anything else → mfix.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub format: Option<String>,
     /// Largest initial overlap allowed, as a fraction of the smaller radius (particle pairs)
     /// or of the radius (walls). Default 0.05.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_initial_overlap: Option<f64>,
     /// Particles listed inline.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub list: Vec<RawParticle>,
 }
 
 /// `[[particles.list]]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawParticle {
     /// Stable id, >= 1, unique. Default: its 1-based position among all particles.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub id: Option<u32>,
     /// Phase name. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub phase: Option<String>,
     /// Centre, m. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub position: Option<[f64; 3]>,
     /// Velocity, m/s. Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub velocity: Option<[f64; 3]>,
     /// Angular velocity, rad/s. Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub angular_velocity: Option<[f64; 3]>,
     /// Diameter, m. Default: the phase's diameter.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub diameter: Option<f64>,
 }
 
 /// `[[motion]]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawMotion {
     /// Ids the rule applies to: one id, or `[first, last]` inclusive. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub particles: Option<IdSelection>,
     /// "hold" (fixed at the initial position, at rest) or "follow". Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub rule: Option<String>,
     /// For "follow": the leader's id.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub leader: Option<u32>,
     /// For "follow": the leader of particle k is particle k + leader_offset.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub leader_offset: Option<i64>,
     /// For "follow": axes on which the position copies the leader's, e.g. ["x", "z"].
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub axes: Option<Vec<String>>,
 }
 
 /// One id or an inclusive range.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum IdSelection {
     /// A single id.

@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod convert;
 mod example;
 mod run;
 mod verify;
@@ -23,8 +24,12 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Run a case file (TOML) and write its time series and particle snapshots.
+    /// Run a case file (TOML, or an MFIX deck: mfix.dat, *.mfx) and write its time series and
+    /// particle snapshots.
     Run(run::RunArgs),
+    /// Translate an MFIX deck (mfix.dat, *.mfx) into the equivalent grainflow case file
+    /// (TOML, written to standard output).
+    Convert(convert::ConvertArgs),
     /// Run verification cases (all, or those named), compare with analytical solutions,
     /// reference codes and experiments; write CSV, figures, summaries and report.html; exit
     /// non-zero if a check fails.
@@ -51,6 +56,7 @@ fn main() -> ExitCode {
     };
     match cli.command {
         Command::Run(args) => run::main(args),
+        Command::Convert(args) => convert::main(args),
         Command::Verify(args) => verify::main(args),
         Command::Example(args) => example::main(args),
     }

@@ -84,8 +84,17 @@ impl Progress {
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// The case file (TOML; see docs/case-file.md).
+    /// The case file: TOML (docs/case-file.md), or an MFIX deck, `*.dat` or `*.mfx`, read with
+    /// particle_input.dat beside it (docs/mfix-decks.md).
     case: PathBuf,
+    /// MFIX decks only: KEYWORD=VALUE overrides applied after the deck, as on MFIX's command
+    /// line (e.g. TSTOP=0.5 KN=2.0e4).
+    #[arg(value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// MFIX decks only: a TOML file of [[motion]] tables (docs/case-file.md) that replaces
+    /// user-defined functions prescribing particle motion (CALL_USR = .TRUE.).
+    #[arg(long, value_name = "FILE")]
+    motion: Option<PathBuf>,
     /// Output folder: timeseries.csv, snapshots/ and vtk/ are written there.
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -133,15 +142,42 @@ fn parse_checkpoint_every(s: &str) -> Result<CheckpointEvery, String> {
     }
 }
 
+/// Reads a case file, or translates an MFIX deck. The error is the message to print.
+pub fn load_case(
+    case: &Path,
+    overrides: &[String],
+    motion: Option<&Path>,
+) -> Result<grainflow_case::Case, String> {
+    if grainflow_case::mfix::is_deck(case) {
+        // Deck messages name the deck (and its line) already.
+        return grainflow_case::mfix::load(case, overrides, motion)
+            .map(|d| d.case)
+            .map_err(|e| e.to_string());
+    }
+    if let Some(o) = overrides.first() {
+        return Err(format!(
+            "`{o}`: KEY=VALUE overrides apply to MFIX decks (*.dat, *.mfx) only; {} is a TOML case file: edit it instead",
+            case.display()
+        ));
+    }
+    if motion.is_some() {
+        return Err(format!(
+            "--motion applies to MFIX decks (*.dat, *.mfx) only; {} is a TOML case file: put the rules in its [[motion]] tables",
+            case.display()
+        ));
+    }
+    grainflow_case::load(case).map_err(|e| match e {
+        // Syntax and read errors name the file already; the others name table and key.
+        CaseError::Syntax(_) | CaseError::Read { .. } => e.to_string(),
+        _ => format!("{}: {e}", case.display()),
+    })
+}
+
 pub fn main(args: RunArgs) -> ExitCode {
-    let case = match grainflow_case::load(&args.case) {
+    let case = match load_case(&args.case, &args.overrides, args.motion.as_deref()) {
         Ok(c) => c,
         Err(e) => {
-            // Syntax and read errors name the file already; the others name table and key.
-            match e {
-                CaseError::Syntax(_) | CaseError::Read { .. } => eprintln!("error: {e}"),
-                _ => eprintln!("error: {}: {e}", args.case.display()),
-            }
+            eprintln!("error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
@@ -167,7 +203,13 @@ pub fn main(args: RunArgs) -> ExitCode {
         accept_changed_case: args.accept_changed_case,
         stop: Some(stop),
     };
-    let info = RunInfo { case: &args.case, hash: case.hash.clone(), restart: args.restart.as_deref() };
+    let info = RunInfo {
+        case: &args.case,
+        hash: case.hash.clone(),
+        restart: args.restart.as_deref(),
+        overrides: &args.overrides,
+        motion: args.motion.as_deref(),
+    };
     let mut progress = Progress::new(args.quiet);
     let result = run_case(case, &args.out, &options, |sim| progress.update(sim));
     progress.finish();
@@ -242,6 +284,8 @@ struct RunInfo<'a> {
     case: &'a Path,
     hash: String,
     restart: Option<&'a Path>,
+    overrides: &'a [String],
+    motion: Option<&'a Path>,
 }
 
 impl RunInfo<'_> {
@@ -254,6 +298,12 @@ impl RunInfo<'_> {
         );
         if let Some(r) = self.restart {
             s.push_str(&format!("restarted_from = {:?}\n", r.display().to_string()));
+        }
+        if !self.overrides.is_empty() {
+            s.push_str(&format!("mfix_overrides = {:?}\n", self.overrides));
+        }
+        if let Some(m) = self.motion {
+            s.push_str(&format!("motion_file = {:?}\n", m.display().to_string()));
         }
         if let Some(x) = summary {
             s.push_str(&format!(

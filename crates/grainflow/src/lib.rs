@@ -24,6 +24,7 @@
 //!
 //! [`Simulation`] ties the stages together; [`timestep`] holds MFIX's time-step rule.
 
+pub mod boundary;
 pub mod checkpoint;
 pub mod contact;
 pub mod error;
@@ -38,6 +39,7 @@ pub mod state;
 pub mod timestep;
 pub mod wall;
 
+pub use boundary::Periodic;
 pub use contact::{
     ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel,
 };

@@ -73,6 +73,17 @@ pub(crate) fn resolve(rules: &[PrescribedMotion], p: &Particles) -> Result<Vec<R
         .collect()
 }
 
+/// Slots held fixed (rule `Hold`): they never move, so pairs among them can be left out.
+pub(crate) fn held(rules: &[ResolvedMotion], n: usize) -> Vec<bool> {
+    let mut held = vec![false; n];
+    for r in rules {
+        if r.leader.is_none() {
+            held[r.slot] = true;
+        }
+    }
+    held
+}
+
 /// The anchor (initial position) of each resolved rule.
 pub(crate) fn anchors(rules: &[ResolvedMotion]) -> Vec<Vec3> {
     rules.iter().map(|r| r.anchor).collect()

@@ -6,6 +6,7 @@
 //! contact's tangential history; on a rebuild, entries that persist keep it (matched by the
 //! stable ids of the particles, and the wall index), new entries start from zero.
 
+use crate::boundary::Periodic;
 use crate::math::Vec3;
 use crate::state::Particles;
 use crate::wall::Wall;
@@ -36,6 +37,10 @@ pub struct NeighborList {
     reference: Vec<Vec3>,
     built: bool,
     stats: NeighborStats,
+    /// Periodic axes of the domain (distances by nearest image).
+    periodic: Periodic,
+    /// Slots whose pairs with each other are left out (particles that never move).
+    excluded: Vec<bool>,
     // scratch, reused between builds
     cell_count: Vec<u32>,
     cell_of: Vec<u32>,
@@ -93,6 +98,18 @@ impl NeighborList {
         NeighborList { skin, ..Default::default() }
     }
 
+    /// An empty list with the given skin (m) for a domain with periodic axes.
+    pub fn with_periodic(skin: f64, periodic: Periodic) -> Self {
+        NeighborList { skin, periodic, ..Default::default() }
+    }
+
+    /// Leaves out the pairs of particles that are both marked (e.g. particles held fixed:
+    /// their mutual forces act on nothing that moves). Takes effect at the next build.
+    pub fn exclude_pairs_among(&mut self, marked: Vec<bool>) {
+        self.excluded = if marked.iter().any(|&m| m) { marked } else { Vec::new() };
+        self.built = false;
+    }
+
     /// The skin distance, m.
     pub fn skin(&self) -> f64 {
         self.skin
@@ -148,8 +165,9 @@ impl NeighborList {
             return true;
         }
         let lim = 0.25 * self.skin * self.skin;
+        let per = self.periodic;
         positions.iter().zip(&self.reference).any(|(x, r)| {
-            let d2 = (*x - *r).length_squared();
+            let d2 = per.min_image(*x - *r).length_squared();
             d2 > lim || d2.is_nan()
         })
     }
@@ -177,46 +195,68 @@ impl NeighborList {
         self.new_pairs.clear();
         if n >= 2 {
             let skin = self.skin;
+            let per = self.periodic;
             let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
             for x in &p.position {
                 if x.is_finite() {
-                    lo = lo.min(*x);
-                    hi = hi.max(*x);
+                    let x = per.wrap(*x);
+                    lo = lo.min(x);
+                    hi = hi.max(x);
                 }
             }
             if !lo.is_finite() {
                 lo = Vec3::ZERO;
                 hi = Vec3::ZERO;
             }
-            let extent = hi - lo;
+            // Periodic axes are binned over the whole box, in whole cells that tile it.
+            let (mut lo_a, mut hi_a) = (lo.to_array(), hi.to_array());
+            for k in 0..3 {
+                if per.axes[k] {
+                    lo_a[k] = per.lo.to_array()[k];
+                    hi_a[k] = per.hi.to_array()[k];
+                }
+            }
+            let (lo, extent) = (Vec3::from_array(lo_a), Vec3::from_array(hi_a) - Vec3::from_array(lo_a));
             // A hair above the largest cut-off, so that rounding in the cell index of a point
             // on a cell boundary can never put two particles closer than the cut-off into
             // non-adjacent cells.
             let mut cell = (2.0 * p.max_radius() + skin) * (1.0 + 1e-6);
             let max_cells = (8 * n).max(1024) as f64;
-            let count = |c: f64| {
-                let d = (extent / c).floor() + Vec3::ONE;
-                (d.x, d.y, d.z)
+            let count = |c: f64| -> [f64; 3] {
+                let e = extent.to_array();
+                std::array::from_fn(|k| {
+                    if per.axes[k] {
+                        // At least 3 cells (the set-up guarantees L ≥ 3 cut-offs).
+                        (e[k] / c).floor().max(3.0)
+                    } else {
+                        (e[k] / c).floor() + 1.0
+                    }
+                })
             };
-            let (mut nx, mut ny, mut nz) = count(cell);
-            if nx * ny * nz > max_cells {
-                cell *= (nx * ny * nz / max_cells).cbrt();
-                (nx, ny, nz) = count(cell);
-                while nx * ny * nz > max_cells {
+            let mut dims = count(cell);
+            if dims.iter().product::<f64>() > max_cells {
+                cell *= (dims.iter().product::<f64>() / max_cells).cbrt();
+                dims = count(cell);
+                while dims.iter().product::<f64>() > max_cells {
                     cell *= 1.25;
-                    (nx, ny, nz) = count(cell);
+                    dims = count(cell);
                 }
             }
-            let (nx, ny, nz) = (nx as usize, ny as usize, nz as usize);
+            let [nx, ny, nz] = dims.map(|d| d as usize);
             let n_cells = nx * ny * nz;
-            let inv = 1.0 / cell;
-            let coord = |x: f64, l: f64, m: usize| (((x - l) * inv) as usize).min(m - 1);
+            // Cell side per axis: the box divided evenly on periodic axes.
+            let e = extent.to_array();
+            let inv: [f64; 3] =
+                std::array::from_fn(|k| if per.axes[k] { dims[k] / e[k] } else { 1.0 / cell });
+            let lo_a = lo.to_array();
+            let coord = |x: f64, k: usize, m: usize| (((x - lo_a[k]) * inv[k]) as usize).min(m - 1);
             // Counting sort of the particles by cell.
             self.cell_count.clear();
             self.cell_count.resize(n_cells + 1, 0);
             self.cell_of.clear();
             for x in &p.position {
-                let c = coord(x.x, lo.x, nx) + nx * (coord(x.y, lo.y, ny) + ny * coord(x.z, lo.z, nz));
+                let x = per.wrap(*x);
+                let c = coord(x.x, 0, nx) + nx * (coord(x.y, 1, ny) + ny * coord(x.z, 2, nz));
                 self.cell_of.push(c as u32);
                 self.cell_count[c + 1] += 1;
             }
@@ -234,13 +274,26 @@ impl NeighborList {
             }
             let start = &self.cell_count;
             let sorted = &self.sorted;
+            let excluded = &self.excluded;
             let mut checks = 0u64;
             let mut consider = |i: usize, j: usize, out: &mut Vec<(u64, [u32; 2])>| {
                 checks += 1;
+                if !excluded.is_empty() && excluded[i] && excluded[j] {
+                    return;
+                }
                 let cut = p.radius[i] + p.radius[j] + skin;
-                if (p.position[j] - p.position[i]).length_squared() < cut * cut {
+                if per.min_image(p.position[j] - p.position[i]).length_squared() < cut * cut {
                     let (a, b) = if p.id[i] < p.id[j] { (i, j) } else { (j, i) };
                     out.push((pair_key(p.id[a], p.id[b]), [a as u32, b as u32]));
+                }
+            };
+            let wrap_axis = |o: i64, m: usize, k: usize| -> Option<usize> {
+                if o >= 0 && o < m as i64 {
+                    Some(o as usize)
+                } else if per.axes[k] {
+                    Some(o.rem_euclid(m as i64) as usize)
+                } else {
+                    None
                 }
             };
             for cz in 0..nz {
@@ -254,17 +307,14 @@ impl NeighborList {
                             }
                         }
                         for (dx, dy, dz) in HALF_SHELL {
-                            let (ox, oy, oz) = (cx as i64 + dx, cy as i64 + dy, cz as i64 + dz);
-                            if ox < 0
-                                || oy < 0
-                                || oz < 0
-                                || ox >= nx as i64
-                                || oy >= ny as i64
-                                || oz >= nz as i64
-                            {
+                            let (Some(ox), Some(oy), Some(oz)) = (
+                                wrap_axis(cx as i64 + dx, nx, 0),
+                                wrap_axis(cy as i64 + dy, ny, 1),
+                                wrap_axis(cz as i64 + dz, nz, 2),
+                            ) else {
                                 continue;
-                            }
-                            let o = ox as usize + nx * (oy as usize + ny * oz as usize);
+                            };
+                            let o = ox + nx * (oy + ny * oz);
                             let other = &sorted[start[o] as usize..start[o + 1] as usize];
                             for &i in own {
                                 for &j in other {

@@ -1,6 +1,7 @@
 //! The simulation: set-up from a [`SimulationConfig`] and the time loop.
 
-use crate::contact::geometry::{ContactGeometry, pair_contact, relative_velocity, wall_contact};
+use crate::boundary::Periodic;
+use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
 use crate::contact::law::{contact_force, contact_force_dyn, normal_spring_energy, rolling_torque};
 use crate::contact::{
     CoeffTable, ContactCoeffs, ContactLaw, ContactParams, LeverArm, NormalModel, TangentialModel,
@@ -18,6 +19,11 @@ use crate::wall::Wall;
 
 /// Standard gravity, m/s² (MFIX's default, along −y).
 pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// The neighbour skin used when none is given: 20 % of the largest radius, m.
+pub fn default_skin(max_radius: f64) -> f64 {
+    0.2 * max_radius
+}
 
 /// Everything the engine needs besides the particles, in SI units.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,6 +54,8 @@ pub struct SimulationConfig {
     pub skin: Option<f64>,
     /// Prescribed motion rules.
     pub motion: Vec<PrescribedMotion>,
+    /// Periodic axes of the domain box, if any.
+    pub periodic: Option<Periodic>,
 }
 
 /// A running simulation.
@@ -69,6 +77,7 @@ pub struct Simulation {
     step: u64,
     neighbors: NeighborList,
     motion: Vec<ResolvedMotion>,
+    periodic: Periodic,
     /// Runs of slots that are integrated (every slot not under prescribed motion).
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
@@ -138,11 +147,14 @@ impl Simulation {
                     "the neighbour skin must be a length >= 0, in m",
                 ));
             }
-            None => 0.2 * particles.max_radius(),
+            None => default_skin(particles.max_radius()),
         };
         let motion = motion::resolve(&config.motion, &particles)?;
         let free = motion::free_runs(&motion, particles.len());
-        let mut neighbors = NeighborList::new(skin);
+        let periodic = config.periodic.unwrap_or(Periodic::NONE);
+        periodic.check(particles.max_radius(), skin, &config.walls)?;
+        let mut neighbors = NeighborList::with_periodic(skin, periodic);
+        neighbors.exclude_pairs_among(motion::held(&motion, particles.len()));
         neighbors.build(&particles, &config.walls);
         Ok(Simulation {
             particles,
@@ -159,6 +171,7 @@ impl Simulation {
             step: 0,
             neighbors,
             motion,
+            periodic,
             free,
             history_started: false,
             forces_current: false,
@@ -316,6 +329,12 @@ impl Simulation {
         }
         self.history_started = true;
         motion::apply(&self.motion, &mut self.particles);
+        if self.periodic.any() {
+            let per = self.periodic;
+            for x in &mut self.particles.position {
+                *x = per.wrap(*x);
+            }
+        }
         self.step += 1;
     }
 
@@ -366,6 +385,7 @@ impl Simulation {
         let frame = self.law.history;
         let lever = self.law.lever;
         let clip = self.law.clip_attraction;
+        let per = self.periodic;
         let p = &mut self.particles;
         let nl = &mut self.neighbors;
         // Walls first, as MFIX does.
@@ -388,7 +408,7 @@ impl Simulation {
         }
         for (k, &[i, j]) in nl.pairs.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
-            let Some(g) = pair_geometry(p, i, j, lever) else {
+            let Some(g) = pair_geometry(p, i, j, lever, &per) else {
                 nl.pair_history[k] = Vec3::ZERO;
                 continue;
             };
@@ -414,6 +434,7 @@ impl Simulation {
     pub fn contacts(&self) -> Vec<ContactInfo> {
         let p = &self.particles;
         let lever = self.law.lever;
+        let per = self.periodic;
         let mut out = Vec::new();
         let mut record =
             |i: usize, other: ContactPartner, g: ContactGeometry, c: &ContactCoeffs, v_r: Vec3, h: Vec3| {
@@ -439,7 +460,7 @@ impl Simulation {
         }
         for (k, &[i, j]) in self.neighbors.pairs.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
-            if let Some(g) = pair_geometry(p, i, j, lever) {
+            if let Some(g) = pair_geometry(p, i, j, lever, &per) {
                 let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
                 let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
                 record(i, ContactPartner::Particle(j), g, c, v_r, self.neighbors.pair_history[k]);
@@ -471,7 +492,11 @@ impl Simulation {
         }
         for &[i, j] in &self.neighbors.pairs {
             let (i, j) = (i as usize, j as usize);
-            if let Some(g) = pair_contact(p.position[i], p.position[j], p.radius[i], p.radius[j]) {
+            if let Some(g) = pair_contact_separation(
+                self.periodic.min_image(p.position[j] - p.position[i]),
+                p.radius[i],
+                p.radius[j],
+            ) {
                 let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
                 visit(
                     g.overlap,
@@ -514,8 +539,15 @@ pub struct ContactInfo {
 
 /// Pair geometry of slots i, j with the law's lever arm, if they touch.
 #[inline(always)]
-fn pair_geometry(p: &Particles, i: usize, j: usize, lever: LeverArm) -> Option<ContactGeometry> {
-    let mut g = pair_contact(p.position[i], p.position[j], p.radius[i], p.radius[j])?;
+fn pair_geometry(
+    p: &Particles,
+    i: usize,
+    j: usize,
+    lever: LeverArm,
+    per: &Periodic,
+) -> Option<ContactGeometry> {
+    let mut g =
+        pair_contact_separation(per.min_image(p.position[j] - p.position[i]), p.radius[i], p.radius[j])?;
     if lever == LeverArm::Radius {
         (g.lever_i, g.lever_j) = (p.radius[i], p.radius[j]);
     }

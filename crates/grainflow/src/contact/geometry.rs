@@ -21,7 +21,13 @@ pub struct ContactGeometry {
 /// (for equal radii a_i = a_j = R − δ/2, not R).
 #[inline(always)]
 pub fn pair_contact(xi: Vec3, xj: Vec3, ri: f64, rj: f64) -> Option<ContactGeometry> {
-    let dvec = xj - xi;
+    pair_contact_separation(xj - xi, ri, rj)
+}
+
+/// As [`pair_contact`], from the separation `dvec` = x_j − x_i (already the nearest image on
+/// periodic axes).
+#[inline(always)]
+pub fn pair_contact_separation(dvec: Vec3, ri: f64, rj: f64) -> Option<ContactGeometry> {
     let d2 = dvec.length_squared();
     let rsum = ri + rj;
     let lim = rsum - 1e-15;

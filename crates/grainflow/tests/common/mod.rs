@@ -67,6 +67,7 @@ pub fn config(
         gravity: Vec3::ZERO,
         skin: None,
         motion: Vec::new(),
+        periodic: None,
     }
 }
 

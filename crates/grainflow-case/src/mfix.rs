@@ -1,1 +1,0 @@
-//! MFIX keyword input decks (mfix.dat / .mfx) (being written).
