@@ -47,7 +47,7 @@ impl Periodic {
         let cut = 2.0 * max_radius + skin;
         let l = self.lengths().to_array();
         for k in 0..3 {
-            if self.axes[k] && !(l[k] >= 3.0 * cut) {
+            if self.axes[k] && (l[k] < 3.0 * cut || l[k].is_nan()) {
                 return Err(crate::EngineError::InvalidValue {
                     what: format!("periodic length along {}", ["x", "y", "z"][k]),
                     value: format!("{}", l[k]),
