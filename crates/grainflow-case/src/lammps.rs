@@ -75,13 +75,11 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
                 .ok_or_else(|| err(line_no, format!("{what} = '{s}' is not a number")))
         };
         match section {
-            "" => {
-                if f.len() == 2 && f[1] == "atoms" {
-                    expected_atoms = Some(
-                        f[0].parse::<usize>()
-                            .map_err(|_| err(line_no, format!("'{}' is not an atom count", f[0])))?,
-                    );
-                }
+            "" if f.len() == 2 && f[1] == "atoms" => {
+                expected_atoms = Some(
+                    f[0].parse::<usize>()
+                        .map_err(|_| err(line_no, format!("'{}' is not an atom count", f[0])))?,
+                );
             }
             "Atoms" => {
                 if f.len() != 7 && f.len() != 10 {
