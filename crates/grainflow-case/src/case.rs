@@ -5,7 +5,8 @@ use crate::particles;
 use crate::raw::*;
 use grainflow::contact::limits::{self, Range};
 use grainflow::contact::{
-    ContactLaw, ContactParams, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel,
+    ContactLaw, ContactParams, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel,
+    TangentialModel,
 };
 use grainflow::simulation::STANDARD_GRAVITY;
 use grainflow::state::ParticleInit;
@@ -366,17 +367,33 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         "lever_arm",
         contact.lever_arm.as_deref(),
         LeverArm::RadicalPlane,
-        &[("mfix", LeverArm::RadicalPlane), ("radius", LeverArm::Radius)],
+        &[
+            ("mfix", LeverArm::RadicalPlane),
+            ("radius", LeverArm::Radius),
+            ("lammps_granular", LeverArm::LammpsGranular),
+        ],
     )?;
     let damping = choose(
         "[contact]",
         "damping",
         contact.damping.as_deref(),
         NormalDamping::Mfix,
-        &[("mfix", NormalDamping::Mfix), ("exact_restitution", NormalDamping::ExactRestitution)],
+        &[
+            ("mfix", NormalDamping::Mfix),
+            ("exact_restitution", NormalDamping::ExactRestitution),
+            ("mass_velocity", NormalDamping::MassVelocity),
+            ("tsuji", NormalDamping::Tsuji),
+        ],
     )?;
     let clip_attraction = contact.clip_attraction.unwrap_or(false);
-    let law = ContactLaw { normal, tangential, history, lever, damping, clip_attraction };
+    let coulomb = choose(
+        "[contact]",
+        "coulomb",
+        contact.coulomb.as_deref(),
+        CoulombCap::Mfix,
+        &[("mfix", CoulombCap::Mfix), ("lammps", CoulombCap::Lammps)],
+    )?;
+    let law = ContactLaw { normal, tangential, history, lever, damping, clip_attraction, coulomb };
     if normal == NormalModel::Hertz {
         for p in &phases {
             let table = format!("[[phases]] '{}'", p.name);
@@ -937,7 +954,7 @@ fn check_params(
     law: ContactLaw,
     warnings: &mut Vec<String>,
 ) -> Result<(), CaseError> {
-    let checks: [(&str, Option<f64>, Range); 7] = [
+    let checks: [(&str, Option<f64>, Range); 9] = [
         ("kn", t.kn, limits::KN),
         ("kt_fac", t.kt_fac, limits::KT_FAC),
         ("etat_fac", t.etat_fac, limits::ETAT_FAC),
@@ -945,6 +962,8 @@ fn check_params(
         ("et", t.et, limits::ET),
         ("mu", t.mu, limits::MU),
         ("mu_roll", t.mu_roll, limits::MU_ROLL),
+        ("gamma_n", t.gamma_n, limits::GAMMA),
+        ("gamma_t", t.gamma_t, limits::GAMMA),
     ];
     for (key, v, r) in checks {
         if let Some(v) = v {
@@ -953,9 +972,7 @@ fn check_params(
     }
     let unused: &[(&str, bool)] = match law.normal {
         NormalModel::LinearSpringDashpot => &[("et", t.et.is_some())],
-        NormalModel::Hertz => {
-            &[("kn", t.kn.is_some()), ("kt_fac", t.kt_fac.is_some()), ("etat_fac", t.etat_fac.is_some())]
-        }
+        NormalModel::Hertz => &[("kn", t.kn.is_some()), ("kt_fac", t.kt_fac.is_some())],
     };
     for (key, given) in unused {
         if *given {
@@ -985,6 +1002,10 @@ fn layer(
         et: pick(|t| t.et),
         mu: pick(|t| t.mu).unwrap_or(d.mu),
         mu_roll: pick(|t| t.mu_roll).unwrap_or(d.mu_roll),
+        gamma_n: pick(|t| t.gamma_n),
+        gamma_t: pick(|t| t.gamma_t),
+        hertz_kn: pick(|t| t.hertz_kn),
+        hertz_kt: pick(|t| t.hertz_kt),
     };
     match law.normal {
         NormalModel::LinearSpringDashpot if p.kn.is_none() => Err(CaseError::missing(
@@ -992,11 +1013,16 @@ fn layer(
             "kn",
             format!("normal stiffness in N/m for the {what}; set it there or in an override table"),
         )),
-        NormalModel::Hertz if p.et.is_none() => Err(CaseError::missing(
-            base_table,
-            "et",
-            format!("tangential restitution for the {what}, required by the hertz model"),
-        )),
+        NormalModel::Hertz
+            if p.et.is_none()
+                && matches!(law.damping, NormalDamping::Mfix | NormalDamping::ExactRestitution) =>
+        {
+            Err(CaseError::missing(
+                base_table,
+                "et",
+                format!("tangential restitution for the {what}, required by the hertz model"),
+            ))
+        }
         _ => Ok(p),
     }
 }

@@ -175,6 +175,10 @@ pub struct RawContact {
     /// Default false (MFIX).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clip_attraction: Option<bool>,
+    /// Tangential force beyond the Coulomb limit: "mfix" (along the spring, spring reset to
+    /// the cone) or "lammps" (spring plus dashpot scaled to the limit). Default "mfix".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coulomb: Option<String>,
     /// Defaults for every phase pair.
     #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
     pub particle: RawContactParams,
@@ -225,6 +229,19 @@ pub struct RawContactParams {
     /// Rolling friction length, m, >= 0. Default 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mu_roll: Option<f64>,
+    /// Normal damping per unit effective mass γ_n, 1/s (`damping = "mass_velocity"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gamma_n: Option<f64>,
+    /// Tangential damping per unit effective mass γ_t, 1/s (`damping = "mass_velocity"`;
+    /// default γ_n/2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gamma_t: Option<f64>,
+    /// Hertz: K_n in N/m^1.5, given directly instead of (4/3)E*√R* from E and ν.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hertz_kn: Option<f64>,
+    /// Hertz: K_t in N/m^1.5, given directly instead of 8G*√R*.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hertz_kt: Option<f64>,
 }
 
 /// `[time]`

@@ -363,6 +363,8 @@ impl ModelRun {
                     / RADIUS
             }
             LeverArm::Radius => 1.0,
+            // Torque lever R − δ/2 at walls and pairs alike.
+            LeverArm::LammpsGranular => 1.0 - 0.5 * mean_overlap_fraction(self.spec.model) * dmax / RADIUS,
         };
         gross_sliding_omega(theta_deg) * factor
     }
@@ -423,7 +425,7 @@ pub fn evaluate(options: Options) -> Result<Report, VerifyError> {
         match (r.spec.dt, r.spec.lever) {
             (None, _) => mfix.push(r),
             (Some(_), LeverArm::RadicalPlane) => converged.push(r),
-            (Some(_), LeverArm::Radius) => lever_r.push(r),
+            (Some(_), LeverArm::Radius | LeverArm::LammpsGranular) => lever_r.push(r),
         }
     }
     let checks = checks(&mfix, &converged, &lever_r);
@@ -794,7 +796,8 @@ pub fn summary_markdown(report: &Report) -> String {
     for run in report.mfix.iter().chain(&report.converged).chain(&report.lever_r) {
         let lever = match run.spec.lever {
             LeverArm::RadicalPlane => "MFIX (radical plane)",
-            LeverArm::Radius => "R (wall impactors + θ = 0.05°)",
+            LeverArm::Radius => "R (wall impactors + θ = 0.01°)",
+            LeverArm::LammpsGranular => "LAMMPS granular (R, torque R − δ/2)",
         };
         let _ = writeln!(
             s,

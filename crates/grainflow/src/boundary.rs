@@ -74,14 +74,19 @@ impl Periodic {
         self.hi - self.lo
     }
 
-    /// The nearest image of a separation vector: on periodic axes, d − L·round(d/L).
+    /// The nearest image of a separation vector on the periodic axes. Positions are kept
+    /// inside the box, so separations lie within (−L, L) and one shift by L suffices.
     #[inline(always)]
     pub fn min_image(&self, d: Vec3) -> Vec3 {
         let mut d = d.to_array();
         let l = self.lengths().to_array();
         for k in 0..3 {
             if self.axes[k] {
-                d[k] -= l[k] * (d[k] / l[k]).round();
+                if d[k] > 0.5 * l[k] {
+                    d[k] -= l[k];
+                } else if d[k] < -0.5 * l[k] {
+                    d[k] += l[k];
+                }
             }
         }
         Vec3::from_array(d)

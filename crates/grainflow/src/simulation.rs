@@ -4,7 +4,8 @@ use crate::boundary::Periodic;
 use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
 use crate::contact::law::{contact_force, contact_force_dyn, normal_spring_energy, rolling_torque};
 use crate::contact::{
-    CoeffTable, ContactCoeffs, ContactLaw, ContactParams, LeverArm, NormalModel, TangentialModel,
+    CoeffTable, ContactCoeffs, ContactLaw, ContactParams, LeverArm, NormalDamping, NormalModel,
+    TangentialModel,
 };
 use crate::error::EngineError;
 use crate::integrate::{self, Integrator};
@@ -78,6 +79,8 @@ pub struct Simulation {
     neighbors: NeighborList,
     motion: Vec<ResolvedMotion>,
     periodic: Periodic,
+    /// Slots held fixed by prescribed motion (empty if none).
+    held: Vec<bool>,
     /// Runs of slots that are integrated (every slot not under prescribed motion).
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
@@ -154,7 +157,9 @@ impl Simulation {
         let periodic = config.periodic.unwrap_or(Periodic::NONE);
         periodic.check(particles.max_radius(), skin, &config.walls)?;
         let mut neighbors = NeighborList::with_periodic(skin, periodic);
-        neighbors.exclude_pairs_among(motion::held(&motion, particles.len()));
+        let held = motion::held(&motion, particles.len());
+        neighbors.exclude_pairs_among(held.clone());
+        let held = if held.iter().any(|&h| h) { held } else { Vec::new() };
         neighbors.build(&particles, &config.walls);
         Ok(Simulation {
             particles,
@@ -172,6 +177,7 @@ impl Simulation {
             neighbors,
             motion,
             periodic,
+            held,
             free,
             history_started: false,
             forces_current: false,
@@ -385,6 +391,9 @@ impl Simulation {
         let frame = self.law.history;
         let lever = self.law.lever;
         let clip = self.law.clip_attraction;
+        let cap = self.law.coulomb;
+        let damping = self.law.damping;
+        let held = &self.held;
         let per = self.periodic;
         let p = &mut self.particles;
         let nl = &mut self.neighbors;
@@ -395,10 +404,10 @@ impl Simulation {
                 nl.wall_history[k] = Vec3::ZERO;
                 continue;
             };
-            let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+            let c = scaled_damping(self.coeffs.wall(p.phase[i] as usize, wall.material), damping, p.mass[i]);
             let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
             let mut h = nl.wall_history[k];
-            let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, c, &g, v_r, &mut h, dt);
+            let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, cap, &c, &g, v_r, &mut h, dt);
             if advance_history {
                 nl.wall_history[k] = h;
             }
@@ -412,20 +421,24 @@ impl Simulation {
                 nl.pair_history[k] = Vec3::ZERO;
                 continue;
             };
-            let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+            let c = scaled_damping(
+                self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize),
+                damping,
+                pair_mass(p, held, i, j),
+            );
             let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
             let mut h = nl.pair_history[k];
-            let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, c, &g, v_r, &mut h, dt);
+            let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, cap, &c, &g, v_r, &mut h, dt);
             if advance_history {
                 nl.pair_history[k] = h;
             }
             let total = f.total();
             p.force[i] += total;
             p.force[j] -= total;
-            p.torque[i] +=
-                f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
-            p.torque[j] +=
-                f.torque(g.lever_j, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[j]);
+            p.torque[i] += f.torque(torque_lever(lever, g.lever_i, g.overlap), g.normal)
+                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
+            p.torque[j] += f.torque(torque_lever(lever, g.lever_j, g.overlap), g.normal)
+                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[j]);
         }
     }
 
@@ -453,17 +466,25 @@ impl Simulation {
         for (k, &[i, w]) in self.neighbors.wall_pairs.iter().enumerate() {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
             if let Some(g) = wall_geometry(p, i, wall, lever) {
-                let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+                let c = scaled_damping(
+                    self.coeffs.wall(p.phase[i] as usize, wall.material),
+                    self.law.damping,
+                    p.mass[i],
+                );
                 let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
-                record(i, ContactPartner::Wall(w as usize), g, c, v_r, self.neighbors.wall_history[k]);
+                record(i, ContactPartner::Wall(w as usize), g, &c, v_r, self.neighbors.wall_history[k]);
             }
         }
         for (k, &[i, j]) in self.neighbors.pairs.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
             if let Some(g) = pair_geometry(p, i, j, lever, &per) {
-                let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+                let c = scaled_damping(
+                    self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize),
+                    self.law.damping,
+                    pair_mass(p, &self.held, i, j),
+                );
                 let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
-                record(i, ContactPartner::Particle(j), g, c, v_r, self.neighbors.pair_history[k]);
+                record(i, ContactPartner::Particle(j), g, &c, v_r, self.neighbors.pair_history[k]);
             }
         }
         out
@@ -537,6 +558,33 @@ pub struct ContactInfo {
     pub tangential_force: f64,
 }
 
+/// Effective mass of the particles in slots i and j: m_i m_j/(m_i + m_j), or the other one's
+/// mass if one of them is held fixed (as LAMMPS does for frozen particles).
+#[inline(always)]
+fn pair_mass(p: &Particles, held: &[bool], i: usize, j: usize) -> f64 {
+    if !held.is_empty() {
+        if held[i] {
+            return p.mass[j];
+        }
+        if held[j] {
+            return p.mass[i];
+        }
+    }
+    p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j])
+}
+
+/// The coefficients with damping that depends on the contact's masses applied: ×m_eff
+/// (`MassVelocity`), ×√m_eff (`Tsuji`); unchanged otherwise.
+#[inline(always)]
+fn scaled_damping(c: &ContactCoeffs, damping: NormalDamping, m_eff: f64) -> ContactCoeffs {
+    let s = match damping {
+        NormalDamping::MassVelocity => m_eff,
+        NormalDamping::Tsuji => m_eff.sqrt(),
+        NormalDamping::Mfix | NormalDamping::ExactRestitution => return *c,
+    };
+    ContactCoeffs { eta_n: c.eta_n * s, eta_t: c.eta_t * s, ..*c }
+}
+
 /// Pair geometry of slots i, j with the law's lever arm, if they touch.
 #[inline(always)]
 fn pair_geometry(
@@ -548,17 +596,24 @@ fn pair_geometry(
 ) -> Option<ContactGeometry> {
     let mut g =
         pair_contact_separation(per.min_image(p.position[j] - p.position[i]), p.radius[i], p.radius[j])?;
-    if lever == LeverArm::Radius {
+    if lever != LeverArm::RadicalPlane {
         (g.lever_i, g.lever_j) = (p.radius[i], p.radius[j]);
     }
     Some(g)
+}
+
+/// The lever of the tangential force's torque: the geometry's lever, less half the overlap
+/// for LAMMPS's `pair granular` convention.
+#[inline(always)]
+fn torque_lever(lever: LeverArm, geometric: f64, overlap: f64) -> f64 {
+    if lever == LeverArm::LammpsGranular { geometric - 0.5 * overlap } else { geometric }
 }
 
 /// Geometry of slot i against a wall with the law's lever arm, if they touch.
 #[inline(always)]
 fn wall_geometry(p: &Particles, i: usize, wall: &Wall, lever: LeverArm) -> Option<ContactGeometry> {
     let mut g = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal)?;
-    if lever == LeverArm::Radius {
+    if lever != LeverArm::RadicalPlane {
         g.lever_i = p.radius[i];
     }
     Some(g)

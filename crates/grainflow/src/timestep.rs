@@ -1,6 +1,6 @@
 //! The time step (reference: MFIX-DEM model §5).
 
-use crate::contact::{CoeffTable, ContactLaw, NormalModel};
+use crate::contact::{CoeffTable, ContactLaw, NormalDamping, NormalModel};
 use crate::error::EngineError;
 use crate::material::Phase;
 
@@ -36,10 +36,31 @@ pub fn collision_time(kn: f64, eta_n: f64, m_eff: f64) -> f64 {
     std::f64::consts::PI / (kn / m_eff - (eta_n / m_eff).powi(2) / 4.0).sqrt()
 }
 
+/// η_n in kg/s for the phase pair's effective mass, whatever the damping's scaling.
+fn absolute_eta(law: &ContactLaw, c: &crate::contact::ContactCoeffs) -> f64 {
+    match law.damping {
+        NormalDamping::MassVelocity => c.eta_n * c.m_eff,
+        NormalDamping::Tsuji => c.eta_n * c.m_eff.sqrt(),
+        NormalDamping::Mfix | NormalDamping::ExactRestitution => c.eta_n,
+    }
+}
+
 /// Number of steps MFIX takes for a run of length `span`: ceil of the single-precision quotient.
 pub fn step_count(span: f64, dt: f64) -> u64 {
     let q = (span as f32) / (dt as f32);
     if q.is_finite() && q > 0.0 { q.ceil() as u64 } else { 0 }
+}
+
+/// Number of steps for an explicit Δt: the run length divided by Δt, rounded to the nearest
+/// whole number when it is one to within 1e-9 (so t_stop = 0.1, Δt = 1e-4 gives 1 000 steps
+/// despite rounding), else rounded up.
+pub fn fixed_step_count(span: f64, dt: f64) -> u64 {
+    let q = span / dt;
+    if !(q.is_finite() && q > 0.0) {
+        return 0;
+    }
+    let r = q.round();
+    if (q - r).abs() <= 1e-9 * q { r as u64 } else { q.ceil() as u64 }
 }
 
 /// Applies the rule.
@@ -60,7 +81,7 @@ pub fn choose(
     for m in 0..phases.len() {
         for l in m..phases.len() {
             let c = table.pair(m, l);
-            let t = collision_time(c.kn, c.eta_n, c.m_eff);
+            let t = collision_time(c.kn, absolute_eta(law, c), c.m_eff);
             if t < tcoll {
                 tcoll = t;
                 limiting = (m, l);
@@ -104,7 +125,11 @@ pub fn choose(
             "MFIX's time-step rule needs at least one phase; give an explicit dt".into(),
         ));
     }
-    Ok(TimeStepChoice { dt, steps: step_count(span, dt), tcoll, explanation })
+    let steps = match rule {
+        TimeStepRule::Mfix { .. } => step_count(span, dt),
+        TimeStepRule::Fixed(_) => fixed_step_count(span, dt),
+    };
+    Ok(TimeStepChoice { dt, steps, tcoll, explanation })
 }
 
 /// The largest time step the contact law tolerates, and the contact that sets it.
@@ -119,7 +144,7 @@ pub struct StabilityLimit {
 }
 
 /// Stability limit of explicit integration for the contact law:
-/// - linear spring–dashpot: Δt ≤ t_c/10, t_c the collision time of the stiffest contact over
+/// - linear spring–dashpot: Δt ≤ t_c/5 (ω·Δt ≤ 0.63, well inside the explicit schemes' ω·Δt < 2), t_c the collision time of the stiffest contact over
 ///   all phase pairs **and** phase–wall pairs (MFIX's rule leaves the walls out); the
 ///   suggestion is t_c/50, MFIX's default;
 /// - Hertz: Δt ≤ 0.3·T_R with the Rayleigh time T_R = πR√(ρ/G)/(0.1631ν + 0.8766) of the
@@ -136,23 +161,23 @@ pub fn stability_limit(
             for m in 0..phases.len() {
                 for l in m..phases.len() {
                     let c = table.pair(m, l);
-                    let t = collision_time(c.kn, c.eta_n, c.m_eff);
+                    let t = collision_time(c.kn, absolute_eta(law, c), c.m_eff);
                     if t < best.0 {
                         best = (t, format!("contact '{}'-'{}'", phases[m].name, phases[l].name));
                     }
                 }
                 for (w, wm) in wall_materials.iter().enumerate() {
                     let c = table.wall(m, w);
-                    let t = collision_time(c.kn, c.eta_n, c.m_eff);
+                    let t = collision_time(c.kn, absolute_eta(law, c), c.m_eff);
                     if t < best.0 {
                         best = (t, format!("contact '{}'-wall '{}'", phases[m].name, wm.name));
                     }
                 }
             }
             StabilityLimit {
-                dt_max: best.0 / 10.0,
+                dt_max: best.0 / 5.0,
                 dt_safe: best.0 / 50.0,
-                reason: format!("collision time {:.4e} s of the {} (limit t_c/10)", best.0, best.1),
+                reason: format!("collision time {:.4e} s of the {} (limit t_c/5)", best.0, best.1),
             }
         }
         NormalModel::Hertz => {

@@ -360,6 +360,7 @@ fn sim_params(law: &ContactLaw, raw: RawCoeffs) -> ContactParams {
             et: None,
             mu: raw.mu,
             mu_roll: 0.0,
+            ..Default::default()
         },
         NormalModel::Hertz => ContactParams {
             kn: None,
@@ -369,6 +370,7 @@ fn sim_params(law: &ContactLaw, raw: RawCoeffs) -> ContactParams {
             et: Some(0.05 + 0.95 * raw.zeta_t),
             mu: raw.mu,
             mu_roll: 0.0,
+            ..Default::default()
         },
     }
 }
@@ -441,6 +443,10 @@ fn check_pair_simulation(
             (a_i, d - a_i)
         }
         LeverArm::Radius => (s.ri, s.rj),
+        LeverArm::LammpsGranular => {
+            let half = 0.5 * (s.ri + s.rj - d);
+            (s.ri - half, s.rj - half)
+        }
     };
     let (ci, cj) = (xi + a_i * n, xj - a_j * n);
     let scale = d * fi.length() + ti.length() + tj.length() + f64::MIN_POSITIVE;
@@ -535,7 +541,7 @@ proptest! {
         let d = (x - point).dot(wall_n);
         let lever = match law.lever {
             LeverArm::RadicalPlane => d,
-            LeverArm::Radius => s.ri,
+            LeverArm::Radius | LeverArm::LammpsGranular => s.ri,
         };
         let cpt = x - lever * wall_n;
         let balance = t + (x - cpt).cross(f);

@@ -180,7 +180,7 @@ impl Deck {
 
     /// A real value (numbers and `@( )` arithmetic).
     pub fn real(&self, key: &str, idx: &[i64]) -> Result<Option<Got<f64>>, CaseError> {
-        self.got(key, idx, |v| to_real(v))
+        self.got(key, idx, to_real)
     }
 
     /// A whole number.

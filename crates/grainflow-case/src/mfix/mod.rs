@@ -531,7 +531,7 @@ impl Translator<'_> {
                     "must be a number of solids phases from 1 to 10 (MFIX's DIM_M); a DEM run needs at least one phase",
                 ));
             }
-            None => 1,
+            None => default_int("MMAX") as usize,
         };
         for m in 1..=mmax as i64 {
             match self.word("SOLIDS_MODEL", &[m])? {
@@ -637,7 +637,7 @@ impl Translator<'_> {
 
     /// Wall boundary conditions on the faces of the box are what MFIX's DEM does anyway; flow
     /// boundaries, walls inside the box and moving walls are refused.
-    fn boundary_conditions(&self, lo: Vec3, hi: Vec3) -> Result<(), CaseError> {
+    fn boundary_conditions(&mut self, lo: Vec3, hi: Vec3) -> Result<(), CaseError> {
         let d = self.deck;
         let mut bcs: Vec<i64> = Vec::new();
         for key in ["BC_TYPE", "BC_X_W", "BC_X_E", "BC_Y_S", "BC_Y_N", "BC_Z_B", "BC_Z_T"] {
@@ -646,6 +646,7 @@ impl Translator<'_> {
         bcs.sort_unstable();
         bcs.dedup();
         let imax = [d.int("IMAX", &[])?, d.int("JMAX", &[])?, d.int("KMAX", &[])?].map(|g| g.map(|g| g.v));
+        let mut accepted = Vec::new();
         for i in bcs {
             let Some(t) = self.word("BC_TYPE", &[i])? else { continue };
             let wall = matches!(
@@ -707,6 +708,14 @@ impl Translator<'_> {
                     ),
                 ));
             }
+            accepted.push(format!("{}({i}) = '{}' ({})", "BC_TYPE", t.v, t.loc));
+        }
+        if !accepted.is_empty() {
+            self.note(format!(
+                "{}: wall boundary conditions on faces of the box, which are DEM walls anyway (their gas-side settings are ignored): {}",
+                self.origin,
+                accepted.join(", ")
+            ));
         }
         Ok(())
     }
@@ -802,7 +811,7 @@ impl Translator<'_> {
     /// `[contact]` and whether the model is Hertzian.
     fn contact(&mut self, phases: &mut [Phase]) -> Result<(RawContact, bool), CaseError> {
         let model = match self.word("DES_COLL_MODEL", &[])? {
-            None => "LSD".to_string(),
+            None => default_str("DES_COLL_MODEL").to_string(),
             Some(g) if g.v == "LSD" || g.v == "HERTZIAN" => g.v,
             Some(g) => {
                 return Err(Self::invalid_word(&g, "must be 'LSD' (linear spring-dashpot) or 'HERTZIAN'"));
@@ -1003,6 +1012,7 @@ impl Translator<'_> {
             lever_arm: None,
             damping: None,
             clip_attraction: None,
+            coulomb: None,
             particle,
             wall,
             pairs: pair_tables,
@@ -1055,12 +1065,16 @@ impl Translator<'_> {
             },
             "the collision time to DEM time step ratio",
         )?;
-        let integrator = match self.word("DES_INTG_METHOD", &[])? {
-            None => "euler",
-            Some(g) if g.v == "EULER" => "euler",
-            Some(g) if g.v == "ADAMS_BASHFORTH" => "adams_bashforth",
-            Some(g) => {
-                return Err(Self::invalid_word(&g, "must be 'EULER' (MFIX's default) or 'ADAMS_BASHFORTH'"));
+        let method = self.word("DES_INTG_METHOD", &[])?;
+        let integrator = match method.as_ref().map_or(default_str("DES_INTG_METHOD"), |g| g.v.as_str()) {
+            "EULER" => "euler",
+            "ADAMS_BASHFORTH" => "adams_bashforth",
+            _ => {
+                let valid = "must be 'EULER' (MFIX's default) or 'ADAMS_BASHFORTH'";
+                return Err(method.as_ref().map_or_else(
+                    || CaseError::missing(self.origin, "DES_INTG_METHOD", valid),
+                    |g| Self::invalid_word(g, valid),
+                ));
             }
         };
         Ok(RawTime {
@@ -1084,7 +1098,7 @@ impl Translator<'_> {
         };
         let mut interval: Option<f64> = None;
         for idx in self.deck.indices("VTK_DT") {
-            let data = self.word("VTK_DATA", &idx)?.map_or("C".to_string(), |g| g.v);
+            let data = self.word("VTK_DATA", &idx)?.map_or(default_str("VTK_DATA").to_string(), |g| g.v);
             if data != "P" {
                 continue;
             }
@@ -1139,10 +1153,10 @@ impl Translator<'_> {
             .map(|(k, l)| (k + 1, l.trim()))
             .filter(|(_, l)| !l.is_empty() && !l.starts_with('#') && !l.starts_with('!'))
             .collect();
-        let want = count.as_ref().map_or(1, |g| g.v) as usize;
+        let want = count.as_ref().map_or(default_int("PARTICLES"), |g| g.v) as usize;
         if data.len() != want {
             let (loc, text) =
-                count.as_ref().map_or((self.origin.to_string(), "1 (MFIX's default)".to_string()), |g| {
+                count.as_ref().map_or((self.origin.to_string(), format!("{want} (MFIX's default)")), |g| {
                     (g.loc.to_string(), g.text.clone())
                 });
             return Err(CaseError::invalid(
@@ -1283,6 +1297,22 @@ impl Translator<'_> {
                 missing.join(", ")
             ));
         }
+    }
+}
+
+/// MFIX's default of a whole-number keyword, from the keyword table.
+fn default_int(key: &str) -> i64 {
+    match keywords::lookup(key).map(|k| k.default) {
+        Some(Dflt::Int(v)) => v,
+        _ => 0,
+    }
+}
+
+/// MFIX's default of a word keyword, from the keyword table.
+fn default_str(key: &str) -> &'static str {
+    match keywords::lookup(key).map(|k| k.default) {
+        Some(Dflt::Str(v)) => v,
+        _ => "",
     }
 }
 

@@ -27,12 +27,33 @@ pub struct ContactParams {
     pub mu: f64,
     /// Rolling friction μ_r ≥ 0, m (`MEW_R` / `MEW_RW`): torque −μ_r·|F_n,elastic|·ω̂.
     pub mu_roll: f64,
+    /// Normal damping per unit effective mass γ_n, 1/s (damping `MassVelocity` only).
+    pub gamma_n: Option<f64>,
+    /// Tangential damping per unit effective mass γ_t, 1/s (damping `MassVelocity` only;
+    /// default γ_n/2, as LAMMPS).
+    pub gamma_t: Option<f64>,
+    /// Hertz only: K_n (N/m^1.5) given directly instead of (4/3)E*√R* from E and ν.
+    pub hertz_kn: Option<f64>,
+    /// Hertz only: K_t (N/m^1.5) given directly instead of 8G*√R*.
+    pub hertz_kt: Option<f64>,
 }
 
 impl Default for ContactParams {
     /// MFIX's defaults; `kn`, `et` unset, e_n = 1, μ = 0.
     fn default() -> Self {
-        ContactParams { kn: None, kt_fac: 2.0 / 7.0, etat_fac: 0.5, en: 1.0, et: None, mu: 0.0, mu_roll: 0.0 }
+        ContactParams {
+            kn: None,
+            kt_fac: 2.0 / 7.0,
+            etat_fac: 0.5,
+            en: 1.0,
+            et: None,
+            mu: 0.0,
+            mu_roll: 0.0,
+            gamma_n: None,
+            gamma_t: None,
+            hertz_kn: None,
+            hertz_kt: None,
+        }
     }
 }
 
@@ -43,9 +64,11 @@ pub struct ContactCoeffs {
     pub kn: f64,
     /// Tangential stiffness: k_t = κ·k_n (N/m, LSD) or K_t = 8·G*·√R* (N/m^1.5, Hertz).
     pub kt: f64,
-    /// Normal damping η_n.
+    /// Normal damping η_n (kg/s, or kg/(s·m^¼) for Hertz). For damping that depends on the
+    /// particles' masses it is per unit mass (`MassVelocity`: γ_n) or per √mass (`Tsuji`:
+    /// α√K_n), and the force loop multiplies by m_eff or √m_eff of the contact.
     pub eta_n: f64,
-    /// Tangential damping η_t.
+    /// Tangential damping η_t, scaled like `eta_n`.
     pub eta_t: f64,
     /// Coulomb friction coefficient.
     pub mu: f64,
@@ -64,14 +87,36 @@ pub fn damping_coefficient(k: f64, m: f64, e: f64) -> f64 {
     2.0 * (k * m).sqrt() * l.abs() / (std::f64::consts::PI.powi(2) + l * l).sqrt()
 }
 
-/// η_n for stiffness `k`, effective mass `m` and restitution `e`, by the law's damping rule.
+/// η_n for stiffness `k`, effective mass `m` and restitution `e`, by the law's damping rule
+/// (for `Tsuji`, per √mass: α√k; `MassVelocity` is set from γ_n by the caller).
 fn normal_damping(law: &ContactLaw, k: f64, m: f64, e: f64) -> f64 {
     match law.damping {
         NormalDamping::Mfix => damping_coefficient(k, m, e),
         NormalDamping::ExactRestitution => {
             super::damping::exact_damping_ratio(law.normal, e, law.clip_attraction) * (k * m).sqrt()
         }
+        NormalDamping::Tsuji => tsuji_alpha(e) * k.sqrt(),
+        NormalDamping::MassVelocity => 0.0,
     }
+}
+
+/// (γ_n, γ_t) per unit mass for `MassVelocity` damping; γ_t defaults to γ_n/2 (LAMMPS).
+fn mass_velocity(what: &str, p: &ContactParams) -> Result<(f64, f64), EngineError> {
+    let gn = p.gamma_n.ok_or_else(|| EngineError::MissingParameter {
+        what: format!("{what} gamma_n (normal damping per unit mass, 1/s)"),
+        model: "mass_velocity damping".into(),
+    })?;
+    limits::GAMMA.check(what, "gamma_n", gn)?;
+    let gt = p.gamma_t.unwrap_or(0.5 * gn);
+    limits::GAMMA.check(what, "gamma_t", gt)?;
+    Ok((gn, gt))
+}
+
+/// LAMMPS's fit of Tsuji's damping ratio to the restitution coefficient:
+/// α = 1.2728 − 4.2783e + 11.087e² − 22.348e³ + 27.467e⁴ − 18.022e⁵ + 4.8218e⁶.
+pub fn tsuji_alpha(e: f64) -> f64 {
+    1.2728 - 4.2783 * e + 11.087 * e.powi(2) - 22.348 * e.powi(3) + 27.467 * e.powi(4) - 18.022 * e.powi(5)
+        + 4.8218 * e.powi(6)
 }
 
 /// Coefficients for every phase pair and every phase–wall-material pair.
@@ -231,35 +276,54 @@ fn derive(
                 model: "lsd".into(),
             })?;
             limits::KN.check(what, "kn", kn)?;
-            let eta_n = normal_damping(law, kn, m_eff, p.en);
-            Ok(ContactCoeffs {
-                kn,
-                kt: p.kt_fac * kn,
-                eta_n,
-                eta_t: p.etat_fac * eta_n,
-                mu: p.mu,
-                mu_roll: p.mu_roll,
-                m_eff,
-            })
+            let (eta_n, eta_t) = match law.damping {
+                NormalDamping::MassVelocity => mass_velocity(what, p)?,
+                _ => {
+                    let eta_n = normal_damping(law, kn, m_eff, p.en);
+                    (eta_n, p.etat_fac * eta_n)
+                }
+            };
+            Ok(ContactCoeffs { kn, kt: p.kt_fac * kn, eta_n, eta_t, mu: p.mu, mu_roll: p.mu_roll, m_eff })
         }
         (NormalModel::Hertz, Some(h)) => {
-            let et = p.et.ok_or_else(|| EngineError::MissingParameter {
-                what: format!("{what} et (tangential restitution)"),
-                model: "hertz".into(),
-            })?;
-            limits::ET.check(what, "et", et)?;
+            // MFIX's Hertz damping takes η_t from e_t; the LAMMPS forms do not need it.
+            let et = match law.damping {
+                NormalDamping::Mfix | NormalDamping::ExactRestitution => {
+                    let et = p.et.ok_or_else(|| EngineError::MissingParameter {
+                        what: format!("{what} et (tangential restitution)"),
+                        model: "hertz".into(),
+                    })?;
+                    limits::ET.check(what, "et", et)?;
+                    et
+                }
+                NormalDamping::MassVelocity | NormalDamping::Tsuji => 1.0,
+            };
             let e_star = 1.0 / ((1.0 - h.nu1 * h.nu1) / h.e1 + (1.0 - h.nu2 * h.nu2) / h.e2);
             let g1 = h.e1 / (2.0 * (1.0 + h.nu1));
             let g2 = h.e2 / (2.0 * (1.0 + h.nu2));
             let g_star = 1.0 / ((2.0 - h.nu1) / g1 + (2.0 - h.nu2) / g2);
             let sr = h.r_star.sqrt();
-            let kn = 4.0 / 3.0 * e_star * sr;
-            let kt = 8.0 * g_star * sr;
+            let kn = p.hertz_kn.unwrap_or(4.0 / 3.0 * e_star * sr);
+            let kt = p.hertz_kt.unwrap_or(8.0 * g_star * sr);
+            for (key, v) in [("hertz_kn", p.hertz_kn), ("hertz_kt", p.hertz_kt)] {
+                if let Some(v) = v {
+                    limits::KN.check(what, key, v)?;
+                }
+            }
             Ok(ContactCoeffs {
                 kn,
                 kt,
-                eta_n: normal_damping(law, kn, m_eff, p.en),
-                eta_t: damping_coefficient(kt, 2.0 / 7.0 * m_eff, et),
+                eta_n: match law.damping {
+                    NormalDamping::MassVelocity => mass_velocity(what, p)?.0,
+                    _ => normal_damping(law, kn, m_eff, p.en),
+                },
+                eta_t: match law.damping {
+                    NormalDamping::Mfix | NormalDamping::ExactRestitution => {
+                        damping_coefficient(kt, 2.0 / 7.0 * m_eff, et)
+                    }
+                    NormalDamping::Tsuji => p.etat_fac * normal_damping(law, kn, m_eff, p.en),
+                    NormalDamping::MassVelocity => mass_velocity(what, p)?.1,
+                },
                 mu: p.mu,
                 mu_roll: p.mu_roll,
                 m_eff,

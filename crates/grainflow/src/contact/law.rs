@@ -5,7 +5,7 @@
 //! monomorphised once per law.
 
 use super::geometry::ContactGeometry;
-use super::{ContactCoeffs, ContactLaw, HistoryFrame, NormalModel, TangentialModel};
+use super::{ContactCoeffs, ContactLaw, CoulombCap, HistoryFrame, NormalModel, TangentialModel};
 use crate::math::Vec3;
 
 /// The forces of one contact on particle i (particle j, if any, gets the opposite force).
@@ -36,7 +36,8 @@ impl ContactForce {
 
 /// Normal and tangential force of one contact, updating the stored tangential `history`.
 ///
-/// `clip` floors the normal force at zero (no attraction at the end of a contact).
+/// `clip` floors the normal force at zero (no attraction at the end of a contact); `cap`
+/// chooses MFIX's or LAMMPS's treatment of a force beyond the Coulomb limit.
 /// `HERTZ` selects the Hertzian normal law and stiffness scaling; `INCREMENTAL` the
 /// incremental Mindlin spring (history = elastic tangential force) instead of MFIX's total
 /// displacement (history = tangential displacement s).
@@ -47,6 +48,7 @@ impl ContactForce {
 pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     frame: HistoryFrame,
     clip: bool,
+    cap: CoulombCap,
     c: &ContactCoeffs,
     g: &ContactGeometry,
     v_r: Vec3,
@@ -94,13 +96,17 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
         let trial = f_el - damp_t * v_t;
         if trial.length_squared() > limit * limit {
             let len = f_el.length();
-            if len > 0.0 {
+            if len == 0.0 {
+                *history = Vec3::ZERO;
+                Vec3::ZERO
+            } else if cap == CoulombCap::Lammps {
+                let capped = (limit / trial.length()) * trial;
+                *history = capped + damp_t * v_t;
+                capped
+            } else {
                 let capped = (limit / len) * f_el;
                 *history = capped;
                 capped
-            } else {
-                *history = Vec3::ZERO;
-                Vec3::ZERO
             }
         } else {
             *history = f_el;
@@ -115,13 +121,17 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
         let trial = -k * s - damp_t * v_t;
         if trial.length_squared() > limit * limit {
             let len = s.length();
-            if len > 0.0 {
+            if len == 0.0 {
+                *history = Vec3::ZERO;
+                Vec3::ZERO
+            } else if cap == CoulombCap::Lammps {
+                let capped = (limit / trial.length()) * trial;
+                *history = if k > 0.0 { -(capped + damp_t * v_t) / k } else { Vec3::ZERO };
+                capped
+            } else {
                 let dir = s / len;
                 *history = if k > 0.0 { (limit / k) * dir } else { Vec3::ZERO };
                 -limit * dir
-            } else {
-                *history = Vec3::ZERO;
-                Vec3::ZERO
             }
         } else {
             *history = s;
@@ -144,17 +154,38 @@ pub fn contact_force_dyn(
     use NormalModel::*;
     use TangentialModel::*;
     match (law.normal, law.tangential) {
-        (LinearSpringDashpot, MfixTotal) => {
-            contact_force::<false, false>(law.history, law.clip_attraction, c, g, v_r, history, dt)
-        }
-        (LinearSpringDashpot, IncrementalMindlin) => {
-            contact_force::<false, true>(law.history, law.clip_attraction, c, g, v_r, history, dt)
-        }
-        (Hertz, MfixTotal) => {
-            contact_force::<true, false>(law.history, law.clip_attraction, c, g, v_r, history, dt)
-        }
+        (LinearSpringDashpot, MfixTotal) => contact_force::<false, false>(
+            law.history,
+            law.clip_attraction,
+            law.coulomb,
+            c,
+            g,
+            v_r,
+            history,
+            dt,
+        ),
+        (LinearSpringDashpot, IncrementalMindlin) => contact_force::<false, true>(
+            law.history,
+            law.clip_attraction,
+            law.coulomb,
+            c,
+            g,
+            v_r,
+            history,
+            dt,
+        ),
+        (Hertz, MfixTotal) => contact_force::<true, false>(
+            law.history,
+            law.clip_attraction,
+            law.coulomb,
+            c,
+            g,
+            v_r,
+            history,
+            dt,
+        ),
         (Hertz, IncrementalMindlin) => {
-            contact_force::<true, true>(law.history, law.clip_attraction, c, g, v_r, history, dt)
+            contact_force::<true, true>(law.history, law.clip_attraction, law.coulomb, c, g, v_r, history, dt)
         }
     }
 }

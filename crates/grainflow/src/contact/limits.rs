@@ -62,3 +62,5 @@ pub const YOUNGS: Range = range(0.0, true, f64::MAX, false, "must be positive (P
 pub const DIAMETER: Range = range(0.0, true, f64::MAX, false, "must be a positive length (m)");
 /// Density.
 pub const DENSITY: Range = range(0.0, true, f64::MAX, false, "must be positive (kg/m³)");
+/// Damping per unit mass γ_n, γ_t.
+pub const GAMMA: Range = range(0.0, false, f64::MAX, false, "must be >= 0 (1/s)");

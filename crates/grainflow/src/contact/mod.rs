@@ -14,7 +14,7 @@ pub mod geometry;
 pub mod law;
 pub mod limits;
 
-pub use coefficients::{CoeffTable, ContactCoeffs, ContactParams, damping_coefficient};
+pub use coefficients::{CoeffTable, ContactCoeffs, ContactParams, damping_coefficient, tsuji_alpha};
 
 /// The normal force law.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -59,6 +59,9 @@ pub enum LeverArm {
     /// The particle radius R, as in the rigid-body analysis of oblique impact (Maw, Barber &
     /// Fawcett; Chung & Ooi). Makes K·R·ω′ = (1 − e_t)·v_t0 exact for a wall impact.
     Radius,
+    /// LAMMPS `pair granular` (2021): the contact-point velocity uses R; the torque R − δ/2
+    /// between particles and R at walls (`fix wall/gran`).
+    LammpsGranular,
 }
 
 /// How the normal damping coefficient follows from the restitution coefficient.
@@ -70,6 +73,31 @@ pub enum NormalDamping {
     /// η_n = α(e)·√(K_n M), with α solved so that a normal impact rebounds with exactly e,
     /// for the chosen law and clipping (see [`damping`]).
     ExactRestitution,
+    /// LAMMPS `gran/hooke/history` and `granular … damping mass_velocity`: η_n = γ_n·m_eff and
+    /// η_t = γ_t·m_eff, with γ_n, γ_t (1/s) given and m_eff = m_i m_j/(m_i + m_j) of the two
+    /// particles in contact (the other particle's mass if one is held fixed; m_i at a wall).
+    MassVelocity,
+    /// LAMMPS `granular … damping tsuji`: η_n = α(e)·√(m_eff K_n) with LAMMPS's polynomial
+    /// α(e) (Tsuji et al. 1992), m_eff of the two particles as for `MassVelocity`, and
+    /// η_t = `etat_fac`·η_n.
+    Tsuji,
+}
+
+impl NormalDamping {
+    /// True when the damping depends on the masses of the particles in contact.
+    pub fn per_particle_mass(&self) -> bool {
+        matches!(self, NormalDamping::MassVelocity | NormalDamping::Tsuji)
+    }
+}
+
+/// What happens when the tangential force exceeds the Coulomb limit μ|F_n|.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CoulombCap {
+    /// MFIX: F_t = −μ|F_n|·ŝ along the spring, and the spring is set to μ|F_n|/k.
+    Mfix,
+    /// LAMMPS: the whole trial force (spring and dashpot) is scaled down to μ|F_n|, and the
+    /// spring is set so that spring plus dashpot give that force.
+    Lammps,
 }
 
 /// A complete contact law: normal model, tangential model and history treatment.
@@ -88,6 +116,8 @@ pub struct ContactLaw {
     /// Clip the normal force at zero, so that the dashpot never pulls the bodies together at
     /// the end of a contact (MFIX does not clip).
     pub clip_attraction: bool,
+    /// Coulomb cap of the tangential force.
+    pub coulomb: CoulombCap,
 }
 
 impl ContactLaw {
@@ -100,6 +130,7 @@ impl ContactLaw {
             lever: LeverArm::RadicalPlane,
             damping: NormalDamping::Mfix,
             clip_attraction: false,
+            coulomb: CoulombCap::Mfix,
         }
     }
 
