@@ -23,6 +23,7 @@ fn config() -> SimulationConfig {
         gravity: Vec3::new(0.0, -9.81, 0.0),
         skin: None,
         motion: Vec::new(),
+        periodic: None,
     }
 }
 

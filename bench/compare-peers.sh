@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# grainflow against LAMMPS and LIGGGHTS on the three yardstick cases of ../shared/peers/, in
+# the same session: (1) physics — from the same LAMMPS state, the kinetic energy after 1 000
+# steps in both codes; (2) speed — particle-steps per second on one core, median of RUNS runs
+# each, and the ratios. Results go to bench/results/<date>-<host>.md with a machine
+# description. Installs the peers from Debian's packages if they are missing.
+#
+#   bench/compare-peers.sh              (RUNS=3 NRUN=2000 by default)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+PEERS=${PEERS:-$ROOT/../shared/peers}
+RUNS=${RUNS:-3}
+NRUN=${NRUN:-2000}
+DATA=$ROOT/bench/cases/data
+mkdir -p "$DATA" bench/results
+if ! command -v lmp >/dev/null || ! command -v liggghts >/dev/null; then
+  apt-get update -qq && apt-get install -y -qq --no-install-recommends lammps liggghts openmpi-bin >/dev/null
+fi
+cargo build --release --quiet
+GF=$ROOT/target/release/grainflow
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+
+# Settled states, written by LAMMPS with the peers' own inputs (untimed, a few minutes once).
+cd "$DATA"
+for m in hm lsd; do
+  [ -f box_${m}_settled.data ] || lmp -in "$PEERS/lammps/in.box_walls.lmp" -var model $m -var nsettle 25000 -var nrun 0 -log none -screen none
+done
+[ -f chute_eq.data ] || lmp -in "$PEERS/lammps/in.chute_like.lmp" -var neq 50000 -var nrun 0 -log none -screen none
+cd "$W"
+
+lmp_ke() { awk '/^Step/{f=1;next} f && $1==1000 {print $3; exit}' "$1"; }
+loop_time() { awk '/^Loop time of/{print $4; exit}' "$1"; }
+median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+
+declare -A LMP_IN=( [box_hm]="$PEERS/lammps/in.box_walls_run.lmp -var model hm -var data $DATA/box_hm_settled.data"
+                    [box_lsd]="$PEERS/lammps/in.box_walls_run.lmp -var model lsd -var data $DATA/box_lsd_settled.data"
+                    [chute]="$PEERS/lammps/in.chute_like_run.lmp -var data $DATA/chute_eq.data" )
+out="$ROOT/bench/results/$(date +%Y-%m-%d)-$(hostname).md"
+{
+  echo "# grainflow vs LAMMPS, $(date -u +%Y-%m-%dT%H:%MZ)"
+  echo
+  echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}'), $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB;"
+  echo "$(lmp -h | sed -n 2p | sed 's/^ *//'); grainflow $($GF --version | awk '{print $2}'); one core each."
+  echo
+  echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS Mps/s | grainflow Mps/s | ratio |"
+  echo "|---|---|---|---|---|---|---|"
+} > "$out"
+for c in box_hm box_lsd chute; do
+  # Physics: 1 000 steps from the same state.
+  lmp -in ${LMP_IN[$c]} -var nrun 1000 -log lmp.$c.1000 -screen none
+  ke_l=$(lmp_ke lmp.$c.1000)
+  cp "$ROOT/bench/cases/$c.toml" $c.toml
+  sed -i "s|file = \"data/|file = \"$DATA/|" $c.toml
+  $GF run $c.toml --out gf.$c.1000 -q >/dev/null
+  ke_g=$(awk -F, '$1==1000 {print $3}' gf.$c.1000/timeseries.csv)
+  # Speed: NRUN steps, RUNS times each.
+  n=$(grep -m1 ' atoms$' "$DATA/$( [ $c = chute ] && echo chute_eq || echo ${c}_settled ).data" | awk '{print $1}')
+  for i in $(seq "$RUNS"); do
+    lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp.$c.t$i -screen none
+    awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lmp.$c.t$i
+  done | median > lmp.$c.speed
+  dtl=$(awk '/^dt = /{print $3}' $c.toml)
+  for i in $(seq "$RUNS"); do
+    sed "s|^t_stop = .*|t_stop = $(python3 -c "print($NRUN*$dtl)")|; s|^interval = .*|interval = 1e9|" $c.toml > $c.speed.toml
+    $GF run $c.speed.toml --out gf.$c.t$i -q | awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'
+  done | median > gf.$c.speed
+  python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat gf.$c.speed)" >> "$out" <<'PY'
+import sys
+c, kl, kg, sl, sg = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])
+print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sg:.2f} | {sg/sl:.2f} |")
+PY
+done
+echo >> "$out"
+echo "Speeds are medians of $RUNS runs of $NRUN steps (particle-steps per second, millions)." >> "$out"
+cat "$out"
