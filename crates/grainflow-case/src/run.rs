@@ -80,6 +80,11 @@ pub struct RunSummary {
     pub interrupted: bool,
     /// The checkpoint written when interrupted or periodically, if any.
     pub checkpoint: Option<PathBuf>,
+    /// Wall-clock seconds per stage: neighbour search, walls, pairs, integration (engine) and
+    /// output (files), for the time loop.
+    pub stages: grainflow::StageTimes,
+    /// Wall-clock seconds spent writing output in the time loop.
+    pub output_seconds: f64,
     /// Files written.
     pub files: Vec<PathBuf>,
 }
@@ -230,6 +235,8 @@ fn run_simulation(
     on_progress: &mut dyn FnMut(&Simulation),
 ) -> Result<RunSummary, RunError> {
     let OutputSettings { interval, snapshots, vtk_interval } = output;
+    sim.enable_stage_timing();
+    let mut output_seconds = 0.0;
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let snap_dir = out.join("snapshots");
     if snapshots {
@@ -317,11 +324,13 @@ fn run_simulation(
                 last_good = (step, sim.checkpoint(hash));
             }
         }
+        let t_out = Instant::now();
         if output_now {
             last = emit(&sim, &mut ts, &mut files)?;
             outputs += 1;
         }
         write_vtk(&sim, end)?;
+        output_seconds += t_out.elapsed().as_secs_f64();
         if step % progress_every == 0 || end {
             on_progress(&sim);
         }
@@ -374,6 +383,8 @@ fn run_simulation(
         },
         interrupted,
         checkpoint,
+        stages: sim.stage_times().unwrap_or_default(),
+        output_seconds,
         files,
     })
 }

@@ -248,6 +248,21 @@ pub fn main(args: RunArgs) -> ExitCode {
                 "wall time {:.3} s, {:.3e} particle-steps/s",
                 s.wall_seconds, s.particle_steps_per_second
             );
+            let st = s.stages;
+            let pct = |t: f64| if s.wall_seconds > 0.0 { 100.0 * t / s.wall_seconds } else { 0.0 };
+            println!(
+                "stages: neighbour search {:.3} s ({:.0} %), walls {:.3} s ({:.0} %), pairs {:.3} s ({:.0} %), integration {:.3} s ({:.0} %), output {:.3} s ({:.0} %)",
+                st.neighbor,
+                pct(st.neighbor),
+                st.walls,
+                pct(st.walls),
+                st.pairs,
+                pct(st.pairs),
+                st.integrate,
+                pct(st.integrate),
+                s.output_seconds,
+                pct(s.output_seconds)
+            );
             if s.interrupted {
                 let at = s.checkpoint.as_ref().map_or("(no checkpoint)".into(), |c| c.display().to_string());
                 eprintln!(

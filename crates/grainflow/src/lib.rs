@@ -49,7 +49,7 @@ pub use material::{Phase, WallMaterial};
 pub use math::Vec3;
 pub use motion::{MotionRule, PrescribedMotion};
 pub use observe::Diagnostics;
-pub use simulation::{ContactInfo, ContactPartner, Simulation, SimulationConfig};
+pub use simulation::{ContactInfo, ContactPartner, Simulation, SimulationConfig, StageTimes};
 pub use state::Particles;
 pub use timestep::{TimeStepChoice, TimeStepRule};
 pub use wall::Wall;

@@ -85,6 +85,8 @@ pub struct Simulation {
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
     forces_current: bool,
+    /// Per-stage wall-clock times, when enabled.
+    timing: Option<StageTimes>,
 }
 
 impl Simulation {
@@ -181,6 +183,7 @@ impl Simulation {
             free,
             history_started: false,
             forces_current: false,
+            timing: None,
         })
     }
 
@@ -297,8 +300,19 @@ impl Simulation {
         Ok(())
     }
 
+    /// Starts measuring the wall-clock time of each stage (a few clock reads per step).
+    pub fn enable_stage_timing(&mut self) {
+        self.timing.get_or_insert_with(StageTimes::default);
+    }
+
+    /// The stage times so far, if timing is on.
+    pub fn stage_times(&self) -> Option<StageTimes> {
+        self.timing
+    }
+
     /// Advances one step: contact forces, integration, prescribed motion.
     pub fn step(&mut self) {
+        let start = self.timing.map(|t| (std::time::Instant::now(), t));
         let dt = self.time_step.dt;
         let g = self.gravity;
         match self.integrator {
@@ -342,6 +356,12 @@ impl Simulation {
             }
         }
         self.step += 1;
+        if let (Some((t0, before)), Some(now)) = (start, self.timing.as_mut()) {
+            // Whatever the step spent outside the force stages is integration.
+            let forces =
+                (now.neighbor - before.neighbor) + (now.walls - before.walls) + (now.pairs - before.pairs);
+            now.integrate += (t0.elapsed().as_secs_f64() - forces).max(0.0);
+        }
     }
 
     /// Takes up to `steps` steps (stopping at the end of the run), calling `hook` after each
@@ -374,8 +394,12 @@ impl Simulation {
     /// are those of the stored springs as they are (s = h), and nothing is stored — so
     /// evaluating the same state again gives the same forces and leaves the history alone.
     fn evaluate_forces(&mut self, advance_history: bool) {
+        let t0 = self.timing.map(|_| std::time::Instant::now());
         self.neighbors.update(&self.particles, &self.walls);
         self.particles.clear_forces();
+        if let (Some(t0), Some(t)) = (t0, self.timing.as_mut()) {
+            t.neighbor += t0.elapsed().as_secs_f64();
+        }
         use NormalModel::*;
         use TangentialModel::*;
         match (self.law.normal, self.law.tangential) {
@@ -395,6 +419,7 @@ impl Simulation {
         let damping = self.law.damping;
         let held = &self.held;
         let per = self.periodic;
+        let clock = self.timing.map(|_| std::time::Instant::now());
         let p = &mut self.particles;
         let nl = &mut self.neighbors;
         // Walls first, as MFIX does.
@@ -415,6 +440,7 @@ impl Simulation {
             p.torque[i] +=
                 f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
         }
+        let walls_done = clock.map(|c| c.elapsed().as_secs_f64());
         for (k, &[i, j]) in nl.pairs.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
             let Some(g) = pair_geometry(p, i, j, lever, &per) else {
@@ -439,6 +465,10 @@ impl Simulation {
                 + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
             p.torque[j] += f.torque(torque_lever(lever, g.lever_j, g.overlap), g.normal)
                 + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[j]);
+        }
+        if let (Some(c), Some(w), Some(t)) = (clock, walls_done, self.timing.as_mut()) {
+            t.walls += w;
+            t.pairs += c.elapsed().as_secs_f64() - w;
         }
     }
 
@@ -528,6 +558,19 @@ impl Simulation {
         }
         d
     }
+}
+
+/// Wall-clock seconds spent in each stage of the step, when timing is on.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Neighbour search (rebuild checks and rebuilds).
+    pub neighbor: f64,
+    /// Particle–wall contacts.
+    pub walls: f64,
+    /// Particle–particle contacts.
+    pub pairs: f64,
+    /// Integration, prescribed motion, periodic wrapping.
+    pub integrate: f64,
 }
 
 /// The other side of a contact.
