@@ -675,6 +675,18 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
     if init.is_empty() {
         return Err(CaseError::missing("[particles]", "file or list", "at least one particle"));
     }
+    match praw.order.as_deref() {
+        None | Some("input") => {}
+        Some("spatial") => sort_along_morton_curve(&mut init, min, max),
+        Some(other) => {
+            return Err(CaseError::invalid(
+                "[particles]",
+                "order",
+                format!("\"{other}\""),
+                "must be \"input\" or \"spatial\"",
+            ));
+        }
+    }
     let particles = Particles::from_init(&init);
 
     // Prescribed motion.
@@ -829,6 +841,26 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         hash: String::new(),
         warnings,
     })
+}
+
+/// Sorts particles along a Morton (Z-order) curve over the domain box, 2^21 cells per axis, so
+/// that particles close in space are close in memory.
+fn sort_along_morton_curve(init: &mut [ParticleInit], lo: Vec3, hi: Vec3) {
+    fn spread(v: u64) -> u64 {
+        // Interleave: bit k of v goes to bit 3k.
+        let mut x = v & 0x1f_ffff;
+        x = (x | x << 32) & 0x1f00000000ffff;
+        x = (x | x << 16) & 0x1f0000ff0000ff;
+        x = (x | x << 8) & 0x100f00f00f00f00f;
+        x = (x | x << 4) & 0x10c30c30c30c30c3;
+        (x | x << 2) & 0x1249249249249249
+    }
+    let scale = (hi - lo).max(Vec3::splat(f64::MIN_POSITIVE));
+    let key = |x: Vec3| {
+        let u = ((x - lo) / scale).clamp(Vec3::ZERO, Vec3::ONE) * ((1u64 << 21) - 1) as f64;
+        spread(u.x as u64) | spread(u.y as u64) << 1 | spread(u.z as u64) << 2
+    };
+    init.sort_by_key(|p| (key(p.position), p.id));
 }
 
 /// Default of `[particles] max_initial_overlap`.

@@ -24,12 +24,12 @@ pub struct NeighborStats {
 #[derive(Debug, Clone, Default)]
 pub struct NeighborList {
     skin: f64,
-    /// Candidate pairs as particle slots (i, j), ordered so that id[i] < id[j], sorted by ids.
+    /// Candidate pairs as particle slots (i, j), with id[i] < id[j], ordered by slots.
     pub pairs: Vec<[u32; 2]>,
     pair_keys: Vec<u64>,
     /// Tangential history of each pair, seen from the lower-id particle.
     pub pair_history: Vec<Vec3>,
-    /// Candidate particle–wall pairs (slot, wall index), sorted by (id, wall).
+    /// Candidate particle–wall pairs (slot, wall index), ordered by slots.
     pub wall_pairs: Vec<[u32; 2]>,
     wall_keys: Vec<u64>,
     /// Tangential history of each particle–wall pair.
@@ -327,13 +327,7 @@ impl NeighborList {
             }
             self.stats.distance_checks += checks;
         }
-        self.new_pairs.sort_unstable_by_key(|e| e.0);
-        let (keys, hist) =
-            merge_history(&self.pair_keys, &self.pair_history, self.new_pairs.iter().map(|e| e.0));
-        self.pairs.clear();
-        self.pairs.extend(self.new_pairs.iter().map(|e| e.1));
-        self.pair_keys = keys;
-        self.pair_history = hist;
+        renew(&mut self.new_pairs, &mut self.pairs, &mut self.pair_keys, &mut self.pair_history);
     }
 
     fn build_walls(&mut self, p: &Particles, walls: &[Wall]) {
@@ -347,32 +341,38 @@ impl NeighborList {
                 }
             }
         }
-        self.new_pairs.sort_unstable_by_key(|e| e.0);
-        let (keys, hist) =
-            merge_history(&self.wall_keys, &self.wall_history, self.new_pairs.iter().map(|e| e.0));
-        self.wall_pairs.clear();
-        self.wall_pairs.extend(self.new_pairs.iter().map(|e| e.1));
-        self.wall_keys = keys;
-        self.wall_history = hist;
+        renew(&mut self.new_pairs, &mut self.wall_pairs, &mut self.wall_keys, &mut self.wall_history);
     }
 }
 
-/// New keys (sorted) take the history of equal old keys (sorted), zero otherwise.
-fn merge_history(
-    old_keys: &[u64],
-    old_hist: &[Vec3],
-    new_keys: impl Iterator<Item = u64>,
-) -> (Vec<u64>, Vec<Vec3>) {
-    let mut keys = Vec::new();
-    let mut hist = Vec::new();
+/// Replaces the entries `(slots, keys, history)` by the `fresh` ones: each takes the history of
+/// the old entry with the same key (particle ids, or id and wall), zero if it is new. The
+/// result is ordered by slots — the order the force loop then walks memory in.
+fn renew(
+    fresh: &mut [(u64, [u32; 2])],
+    slots: &mut Vec<[u32; 2]>,
+    keys: &mut Vec<u64>,
+    hist: &mut Vec<Vec3>,
+) {
+    let mut old: Vec<(u64, Vec3)> = keys.iter().copied().zip(hist.iter().copied()).collect();
+    old.sort_unstable_by_key(|e| e.0);
+    fresh.sort_unstable_by_key(|e| e.0);
+    let mut merged: Vec<([u32; 2], u64, Vec3)> = Vec::with_capacity(fresh.len());
     let mut k = 0;
-    for key in new_keys {
-        while k < old_keys.len() && old_keys[k] < key {
+    for &(key, s) in fresh.iter() {
+        while k < old.len() && old[k].0 < key {
             k += 1;
         }
-        let h = if k < old_keys.len() && old_keys[k] == key { old_hist[k] } else { Vec3::ZERO };
+        let h = if k < old.len() && old[k].0 == key { old[k].1 } else { Vec3::ZERO };
+        merged.push((s, key, h));
+    }
+    merged.sort_unstable_by_key(|e| e.0);
+    slots.clear();
+    keys.clear();
+    hist.clear();
+    for (s, key, h) in merged {
+        slots.push(s);
         keys.push(key);
         hist.push(h);
     }
-    (keys, hist)
 }

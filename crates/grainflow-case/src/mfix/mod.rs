@@ -1171,7 +1171,13 @@ impl Translator<'_> {
                 ),
             ));
         }
-        let mut raw = RawParticles { file: None, format: None, max_initial_overlap: None, list: Vec::new() };
+        let mut raw = RawParticles {
+            file: None,
+            format: None,
+            max_initial_overlap: None,
+            order: None,
+            list: Vec::new(),
+        };
         let mut extra_source = String::new();
         let init = if self.cgs {
             let mut init = Vec::new();
