@@ -166,8 +166,10 @@ impl NeighborList {
         }
         let lim = 0.25 * self.skin * self.skin;
         let per = self.periodic;
+        let periodic = per.any();
         positions.iter().zip(&self.reference).any(|(x, r)| {
-            let d2 = per.min_image(*x - *r).length_squared();
+            let d = *x - *r;
+            let d2 = if periodic { per.min_image(d) } else { d }.length_squared();
             d2 > lim || d2.is_nan()
         })
     }

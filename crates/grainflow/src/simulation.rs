@@ -417,6 +417,7 @@ impl Simulation {
         let clip = self.law.clip_attraction;
         let cap = self.law.coulomb;
         let damping = self.law.damping;
+        let per_mass = damping.per_particle_mass();
         let held = &self.held;
         let per = self.periodic;
         let clock = self.timing.map(|_| std::time::Instant::now());
@@ -429,7 +430,8 @@ impl Simulation {
                 nl.wall_history[k] = Vec3::ZERO;
                 continue;
             };
-            let c = scaled_damping(self.coeffs.wall(p.phase[i] as usize, wall.material), damping, p.mass[i]);
+            let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+            let c = if per_mass { scaled_damping(c, damping, p.mass[i]) } else { *c };
             let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
             let mut h = nl.wall_history[k];
             let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, cap, &c, &g, v_r, &mut h, dt);
@@ -447,11 +449,8 @@ impl Simulation {
                 nl.pair_history[k] = Vec3::ZERO;
                 continue;
             };
-            let c = scaled_damping(
-                self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize),
-                damping,
-                pair_mass(p, held, i, j),
-            );
+            let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+            let c = if per_mass { scaled_damping(c, damping, pair_mass(p, held, i, j)) } else { *c };
             let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
             let mut h = nl.pair_history[k];
             let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, cap, &c, &g, v_r, &mut h, dt);
@@ -637,8 +636,9 @@ fn pair_geometry(
     lever: LeverArm,
     per: &Periodic,
 ) -> Option<ContactGeometry> {
-    let mut g =
-        pair_contact_separation(per.min_image(p.position[j] - p.position[i]), p.radius[i], p.radius[j])?;
+    let d = p.position[j] - p.position[i];
+    let d = if per.any() { per.min_image(d) } else { d };
+    let mut g = pair_contact_separation(d, p.radius[i], p.radius[j])?;
     if lever != LeverArm::RadicalPlane {
         (g.lever_i, g.lever_j) = (p.radius[i], p.radius[j]);
     }
