@@ -46,7 +46,7 @@ use crate::check::Check;
 use crate::dem01::{FloorContact, GRAVITY, H0, RADIUS, set_kn_en};
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, summary_markdown, write_file};
+use crate::suite::{CaseOutcome, SuiteOptions};
 use grainflow::Simulation;
 use grainflow_case::Case;
 use rayon::prelude::*;
@@ -416,12 +416,15 @@ fn figure(runs: &[RunResult]) -> Figure {
 pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, VerifyError> {
     let start = Instant::now();
     let report = evaluate()?;
-    let out = case_dir(dir, "dem02")?;
-    let mut files = Vec::new();
-    write_file(out.join("dem02.csv"), &csv(&report.runs), &mut files)?;
-    let png = crate::suite::write_figure(&out, "dem02", &figure(&report.runs), &mut files)?;
     let title = "bouncing particle height (MFIX DEM02)";
-    write_file(out.join("summary.md"), &summary_markdown(title, &report.checks), &mut files)?;
+    let (files, png) = crate::suite::write_case_files(
+        dir,
+        "dem02",
+        title,
+        &csv(&report.runs),
+        &figure(&report.runs),
+        &report.checks,
+    )?;
     // The size of the gravity effect on the first bounce, softest and stiffest spring, e_n = 0.5.
     let first = |kn: f64| {
         report

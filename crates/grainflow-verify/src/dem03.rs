@@ -32,7 +32,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, summary_markdown, write_file};
+use crate::suite::{CaseOutcome, SuiteOptions};
 use grainflow::contact::damping_coefficient;
 use grainflow::{Simulation, TimeStepRule};
 use grainflow_case::Case;
@@ -549,13 +549,10 @@ fn figure(runs: &[RunResult], convergence: &[Convergence]) -> Figure {
 pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, VerifyError> {
     let start = Instant::now();
     let report = evaluate()?;
-    let out = case_dir(dir, "dem03")?;
-    let mut files = Vec::new();
-    write_file(out.join("dem03.csv"), &csv(&report.runs), &mut files)?;
-    let png =
-        crate::suite::write_figure(&out, "dem03", &figure(&report.runs, &report.convergence), &mut files)?;
     let title = "two stacked, compressed particles (MFIX DEM03)";
-    write_file(out.join("summary.md"), &summary_markdown(title, &report.checks), &mut files)?;
+    let fig = figure(&report.runs, &report.convergence);
+    let (files, png) =
+        crate::suite::write_case_files(dir, "dem03", title, &csv(&report.runs), &fig, &report.checks)?;
     let z = report.runs.first().map_or(f64::NAN, |r| r.system.omega_max() * r.dt);
     Ok(CaseOutcome {
         name: "dem03",

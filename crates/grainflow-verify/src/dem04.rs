@@ -39,7 +39,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, summary_markdown, write_file};
+use crate::suite::{CaseOutcome, SuiteOptions};
 use grainflow::Simulation;
 use grainflow_case::Case;
 use rayon::prelude::*;
@@ -428,12 +428,15 @@ fn figure(runs: &[RunResult]) -> Figure {
 pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, VerifyError> {
     let start = Instant::now();
     let report = evaluate()?;
-    let out = case_dir(dir, "dem04")?;
-    let mut files = Vec::new();
-    write_file(out.join("dem04.csv"), &csv(&report.runs), &mut files)?;
-    let png = crate::suite::write_figure(&out, "dem04", &figure(&report.runs), &mut files)?;
     let title = "ball slipping on a rough surface (MFIX DEM04)";
-    write_file(out.join("summary.md"), &summary_markdown(title, &report.checks), &mut files)?;
+    let (files, png) = crate::suite::write_case_files(
+        dir,
+        "dem04",
+        title,
+        &csv(&report.runs),
+        &figure(&report.runs),
+        &report.checks,
+    )?;
     let ratio = report.runs.first().map_or(f64::NAN, |r| 1.0 / (r.omega0 * r.dt));
     Ok(CaseOutcome {
         name: "dem04",

@@ -265,6 +265,24 @@ pub fn write_figure(
     Ok(png)
 }
 
+/// Writes a case's usual files into `DIR/<name>/`: `<name>.csv`, the figure `<name>.png` and
+/// `.svg`, and `summary.md` with the checks; returns the files written and the PNG.
+pub fn write_case_files(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    csv: &str,
+    fig: &crate::plot::Figure,
+    checks: &[Check],
+) -> Result<(Vec<PathBuf>, PathBuf), VerifyError> {
+    let out = case_dir(dir, name)?;
+    let mut files = Vec::new();
+    write_file(out.join(format!("{name}.csv")), csv, &mut files)?;
+    let png = write_figure(&out, name, fig, &mut files)?;
+    write_file(out.join("summary.md"), &summary_markdown(title, checks), &mut files)?;
+    Ok((files, png))
+}
+
 /// A case's `summary.md`: title, the checks as a table, the count of failures.
 pub fn summary_markdown(title: &str, checks: &[Check]) -> String {
     let failed = checks.iter().filter(|c| !c.passed()).count();
