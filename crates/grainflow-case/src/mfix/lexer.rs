@@ -265,6 +265,11 @@ fn assignment_head(
     if k < chars.len() && chars[k] == '=' { Ok(Some((name, subscript, k + 1))) } else { Ok(None) }
 }
 
+/// The largest array a deck can address: far above MFIX's (phases, walls, boundary regions
+/// count in the hundreds), small enough that a mistyped repeat count or subscript cannot make
+/// the reader allocate without bound.
+const MAX_ELEMENTS: usize = 100_000;
+
 fn parse_subscript(inside: &str, name: &str, loc: &Loc) -> Result<Vec<Sub>, CaseError> {
     let bad = |what: &str| {
         CaseError::invalid(
@@ -280,7 +285,14 @@ fn parse_subscript(inside: &str, name: &str, loc: &Loc) -> Result<Vec<Sub>, Case
     for part in inside.split(',') {
         let part = part.trim();
         let int = |s: &str| {
-            s.trim().parse::<i64>().map_err(|_| bad(&format!("`{}` is not a whole number", s.trim())))
+            let v =
+                s.trim().parse::<i64>().map_err(|_| bad(&format!("`{}` is not a whole number", s.trim())))?;
+            if v.abs() > MAX_ELEMENTS as i64 {
+                return Err(bad(&format!(
+                    "`{v}` is beyond any MFIX array (at most {MAX_ELEMENTS} elements)"
+                )));
+            }
+            Ok(v)
         };
         if let Some((a, b)) = part.split_once(':') {
             let (a, b) = (int(a)?, int(b)?);
@@ -303,7 +315,15 @@ fn value_item(chars: &[char], i: usize, loc: &Loc) -> Result<(Vec<Option<Value>>
     if digits > 0 && chars.get(i + digits) == Some(&'*') {
         let count_text: String = chars[i..i + digits].iter().collect();
         let j = i + digits + 1;
-        let count: usize = count_text.parse().unwrap_or(0);
+        let count: usize = count_text.parse().unwrap_or(usize::MAX);
+        if count > MAX_ELEMENTS {
+            return Err(syntax(
+                loc,
+                format!(
+                    "repeat count `{count_text}*` is beyond any MFIX array (at most {MAX_ELEMENTS} elements)"
+                ),
+            ));
+        }
         if count == 0 {
             return Err(syntax(
                 loc,
