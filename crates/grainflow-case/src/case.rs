@@ -913,7 +913,7 @@ fn check_geometry(
     }
     let mut nl = grainflow::neighbor::NeighborList::new(0.0);
     nl.build(p, &[]);
-    for &[i, j] in &nl.pairs {
+    for [i, j] in nl.pairs() {
         let (i, j) = (i as usize, j as usize);
         let overlap = p.radius[i] + p.radius[j] - (p.position[j] - p.position[i]).length();
         let r = p.radius[i].min(p.radius[j]);

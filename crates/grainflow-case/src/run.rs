@@ -51,6 +51,8 @@ pub struct RunOptions {
     pub accept_changed_case: bool,
     /// Raised from outside (a signal handler) to stop after the current step.
     pub stop: Option<Arc<AtomicBool>>,
+    /// Threads of the force stage (None: one). The results do not depend on it.
+    pub threads: Option<usize>,
 }
 
 /// What a finished (or interrupted) run reports.
@@ -76,6 +78,10 @@ pub struct RunSummary {
     pub wall_seconds: f64,
     /// Particle-steps per wall-clock second.
     pub particle_steps_per_second: f64,
+    /// Threads of the force stage.
+    pub threads: usize,
+    /// Heap bytes of the particles, the neighbour list and the threads' plan at the end.
+    pub memory: grainflow::MemoryUse,
     /// True when the run was stopped by the `stop` flag before its end.
     pub interrupted: bool,
     /// The checkpoint written when interrupted or periodically, if any.
@@ -236,6 +242,9 @@ fn run_simulation(
 ) -> Result<RunSummary, RunError> {
     let OutputSettings { interval, snapshots, vtk_interval } = output;
     sim.enable_stage_timing();
+    if let Some(t) = options.threads {
+        sim.set_threads(t)?;
+    }
     let mut output_seconds = 0.0;
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let snap_dir = out.join("snapshots");
@@ -381,6 +390,8 @@ fn run_simulation(
         } else {
             0.0
         },
+        threads: sim.threads(),
+        memory: sim.heap_bytes(),
         interrupted,
         checkpoint,
         stages: sim.stage_times().unwrap_or_default(),

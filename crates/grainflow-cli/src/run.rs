@@ -113,6 +113,10 @@ pub struct RunArgs {
     /// after fixing the time step of a failed run); particles must still match.
     #[arg(long, requires = "restart")]
     accept_changed_case: bool,
+    /// Threads of the force stage (default: every core). Results are bit-identical for any
+    /// count.
+    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
 }
 
 /// Exit code of a run stopped by SIGINT/SIGTERM (128 + SIGINT, the shell's convention).
@@ -202,6 +206,11 @@ pub fn main(args: RunArgs) -> ExitCode {
         restart: args.restart.clone(),
         accept_changed_case: args.accept_changed_case,
         stop: Some(stop),
+        threads: Some(
+            args.threads
+                .map(usize::from)
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+        ),
     };
     let info = RunInfo {
         case: &args.case,
@@ -245,8 +254,19 @@ pub fn main(args: RunArgs) -> ExitCode {
                 s.last.max_overlap_ratio
             );
             println!(
-                "wall time {:.3} s, {:.3e} particle-steps/s",
-                s.wall_seconds, s.particle_steps_per_second
+                "wall time {:.3} s, {:.3e} particle-steps/s on {} thread{}",
+                s.wall_seconds,
+                s.particle_steps_per_second,
+                s.threads,
+                if s.threads == 1 { "" } else { "s" }
+            );
+            let m = s.memory;
+            let per = |b: usize| b as f64 / n.max(1) as f64;
+            println!(
+                "memory: particles {:.0} B, neighbour list and contact history {:.0} B, thread plan {:.0} B per particle (heap, at the end)",
+                per(m.particles),
+                per(m.neighbors),
+                per(m.threads)
             );
             let st = s.stages;
             let pct = |t: f64| if s.wall_seconds > 0.0 { 100.0 * t / s.wall_seconds } else { 0.0 };

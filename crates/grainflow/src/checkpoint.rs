@@ -13,8 +13,8 @@ use crate::simulation::{Simulation, SimulationConfig};
 use crate::state::Particles;
 use thiserror::Error;
 
-/// The checkpoint format this build writes and reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// The checkpoint format this build writes and reads (2: pairs by slots, without id keys).
+pub const FORMAT_VERSION: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
 
 /// Why a checkpoint cannot be used.
@@ -79,12 +79,6 @@ impl Enc {
             self.0.extend_from_slice(&x.to_le_bytes());
         }
     }
-    fn u64s(&mut self, v: &[u64]) {
-        self.u64(v.len() as u64);
-        for x in v {
-            self.u64(*x);
-        }
-    }
     fn f64s(&mut self, v: &[f64]) {
         self.u64(v.len() as u64);
         for x in v {
@@ -140,10 +134,6 @@ impl<'a> Dec<'a> {
         let b = self.take(4 * n, what)?;
         Ok(b.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
     }
-    fn u64s(&mut self, what: &'static str) -> Result<Vec<u64>, CheckpointError> {
-        let n = self.len(8, what)?;
-        (0..n).map(|_| self.u64(what)).collect()
-    }
     fn f64s(&mut self, what: &'static str) -> Result<Vec<f64>, CheckpointError> {
         let n = self.len(8, what)?;
         (0..n).map(|_| self.f64(what)).collect()
@@ -187,10 +177,8 @@ impl Simulation {
         e.f64(n.skin);
         e.u64(n.built as u64);
         e.pairs(&n.pairs);
-        e.u64s(&n.pair_keys);
         e.vec3s(&n.pair_history);
         e.pairs(&n.wall_pairs);
-        e.u64s(&n.wall_keys);
         e.vec3s(&n.wall_history);
         e.vec3s(&n.reference);
         e.vec3s(&self.motion_anchors());
@@ -268,10 +256,8 @@ impl Simulation {
             skin: d.f64("skin")?,
             built: d.u64("flags")? != 0,
             pairs: d.pairs("pairs")?,
-            pair_keys: d.u64s("pair keys")?,
             pair_history: d.vec3s("pair history")?,
             wall_pairs: d.pairs("wall pairs")?,
-            wall_keys: d.u64s("wall keys")?,
             wall_history: d.vec3s("wall history")?,
             reference: d.vec3s("reference positions")?,
         };

@@ -34,65 +34,158 @@ impl Integrator {
     }
 }
 
-#[inline(always)]
-fn accelerations(p: &Particles, i: usize, gravity: Vec3) -> (Vec3, Vec3) {
-    (p.force[i] * p.inv_mass[i] + gravity, p.torque[i] * p.inv_inertia[i])
-}
+/// Particles per piece of work when integrating on several threads.
+const CHUNK: usize = 4096;
 
-/// MFIX's `EULER` step.
-pub fn euler(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64) {
-    for i in range {
-        let (a, alpha) = accelerations(p, i, gravity);
-        p.velocity[i] += dt * a;
-        p.position[i] += dt * p.velocity[i];
-        p.omega[i] += dt * alpha;
+/// MFIX's `EULER` step. With `parallel`, on the current rayon pool (the result is the same:
+/// every particle is updated on its own).
+pub fn euler(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
+    let kernel =
+        |x: &mut [Vec3], v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], im: &[f64], ii: &[f64]| {
+            for i in 0..x.len() {
+                let (a, alpha) = (f[i] * im[i] + gravity, t[i] * ii[i]);
+                v[i] += dt * a;
+                x[i] += dt * v[i];
+                w[i] += dt * alpha;
+            }
+        };
+    let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
+    let (f, t, im, ii) =
+        (&p.force[r.clone()], &p.torque[r.clone()], &p.inv_mass[r.clone()], &p.inv_inertia[r]);
+    if parallel {
+        use rayon::prelude::*;
+        (
+            x.par_chunks_mut(CHUNK),
+            v.par_chunks_mut(CHUNK),
+            w.par_chunks_mut(CHUNK),
+            f.par_chunks(CHUNK),
+            t.par_chunks(CHUNK),
+            im.par_chunks(CHUNK),
+            ii.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .for_each(|(x, v, w, f, t, im, ii)| kernel(x, v, w, f, t, im, ii));
+    } else {
+        kernel(x, v, w, f, t, im, ii);
     }
 }
 
 /// MFIX's `ADAMS_BASHFORTH` step. `first` marks the first step of the run, where the previous
 /// accelerations are taken equal to the current ones.
-pub fn adams_bashforth(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64, first: bool) {
+pub fn adams_bashforth(
+    p: &mut Particles,
+    r: Range<usize>,
+    gravity: Vec3,
+    dt: f64,
+    first: bool,
+    parallel: bool,
+) {
     let h = 0.5 * dt;
-    let r = range;
-    // Slicing every array to the range up front lets the compiler drop the bounds checks.
-    let (force, torque) = (&p.force[r.clone()], &p.torque[r.clone()]);
-    let (inv_m, inv_i) = (&p.inv_mass[r.clone()], &p.inv_inertia[r.clone()]);
-    let x = &mut p.position[r.clone()];
-    let v = &mut p.velocity[r.clone()];
-    let w = &mut p.omega[r.clone()];
-    let a_prev = &mut p.accel_prev[r.clone()];
-    let alpha_prev = &mut p.alpha_prev[r];
-    for i in 0..force.len() {
-        let a = force[i] * inv_m[i] + gravity;
-        let alpha = torque[i] * inv_i[i];
-        let (ap, alp) = if first { (a, alpha) } else { (a_prev[i], alpha_prev[i]) };
-        let v0 = v[i];
-        let v1 = v0 + h * (3.0 * a - ap);
-        x[i] += h * (v0 + v1);
-        v[i] = v1;
-        w[i] += h * (3.0 * alpha - alp);
-        a_prev[i] = a;
-        alpha_prev[i] = alpha;
+    let kernel = |x: &mut [Vec3],
+                  v: &mut [Vec3],
+                  w: &mut [Vec3],
+                  ap: &mut [Vec3],
+                  alp: &mut [Vec3],
+                  f: &[Vec3],
+                  t: &[Vec3],
+                  im: &[f64],
+                  ii: &[f64]| {
+        for i in 0..x.len() {
+            let a = f[i] * im[i] + gravity;
+            let alpha = t[i] * ii[i];
+            let (a_prev, alpha_prev) = if first { (a, alpha) } else { (ap[i], alp[i]) };
+            let v0 = v[i];
+            let v1 = v0 + h * (3.0 * a - a_prev);
+            x[i] += h * (v0 + v1);
+            v[i] = v1;
+            w[i] += h * (3.0 * alpha - alpha_prev);
+            ap[i] = a;
+            alp[i] = alpha;
+        }
+    };
+    let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
+    let (ap, alp) = (&mut p.accel_prev[r.clone()], &mut p.alpha_prev[r.clone()]);
+    let (f, t, im, ii) =
+        (&p.force[r.clone()], &p.torque[r.clone()], &p.inv_mass[r.clone()], &p.inv_inertia[r]);
+    if parallel {
+        use rayon::prelude::*;
+        (
+            x.par_chunks_mut(CHUNK),
+            v.par_chunks_mut(CHUNK),
+            w.par_chunks_mut(CHUNK),
+            ap.par_chunks_mut(CHUNK),
+            alp.par_chunks_mut(CHUNK),
+            f.par_chunks(CHUNK),
+            t.par_chunks(CHUNK),
+            im.par_chunks(CHUNK),
+            ii.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .for_each(|(x, v, w, ap, alp, f, t, im, ii)| kernel(x, v, w, ap, alp, f, t, im, ii));
+    } else {
+        kernel(x, v, w, ap, alp, f, t, im, ii);
     }
 }
 
 /// Velocity Verlet, first half: kick by Δt/2 with the current accelerations, then drift by Δt.
-pub fn verlet_kick_drift(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64) {
+pub fn verlet_kick_drift(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
     let h = 0.5 * dt;
-    for i in range {
-        let (a, alpha) = accelerations(p, i, gravity);
-        p.velocity[i] += h * a;
-        p.omega[i] += h * alpha;
-        p.position[i] += dt * p.velocity[i];
+    let kernel =
+        |x: &mut [Vec3], v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], im: &[f64], ii: &[f64]| {
+            for i in 0..x.len() {
+                let (a, alpha) = (f[i] * im[i] + gravity, t[i] * ii[i]);
+                v[i] += h * a;
+                w[i] += h * alpha;
+                x[i] += dt * v[i];
+            }
+        };
+    let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
+    let (f, t, im, ii) =
+        (&p.force[r.clone()], &p.torque[r.clone()], &p.inv_mass[r.clone()], &p.inv_inertia[r]);
+    if parallel {
+        use rayon::prelude::*;
+        (
+            x.par_chunks_mut(CHUNK),
+            v.par_chunks_mut(CHUNK),
+            w.par_chunks_mut(CHUNK),
+            f.par_chunks(CHUNK),
+            t.par_chunks(CHUNK),
+            im.par_chunks(CHUNK),
+            ii.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .for_each(|(x, v, w, f, t, im, ii)| kernel(x, v, w, f, t, im, ii));
+    } else {
+        kernel(x, v, w, f, t, im, ii);
     }
 }
 
 /// Velocity Verlet, second half: kick by Δt/2 with the new accelerations.
-pub fn verlet_kick(p: &mut Particles, range: Range<usize>, gravity: Vec3, dt: f64) {
+pub fn verlet_kick(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
     let h = 0.5 * dt;
-    for i in range {
-        let (a, alpha) = accelerations(p, i, gravity);
-        p.velocity[i] += h * a;
-        p.omega[i] += h * alpha;
+    let kernel = |v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], im: &[f64], ii: &[f64]| {
+        for i in 0..v.len() {
+            let (a, alpha) = (f[i] * im[i] + gravity, t[i] * ii[i]);
+            v[i] += h * a;
+            w[i] += h * alpha;
+        }
+    };
+    let (v, w) = (&mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
+    let (f, t, im, ii) =
+        (&p.force[r.clone()], &p.torque[r.clone()], &p.inv_mass[r.clone()], &p.inv_inertia[r]);
+    if parallel {
+        use rayon::prelude::*;
+        (
+            v.par_chunks_mut(CHUNK),
+            w.par_chunks_mut(CHUNK),
+            f.par_chunks(CHUNK),
+            t.par_chunks(CHUNK),
+            im.par_chunks(CHUNK),
+            ii.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .for_each(|(v, w, f, t, im, ii)| kernel(v, w, f, t, im, ii));
+    } else {
+        kernel(v, w, f, t, im, ii);
     }
 }

@@ -4,7 +4,8 @@
 //! The list holds every particle pair closer than R_i + R_j + skin and every particle–wall pair
 //! closer than R + skin, so between rebuilds no contact can be missed. Each entry carries the
 //! contact's tangential history; on a rebuild, entries that persist keep it (matched by the
-//! stable ids of the particles, and the wall index), new entries start from zero.
+//! slots of the two particles, or the slot and the wall index — slots never change during a
+//! run), new entries start from zero.
 
 use crate::boundary::Periodic;
 use crate::math::Vec3;
@@ -21,19 +22,20 @@ pub struct NeighborStats {
 }
 
 /// The Verlet list with its contact histories.
+///
+/// Pairs are stored as a half list in compressed rows: the partners of slot `a` are the slots
+/// `b > a` in `partners[offsets[a]..offsets[a + 1]]`, ascending. Pair `k` (its place in that
+/// order) carries its tangential history in `pair_history[k]`, seen from the lower slot `a`.
+/// This is the order the force loop walks memory in and sums forces in.
 #[derive(Debug, Clone, Default)]
 pub struct NeighborList {
     skin: f64,
-    /// Candidate pairs as particle slots (i, j), with id[i] < id[j], ordered by slots.
-    pub pairs: Vec<[u32; 2]>,
-    pair_keys: Vec<u64>,
-    /// Tangential history of each pair, seen from the lower-id particle.
-    pub pair_history: Vec<Vec3>,
+    offsets: Vec<usize>,
+    partners: Vec<u32>,
+    pair_history: Vec<Vec3>,
     /// Candidate particle–wall pairs (slot, wall index), ordered by slots.
-    pub wall_pairs: Vec<[u32; 2]>,
-    wall_keys: Vec<u64>,
-    /// Tangential history of each particle–wall pair.
-    pub wall_history: Vec<Vec3>,
+    wall_pairs: Vec<[u32; 2]>,
+    wall_history: Vec<Vec3>,
     reference: Vec<Vec3>,
     built: bool,
     stats: NeighborStats,
@@ -45,7 +47,7 @@ pub struct NeighborList {
     cell_count: Vec<u32>,
     cell_of: Vec<u32>,
     sorted: Vec<u32>,
-    new_pairs: Vec<(u64, [u32; 2])>,
+    fresh: Vec<u64>,
 }
 
 /// Everything of a [`NeighborList`] that a checkpoint must carry.
@@ -55,16 +57,12 @@ pub struct NeighborState {
     pub skin: f64,
     /// Whether the list was built.
     pub built: bool,
-    /// Candidate pairs (slots).
+    /// Candidate pairs (slots a < b), in list order.
     pub pairs: Vec<[u32; 2]>,
-    /// Their (id, id) keys.
-    pub pair_keys: Vec<u64>,
-    /// Their tangential histories.
+    /// Their tangential histories, seen from slot a.
     pub pair_history: Vec<Vec3>,
     /// Candidate particle–wall pairs (slot, wall).
     pub wall_pairs: Vec<[u32; 2]>,
-    /// Their (id, wall) keys.
-    pub wall_keys: Vec<u64>,
     /// Their tangential histories.
     pub wall_history: Vec<Vec3>,
     /// Positions at the last build.
@@ -87,9 +85,10 @@ const HALF_SHELL: [(i64, i64, i64); 13] = [
     (1, 1, 1),
 ];
 
+/// The sort key of the pair of slots a < b (or of a slot and a wall index).
 #[inline]
-fn pair_key(id_a: u32, id_b: u32) -> u64 {
-    ((id_a as u64) << 32) | id_b as u64
+fn pair_key(a: u32, b: u32) -> u64 {
+    ((a as u64) << 32) | b as u64
 }
 
 impl NeighborList {
@@ -120,38 +119,124 @@ impl NeighborList {
         NeighborState {
             skin: self.skin,
             built: self.built,
-            pairs: self.pairs.clone(),
-            pair_keys: self.pair_keys.clone(),
+            pairs: self.pairs().collect(),
             pair_history: self.pair_history.clone(),
             wall_pairs: self.wall_pairs.clone(),
-            wall_keys: self.wall_keys.clone(),
             wall_history: self.wall_history.clone(),
             reference: self.reference.clone(),
         }
     }
 
-    /// Restores a checkpointed state; `n` particles and `n_walls` walls must fit it.
+    /// Restores a checkpointed state; `n` particles and `n_walls` walls must fit it. Pairs
+    /// stored the other way round (b < a) are turned, with their history negated (the history
+    /// seen from the other particle); the list is put in its order.
     pub fn set_state(&mut self, s: NeighborState, n: usize, n_walls: usize) -> Result<(), String> {
-        let lens_ok = s.pairs.len() == s.pair_keys.len()
-            && s.pairs.len() == s.pair_history.len()
-            && s.wall_pairs.len() == s.wall_keys.len()
+        let lens_ok = s.pairs.len() == s.pair_history.len()
             && s.wall_pairs.len() == s.wall_history.len()
             && (s.reference.len() == n || !s.built);
-        let in_range = s.pairs.iter().flatten().all(|&i| (i as usize) < n)
+        let in_range = s.pairs.iter().all(|&[a, b]| (a as usize) < n && (b as usize) < n && a != b)
             && s.wall_pairs.iter().all(|&[i, w]| (i as usize) < n && (w as usize) < n_walls);
         if !(lens_ok && in_range) {
             return Err("the neighbour list does not fit the particles and walls of the case".into());
         }
+        let mut pairs: Vec<(u64, Vec3)> = s
+            .pairs
+            .iter()
+            .zip(&s.pair_history)
+            .map(|(&[a, b], &h)| if a < b { (pair_key(a, b), h) } else { (pair_key(b, a), -h) })
+            .collect();
+        pairs.sort_unstable_by_key(|e| e.0);
+        let mut walls: Vec<(u64, Vec3)> =
+            s.wall_pairs.iter().zip(&s.wall_history).map(|(&[i, w], &h)| (pair_key(i, w), h)).collect();
+        walls.sort_unstable_by_key(|e| e.0);
+        if pairs.windows(2).any(|w| w[0].0 == w[1].0) || walls.windows(2).any(|w| w[0].0 == w[1].0) {
+            return Err("the neighbour list holds a pair twice".into());
+        }
         self.skin = s.skin;
         self.built = s.built;
-        self.pairs = s.pairs;
-        self.pair_keys = s.pair_keys;
-        self.pair_history = s.pair_history;
-        self.wall_pairs = s.wall_pairs;
-        self.wall_keys = s.wall_keys;
-        self.wall_history = s.wall_history;
+        self.offsets.clear();
+        self.offsets.resize(n + 1, 0);
+        for &(key, _) in &pairs {
+            self.offsets[(key >> 32) as usize + 1] += 1;
+        }
+        for a in 0..n {
+            self.offsets[a + 1] += self.offsets[a];
+        }
+        self.partners = pairs.iter().map(|e| e.0 as u32).collect();
+        self.pair_history = pairs.iter().map(|e| e.1).collect();
+        self.wall_pairs = walls.iter().map(|e| [(e.0 >> 32) as u32, e.0 as u32]).collect();
+        self.wall_history = walls.iter().map(|e| e.1).collect();
         self.reference = s.reference;
         Ok(())
+    }
+
+    /// Number of particle pairs in the list.
+    pub fn pair_count(&self) -> usize {
+        self.partners.len()
+    }
+
+    /// Every pair (a, b) of slots, a < b, in list order (pair k is the k-th).
+    pub fn pairs(&self) -> impl Iterator<Item = [u32; 2]> + '_ {
+        self.offsets
+            .windows(2)
+            .enumerate()
+            .flat_map(move |(a, w)| self.partners[w[0]..w[1]].iter().map(move |&b| [a as u32, b]))
+    }
+
+    /// Row offsets: the pairs of slot a are `offsets()[a]..offsets()[a + 1]` (n + 1 entries,
+    /// or none before the first build).
+    pub fn offsets(&self) -> &[usize] {
+        &self.offsets
+    }
+
+    /// The partner slot b of each pair, in list order.
+    pub fn partners(&self) -> &[u32] {
+        &self.partners
+    }
+
+    /// Tangential history of each pair, seen from the lower slot.
+    pub fn pair_history(&self) -> &[Vec3] {
+        &self.pair_history
+    }
+
+    /// Mutable pair histories (for tests and hooks that set a contact's state).
+    pub fn pair_history_mut(&mut self) -> &mut [Vec3] {
+        &mut self.pair_history
+    }
+
+    /// Candidate particle–wall pairs (slot, wall index), ordered by slots.
+    pub fn wall_pairs(&self) -> &[[u32; 2]] {
+        &self.wall_pairs
+    }
+
+    /// Tangential history of each particle–wall pair.
+    pub fn wall_history(&self) -> &[Vec3] {
+        &self.wall_history
+    }
+
+    /// Mutable wall histories.
+    pub fn wall_history_mut(&mut self) -> &mut [Vec3] {
+        &mut self.wall_history
+    }
+
+    /// The parts the force loop needs at once: (offsets, partners, pair histories, wall
+    /// pairs, wall histories).
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn split_mut(&mut self) -> (&[usize], &[u32], &mut [Vec3], &[[u32; 2]], &mut [Vec3]) {
+        (&self.offsets, &self.partners, &mut self.pair_history, &self.wall_pairs, &mut self.wall_history)
+    }
+
+    /// Heap bytes held by the list and its scratch space.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.offsets.capacity() * size_of::<usize>()
+            + self.partners.capacity() * 4
+            + (self.pair_history.capacity() + self.wall_history.capacity() + self.reference.capacity())
+                * size_of::<Vec3>()
+            + self.wall_pairs.capacity() * 8
+            + self.excluded.capacity()
+            + (self.cell_count.capacity() + self.cell_of.capacity() + self.sorted.capacity()) * 4
+            + self.fresh.capacity() * 8
     }
 
     /// Counters of the search.
@@ -159,24 +244,31 @@ impl NeighborList {
         self.stats
     }
 
-    /// True when the list was never built or a particle moved more than half the skin.
-    pub fn needs_rebuild(&self, positions: &[Vec3]) -> bool {
+    /// True when the list was never built or a particle moved more than half the skin. With
+    /// `parallel`, checked on the current rayon pool.
+    pub fn needs_rebuild(&self, positions: &[Vec3], parallel: bool) -> bool {
         if !self.built || positions.len() != self.reference.len() {
             return true;
         }
         let lim = 0.25 * self.skin * self.skin;
         let per = self.periodic;
         let periodic = per.any();
-        positions.iter().zip(&self.reference).any(|(x, r)| {
+        let moved = |(x, r): (&Vec3, &Vec3)| {
             let d = *x - *r;
             let d2 = if periodic { per.min_image(d) } else { d }.length_squared();
             d2 > lim || d2.is_nan()
-        })
+        };
+        if parallel {
+            use rayon::prelude::*;
+            positions.par_iter().zip(&self.reference).with_min_len(4096).any(moved)
+        } else {
+            positions.iter().zip(&self.reference).any(moved)
+        }
     }
 
     /// Rebuilds the list if [`needs_rebuild`](Self::needs_rebuild) says so.
-    pub fn update(&mut self, particles: &Particles, walls: &[Wall]) {
-        if self.needs_rebuild(&particles.position) {
+    pub fn update(&mut self, particles: &Particles, walls: &[Wall], parallel: bool) {
+        if self.needs_rebuild(&particles.position, parallel) {
             self.build(particles, walls);
         }
     }
@@ -194,7 +286,7 @@ impl NeighborList {
 
     fn build_pairs(&mut self, p: &Particles) {
         let n = p.len();
-        self.new_pairs.clear();
+        self.fresh.clear();
         if n >= 2 {
             let skin = self.skin;
             let per = self.periodic;
@@ -278,15 +370,15 @@ impl NeighborList {
             let sorted = &self.sorted;
             let excluded = &self.excluded;
             let mut checks = 0u64;
-            let mut consider = |i: usize, j: usize, out: &mut Vec<(u64, [u32; 2])>| {
+            let mut consider = |i: usize, j: usize, out: &mut Vec<u64>| {
                 checks += 1;
                 if !excluded.is_empty() && excluded[i] && excluded[j] {
                     return;
                 }
                 let cut = p.radius[i] + p.radius[j] + skin;
                 if per.min_image(p.position[j] - p.position[i]).length_squared() < cut * cut {
-                    let (a, b) = if p.id[i] < p.id[j] { (i, j) } else { (j, i) };
-                    out.push((pair_key(p.id[a], p.id[b]), [a as u32, b as u32]));
+                    let (a, b) = if i < j { (i, j) } else { (j, i) };
+                    out.push(pair_key(a as u32, b as u32));
                 }
             };
             let wrap_axis = |o: i64, m: usize, k: usize| -> Option<usize> {
@@ -305,7 +397,7 @@ impl NeighborList {
                         let own = &sorted[start[c] as usize..start[c + 1] as usize];
                         for (k, &i) in own.iter().enumerate() {
                             for &j in &own[k + 1..] {
-                                consider(i as usize, j as usize, &mut self.new_pairs);
+                                consider(i as usize, j as usize, &mut self.fresh);
                             }
                         }
                         for (dx, dy, dz) in HALF_SHELL {
@@ -320,7 +412,7 @@ impl NeighborList {
                             let other = &sorted[start[o] as usize..start[o + 1] as usize];
                             for &i in own {
                                 for &j in other {
-                                    consider(i as usize, j as usize, &mut self.new_pairs);
+                                    consider(i as usize, j as usize, &mut self.fresh);
                                 }
                             }
                         }
@@ -329,52 +421,69 @@ impl NeighborList {
             }
             self.stats.distance_checks += checks;
         }
-        renew(&mut self.new_pairs, &mut self.pairs, &mut self.pair_keys, &mut self.pair_history);
+        self.fresh.sort_unstable();
+        self.renew_pairs(n);
+    }
+
+    /// Replaces the pairs by the sorted `fresh` keys: each takes the history of the same pair
+    /// in the old list (both are in (a, b) order, so one merge pass finds it), zero if new.
+    fn renew_pairs(&mut self, n: usize) {
+        let mut history = Vec::with_capacity(self.fresh.len());
+        let (old_off, old_partners, old_hist) = (&self.offsets, &self.partners, &self.pair_history);
+        let (mut a_old, mut k) = (0usize, 0usize);
+        for &key in &self.fresh {
+            let mut h = Vec3::ZERO;
+            while k < old_partners.len() {
+                while old_off[a_old + 1] <= k {
+                    a_old += 1;
+                }
+                let old_key = pair_key(a_old as u32, old_partners[k]);
+                if old_key < key {
+                    k += 1;
+                    continue;
+                }
+                if old_key == key {
+                    h = old_hist[k];
+                }
+                break;
+            }
+            history.push(h);
+        }
+        self.pair_history = history;
+        self.offsets.clear();
+        self.offsets.resize(n + 1, 0);
+        for &key in &self.fresh {
+            self.offsets[(key >> 32) as usize + 1] += 1;
+        }
+        for a in 0..n {
+            self.offsets[a + 1] += self.offsets[a];
+        }
+        self.partners.clear();
+        self.partners.extend(self.fresh.iter().map(|&key| key as u32));
     }
 
     fn build_walls(&mut self, p: &Particles, walls: &[Wall]) {
-        self.new_pairs.clear();
+        let mut fresh = Vec::new();
         for i in 0..p.len() {
             for (w, wall) in walls.iter().enumerate() {
                 self.stats.distance_checks += 1;
                 let d = wall.distance(p.position[i]);
                 if d < p.radius[i] + self.skin {
-                    self.new_pairs.push((pair_key(p.id[i], w as u32), [i as u32, w as u32]));
+                    fresh.push([i as u32, w as u32]);
                 }
             }
         }
-        renew(&mut self.new_pairs, &mut self.wall_pairs, &mut self.wall_keys, &mut self.wall_history);
-    }
-}
-
-/// Replaces the entries `(slots, keys, history)` by the `fresh` ones: each takes the history of
-/// the old entry with the same key (particle ids, or id and wall), zero if it is new. The
-/// result is ordered by slots — the order the force loop then walks memory in.
-fn renew(
-    fresh: &mut [(u64, [u32; 2])],
-    slots: &mut Vec<[u32; 2]>,
-    keys: &mut Vec<u64>,
-    hist: &mut Vec<Vec3>,
-) {
-    let mut old: Vec<(u64, Vec3)> = keys.iter().copied().zip(hist.iter().copied()).collect();
-    old.sort_unstable_by_key(|e| e.0);
-    fresh.sort_unstable_by_key(|e| e.0);
-    let mut merged: Vec<([u32; 2], u64, Vec3)> = Vec::with_capacity(fresh.len());
-    let mut k = 0;
-    for &(key, s) in fresh.iter() {
-        while k < old.len() && old[k].0 < key {
-            k += 1;
+        // Both lists are in (slot, wall) order: one merge pass carries the histories over.
+        let mut history = Vec::with_capacity(fresh.len());
+        let mut k = 0;
+        for pair in &fresh {
+            while k < self.wall_pairs.len() && self.wall_pairs[k] < *pair {
+                k += 1;
+            }
+            let same = k < self.wall_pairs.len() && self.wall_pairs[k] == *pair;
+            history.push(if same { self.wall_history[k] } else { Vec3::ZERO });
         }
-        let h = if k < old.len() && old[k].0 == key { old[k].1 } else { Vec3::ZERO };
-        merged.push((s, key, h));
-    }
-    merged.sort_unstable_by_key(|e| e.0);
-    slots.clear();
-    keys.clear();
-    hist.clear();
-    for (s, key, h) in merged {
-        slots.push(s);
-        keys.push(key);
-        hist.push(h);
+        self.wall_pairs = fresh;
+        self.wall_history = history;
     }
 }

@@ -2,12 +2,10 @@
 
 use crate::boundary::Periodic;
 use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
-use crate::contact::law::{contact_force, contact_force_dyn, normal_spring_energy, rolling_torque};
-use crate::contact::{
-    CoeffTable, ContactCoeffs, ContactLaw, ContactParams, LeverArm, NormalDamping, NormalModel,
-    TangentialModel,
-};
+use crate::contact::law::{contact_force_dyn, normal_spring_energy};
+use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, ContactParams, NormalModel, TangentialModel};
 use crate::error::EngineError;
+use crate::forces::{self, ForcePlan, pair_geometry_of, pair_mass, scaled_damping, wall_geometry};
 use crate::integrate::{self, Integrator};
 use crate::material::{Phase, WallMaterial};
 use crate::math::Vec3;
@@ -87,6 +85,10 @@ pub struct Simulation {
     forces_current: bool,
     /// Per-stage wall-clock times, when enabled.
     timing: Option<StageTimes>,
+    /// Threads of the force stage (None: the calling thread only).
+    pool: Option<std::sync::Arc<rayon::ThreadPool>>,
+    /// Blocks of the parallel force stage.
+    plan: ForcePlan,
 }
 
 impl Simulation {
@@ -184,6 +186,8 @@ impl Simulation {
             history_started: false,
             forces_current: false,
             timing: None,
+            pool: None,
+            plan: ForcePlan::default(),
         })
     }
 
@@ -300,6 +304,40 @@ impl Simulation {
         Ok(())
     }
 
+    /// Runs the force stage on `threads` threads (1: on the calling thread only). The results
+    /// are bit-identical for every thread count: the sums keep one order (see [`forces`]).
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), EngineError> {
+        if threads == 0 {
+            return Err(EngineError::invalid("threads", 0.0, "the thread count must be at least 1"));
+        }
+        self.pool = if threads == 1 {
+            None
+        } else {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(|i| format!("grainflow-{i}"))
+                .build()
+                .map_err(|e| EngineError::BadReference(format!("cannot start {threads} threads: {e}")))?;
+            Some(std::sync::Arc::new(pool))
+        };
+        Ok(())
+    }
+
+    /// Threads of the force stage.
+    pub fn threads(&self) -> usize {
+        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
+    }
+
+    /// Heap bytes held by the particles, by the neighbour list with the contact histories, and
+    /// by the parallel force stage's plan.
+    pub fn heap_bytes(&self) -> MemoryUse {
+        MemoryUse {
+            particles: self.particles.heap_bytes(),
+            neighbors: self.neighbors.heap_bytes(),
+            threads: self.plan.heap_bytes(),
+        }
+    }
+
     /// Starts measuring the wall-clock time of each stage (a few clock reads per step).
     pub fn enable_stage_timing(&mut self) {
         self.timing.get_or_insert_with(StageTimes::default);
@@ -312,6 +350,19 @@ impl Simulation {
 
     /// Advances one step: contact forces, integration, prescribed motion.
     pub fn step(&mut self) {
+        match self.pool.clone() {
+            Some(pool) if self.parallel() => pool.install(|| self.step_on(true)),
+            _ => self.step_on(false),
+        }
+    }
+
+    /// True when the stages run on the thread pool.
+    fn parallel(&self) -> bool {
+        self.pool.is_some() && self.particles.len() >= forces::MIN_PARALLEL_PARTICLES
+    }
+
+    /// One step; with `par`, the per-particle stages use the current rayon pool.
+    fn step_on(&mut self, par: bool) {
         let start = self.timing.map(|t| (std::time::Instant::now(), t));
         let dt = self.time_step.dt;
         let g = self.gravity;
@@ -319,14 +370,14 @@ impl Simulation {
             Integrator::Euler => {
                 self.compute_forces();
                 for r in self.free.clone() {
-                    integrate::euler(&mut self.particles, r, g, dt);
+                    integrate::euler(&mut self.particles, r, g, dt, par);
                 }
             }
             Integrator::AdamsBashforth => {
                 self.compute_forces();
                 let first = !self.history_started;
                 for r in self.free.clone() {
-                    integrate::adams_bashforth(&mut self.particles, r, g, dt, first);
+                    integrate::adams_bashforth(&mut self.particles, r, g, dt, first, par);
                 }
             }
             Integrator::VelocityVerlet => {
@@ -336,11 +387,11 @@ impl Simulation {
                     self.evaluate_forces(false);
                 }
                 for r in self.free.clone() {
-                    integrate::verlet_kick_drift(&mut self.particles, r, g, dt);
+                    integrate::verlet_kick_drift(&mut self.particles, r, g, dt, par);
                 }
                 self.compute_forces();
                 for r in self.free.clone() {
-                    integrate::verlet_kick(&mut self.particles, r, g, dt);
+                    integrate::verlet_kick(&mut self.particles, r, g, dt, par);
                 }
                 // Prescribed motion moves particles after this evaluation: their partners'
                 // forces must then be evaluated again before the next half kick.
@@ -351,8 +402,13 @@ impl Simulation {
         motion::apply(&self.motion, &mut self.particles);
         if self.periodic.any() {
             let per = self.periodic;
-            for x in &mut self.particles.position {
-                *x = per.wrap(*x);
+            if par {
+                use rayon::prelude::*;
+                self.particles.position.par_iter_mut().with_min_len(4096).for_each(|x| *x = per.wrap(*x));
+            } else {
+                for x in &mut self.particles.position {
+                    *x = per.wrap(*x);
+                }
             }
         }
         self.step += 1;
@@ -395,8 +451,8 @@ impl Simulation {
     /// evaluating the same state again gives the same forces and leaves the history alone.
     fn evaluate_forces(&mut self, advance_history: bool) {
         let t0 = self.timing.map(|_| std::time::Instant::now());
-        self.neighbors.update(&self.particles, &self.walls);
-        self.particles.clear_forces();
+        let par = self.parallel();
+        self.neighbors.update(&self.particles, &self.walls, par);
         if let (Some(t0), Some(t)) = (t0, self.timing.as_mut()) {
             t.neighbor += t0.elapsed().as_secs_f64();
         }
@@ -411,63 +467,48 @@ impl Simulation {
     }
 
     fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool) {
-        let dt = if advance_history { self.time_step.dt } else { 0.0 };
-        let frame = self.law.history;
-        let lever = self.law.lever;
-        let clip = self.law.clip_attraction;
-        let cap = self.law.coulomb;
-        let damping = self.law.damping;
-        let per_mass = damping.per_particle_mass();
-        let held = &self.held;
-        let per = self.periodic;
         let clock = self.timing.map(|_| std::time::Instant::now());
         let p = &mut self.particles;
-        let nl = &mut self.neighbors;
-        // Walls first, as MFIX does.
-        for (k, &[i, w]) in nl.wall_pairs.iter().enumerate() {
-            let (i, wall) = (i as usize, &self.walls[w as usize]);
-            let Some(g) = wall_geometry(p, i, wall, lever) else {
-                nl.wall_history[k] = Vec3::ZERO;
-                continue;
-            };
-            let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
-            let c = if per_mass { scaled_damping(c, damping, p.mass[i]) } else { *c };
-            let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
-            let mut h = nl.wall_history[k];
-            let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, cap, &c, &g, v_r, &mut h, dt);
-            if advance_history {
-                nl.wall_history[k] = h;
+        let build = self.neighbors.stats().builds;
+        let (offsets, partners, pair_history, wall_pairs, wall_history) = self.neighbors.split_mut();
+        let x = forces::ForceInputs {
+            position: &p.position,
+            velocity: &p.velocity,
+            omega: &p.omega,
+            radius: &p.radius,
+            mass: &p.mass,
+            phase: &p.phase,
+            held: &self.held,
+            walls: &self.walls,
+            coeffs: &self.coeffs,
+            law: self.law,
+            periodic: self.periodic,
+            dt: if advance_history { self.time_step.dt } else { 0.0 },
+            advance: advance_history,
+            offsets,
+            partners,
+            wall_pairs,
+        };
+        let out =
+            forces::ForceOutputs { force: &mut p.force, torque: &mut p.torque, pair_history, wall_history };
+        let timed = clock.is_some();
+        let wall_seconds = match &self.pool {
+            Some(pool) if p.position.len() >= forces::MIN_PARALLEL_PARTICLES => {
+                let plan = &mut self.plan;
+                plan.prepare(
+                    build,
+                    forces::BLOCKS_PER_THREAD * pool.current_num_threads(),
+                    offsets,
+                    partners,
+                );
+                pool.install(|| forces::parallel::<HERTZ, INCREMENTAL>(&x, plan, out, timed))
             }
-            p.force[i] += f.total();
-            p.torque[i] +=
-                f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
-        }
-        let walls_done = clock.map(|c| c.elapsed().as_secs_f64());
-        for (k, &[i, j]) in nl.pairs.iter().enumerate() {
-            let (i, j) = (i as usize, j as usize);
-            let Some(g) = pair_geometry(p, i, j, lever, &per) else {
-                nl.pair_history[k] = Vec3::ZERO;
-                continue;
-            };
-            let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
-            let c = if per_mass { scaled_damping(c, damping, pair_mass(p, held, i, j)) } else { *c };
-            let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
-            let mut h = nl.pair_history[k];
-            let f = contact_force::<HERTZ, INCREMENTAL>(frame, clip, cap, &c, &g, v_r, &mut h, dt);
-            if advance_history {
-                nl.pair_history[k] = h;
-            }
-            let total = f.total();
-            p.force[i] += total;
-            p.force[j] -= total;
-            p.torque[i] += f.torque(torque_lever(lever, g.lever_i, g.overlap), g.normal)
-                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[i]);
-            p.torque[j] += f.torque(torque_lever(lever, g.lever_j, g.overlap), g.normal)
-                + rolling_torque(c.mu_roll, f.elastic_normal, p.omega[j]);
-        }
-        if let (Some(c), Some(w), Some(t)) = (clock, walls_done, self.timing.as_mut()) {
-            t.walls += w;
-            t.pairs += c.elapsed().as_secs_f64() - w;
+            _ => forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
+        };
+        if let (Some(c), Some(t)) = (clock, self.timing.as_mut()) {
+            let total = c.elapsed().as_secs_f64();
+            t.walls += wall_seconds.min(total);
+            t.pairs += (total - wall_seconds).max(0.0);
         }
     }
 
@@ -492,28 +533,29 @@ impl Simulation {
                     tangential_force: f.tangential.length(),
                 });
             };
-        for (k, &[i, w]) in self.neighbors.wall_pairs.iter().enumerate() {
+        let nl = &self.neighbors;
+        for (&[i, w], &h) in nl.wall_pairs().iter().zip(nl.wall_history()) {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
-            if let Some(g) = wall_geometry(p, i, wall, lever) {
+            if let Some(g) = wall_geometry(p.position[i], p.radius[i], wall, lever) {
                 let c = scaled_damping(
                     self.coeffs.wall(p.phase[i] as usize, wall.material),
                     self.law.damping,
                     p.mass[i],
                 );
                 let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
-                record(i, ContactPartner::Wall(w as usize), g, &c, v_r, self.neighbors.wall_history[k]);
+                record(i, ContactPartner::Wall(w as usize), g, &c, v_r, h);
             }
         }
-        for (k, &[i, j]) in self.neighbors.pairs.iter().enumerate() {
+        for ([i, j], &h) in nl.pairs().zip(nl.pair_history()) {
             let (i, j) = (i as usize, j as usize);
-            if let Some(g) = pair_geometry(p, i, j, lever, &per) {
+            if let Some(g) = pair_geometry_of(&p.position, &p.radius, i, j, lever, &per) {
                 let c = scaled_damping(
                     self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize),
                     self.law.damping,
-                    pair_mass(p, &self.held, i, j),
+                    pair_mass(&p.mass, &self.held, i, j),
                 );
                 let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
-                record(i, ContactPartner::Particle(j), g, &c, v_r, self.neighbors.pair_history[k]);
+                record(i, ContactPartner::Particle(j), g, &c, v_r, h);
             }
         }
         out
@@ -533,14 +575,14 @@ impl Simulation {
             d.elastic += energy;
             d.max_overlap_ratio = d.max_overlap_ratio.max(delta / r_min);
         };
-        for &[i, w] in &self.neighbors.wall_pairs {
+        for &[i, w] in self.neighbors.wall_pairs() {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
             if let Some(g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal) {
                 let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
                 visit(g.overlap, p.radius[i], normal_spring_energy(self.law.normal, c, g.overlap));
             }
         }
-        for &[i, j] in &self.neighbors.pairs {
+        for [i, j] in self.neighbors.pairs() {
             let (i, j) = (i as usize, j as usize);
             if let Some(g) = pair_contact_separation(
                 self.periodic.min_image(p.position[j] - p.position[i]),
@@ -572,6 +614,24 @@ pub struct StageTimes {
     pub integrate: f64,
 }
 
+/// Heap bytes of the simulation's parts.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MemoryUse {
+    /// Particle state.
+    pub particles: usize,
+    /// Neighbour list, contact histories and their scratch space.
+    pub neighbors: usize,
+    /// Blocks and crossing pairs of the parallel force stage.
+    pub threads: usize,
+}
+
+impl MemoryUse {
+    /// All of it.
+    pub fn total(&self) -> usize {
+        self.particles + self.neighbors + self.threads
+    }
+}
+
 /// The other side of a contact.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ContactPartner {
@@ -598,68 +658,6 @@ pub struct ContactInfo {
     pub normal_force: f64,
     /// Magnitude of the tangential force, N.
     pub tangential_force: f64,
-}
-
-/// Effective mass of the particles in slots i and j: m_i m_j/(m_i + m_j), or the other one's
-/// mass if one of them is held fixed (as LAMMPS does for frozen particles).
-#[inline(always)]
-fn pair_mass(p: &Particles, held: &[bool], i: usize, j: usize) -> f64 {
-    if !held.is_empty() {
-        if held[i] {
-            return p.mass[j];
-        }
-        if held[j] {
-            return p.mass[i];
-        }
-    }
-    p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j])
-}
-
-/// The coefficients with damping that depends on the contact's masses applied: ×m_eff
-/// (`MassVelocity`), ×√m_eff (`Tsuji`); unchanged otherwise.
-#[inline(always)]
-fn scaled_damping(c: &ContactCoeffs, damping: NormalDamping, m_eff: f64) -> ContactCoeffs {
-    let s = match damping {
-        NormalDamping::MassVelocity => m_eff,
-        NormalDamping::Tsuji => m_eff.sqrt(),
-        NormalDamping::Mfix | NormalDamping::ExactRestitution => return *c,
-    };
-    ContactCoeffs { eta_n: c.eta_n * s, eta_t: c.eta_t * s, ..*c }
-}
-
-/// Pair geometry of slots i, j with the law's lever arm, if they touch.
-#[inline(always)]
-fn pair_geometry(
-    p: &Particles,
-    i: usize,
-    j: usize,
-    lever: LeverArm,
-    per: &Periodic,
-) -> Option<ContactGeometry> {
-    let d = p.position[j] - p.position[i];
-    let d = if per.any() { per.min_image(d) } else { d };
-    let mut g = pair_contact_separation(d, p.radius[i], p.radius[j])?;
-    if lever != LeverArm::RadicalPlane {
-        (g.lever_i, g.lever_j) = (p.radius[i], p.radius[j]);
-    }
-    Some(g)
-}
-
-/// The lever of the tangential force's torque: the geometry's lever, less half the overlap
-/// for LAMMPS's `pair granular` convention.
-#[inline(always)]
-fn torque_lever(lever: LeverArm, geometric: f64, overlap: f64) -> f64 {
-    if lever == LeverArm::LammpsGranular { geometric - 0.5 * overlap } else { geometric }
-}
-
-/// Geometry of slot i against a wall with the law's lever arm, if they touch.
-#[inline(always)]
-fn wall_geometry(p: &Particles, i: usize, wall: &Wall, lever: LeverArm) -> Option<ContactGeometry> {
-    let mut g = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal)?;
-    if lever != LeverArm::RadicalPlane {
-        g.lever_i = p.radius[i];
-    }
-    Some(g)
 }
 
 fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {

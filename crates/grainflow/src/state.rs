@@ -129,6 +129,23 @@ impl Particles {
         self.radius.iter().copied().fold(0.0, f64::max)
     }
 
+    /// Heap bytes held by the arrays.
+    pub fn heap_bytes(&self) -> usize {
+        let v3 = [
+            &self.position,
+            &self.velocity,
+            &self.omega,
+            &self.force,
+            &self.torque,
+            &self.accel_prev,
+            &self.alpha_prev,
+        ];
+        let f = [&self.radius, &self.mass, &self.inertia, &self.inv_mass, &self.inv_inertia];
+        v3.iter().map(|v| v.capacity() * std::mem::size_of::<Vec3>()).sum::<usize>()
+            + f.iter().map(|v| v.capacity() * 8).sum::<usize>()
+            + (self.id.capacity() + self.phase.capacity()) * 4
+    }
+
     /// Zeroes the force and torque accumulators.
     pub fn clear_forces(&mut self) {
         self.force.fill(Vec3::ZERO);

@@ -96,7 +96,7 @@ impl ContactLedger {
         let g = Vec3::new(0.0, -G, 0.0);
         let nl = sim.neighbors();
         let mut now = HashSet::new();
-        for &[i, j] in &nl.pairs {
+        for [i, j] in nl.pairs() {
             let (i, j) = (i as usize, j as usize);
             let dx = p.position[j] - p.position[i];
             let d = dx.length();
@@ -114,7 +114,7 @@ impl ContactLedger {
         self.pairs = now;
         let walls = sim.walls();
         let mut now = HashSet::new();
-        for &[i, w] in &nl.wall_pairs {
+        for &[i, w] in nl.wall_pairs() {
             let (i, wall) = (i as usize, &walls[w as usize]);
             if wall.distance(p.position[i]) <= p.radius[i] {
                 let key = (p.id[i], w);

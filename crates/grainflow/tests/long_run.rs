@@ -70,7 +70,7 @@ fn two_thousand_particles_for_1e5_steps_stay_healthy_and_the_energy_books_close(
         // Normal springs (diagnostics) plus tangential springs ½k_t|s|² of the stored histories.
         let nl = s.neighbors();
         let t: f64 =
-            nl.pair_history.iter().chain(&nl.wall_history).map(|h| 0.5 * k_t * h.length_squared()).sum();
+            nl.pair_history().iter().chain(nl.wall_history()).map(|h| 0.5 * k_t * h.length_squared()).sum();
         s.diagnostics().elastic + t
     };
     let e0 = sim.diagnostics();

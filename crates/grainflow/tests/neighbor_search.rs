@@ -50,22 +50,29 @@ fn brute_walls(p: &Particles, walls: &[Wall], skin: f64) -> HashSet<(u32, u32)> 
     out
 }
 
-/// The list's pairs as id pairs; checks the documented ordering on the way: id[a] < id[b],
-/// ordered by slots, no duplicates, one history slot per pair.
+/// The list's pairs as id pairs (lower id first); checks the documented ordering on the way:
+/// slot a < slot b, ordered by slots, no duplicates, one history slot per pair.
 fn listed_pairs(nl: &NeighborList, p: &Particles) -> Vec<(u32, u32)> {
-    let ids: Vec<(u32, u32)> = nl.pairs.iter().map(|&[a, b]| (p.id[a as usize], p.id[b as usize])).collect();
-    for &(a, b) in &ids {
-        assert!(a < b, "pair ({a}, {b}) not ordered by id");
+    let slots: Vec<[u32; 2]> = nl.pairs().collect();
+    for &[a, b] in &slots {
+        assert!(a < b, "pair ({a}, {b}) not ordered by slot");
     }
-    assert!(nl.pairs.windows(2).all(|w| w[0] < w[1]), "pairs not ordered by slots or duplicated");
-    assert_eq!(nl.pair_history.len(), ids.len());
-    ids
+    assert!(slots.windows(2).all(|w| w[0] < w[1]), "pairs not ordered by slots or duplicated");
+    assert_eq!(nl.pair_history().len(), slots.len());
+    assert_eq!(nl.pair_count(), slots.len());
+    slots
+        .iter()
+        .map(|&[a, b]| {
+            let (x, y) = (p.id[a as usize], p.id[b as usize]);
+            (x.min(y), x.max(y))
+        })
+        .collect()
 }
 
 fn listed_walls(nl: &NeighborList, p: &Particles) -> Vec<(u32, u32)> {
-    let ids: Vec<(u32, u32)> = nl.wall_pairs.iter().map(|&[i, w]| (p.id[i as usize], w)).collect();
-    assert!(nl.wall_pairs.windows(2).all(|w| w[0] < w[1]), "wall pairs not ordered by slots or duplicated");
-    assert_eq!(nl.wall_history.len(), ids.len());
+    let ids: Vec<(u32, u32)> = nl.wall_pairs().iter().map(|&[i, w]| (p.id[i as usize], w)).collect();
+    assert!(nl.wall_pairs().windows(2).all(|w| w[0] < w[1]), "wall pairs not ordered by slots or duplicated");
+    assert_eq!(nl.wall_history().len(), ids.len());
     ids
 }
 
@@ -171,12 +178,12 @@ fn cutoff_is_strict_and_exact() {
     ];
     let p = particles_from(&x, &vec![r; x.len()]);
     let nl = check_build("exact cut-off", &p, &walls, skin);
-    assert_eq!(nl.pairs.len(), 5, "only the 5 neighbours of the inner row are listed");
-    assert_eq!(nl.wall_pairs.len(), 6, "only the inner row is near its wall");
+    assert_eq!(nl.pair_count(), 5, "only the 5 neighbours of the inner row are listed");
+    assert_eq!(nl.wall_pairs().len(), 6, "only the inner row is near its wall");
 }
 
-/// On a rebuild, pairs that persist keep their history (matched by stable ids, even when the
-/// particles change slots), new pairs start from zero.
+/// On a rebuild, pairs that persist keep their history (matched by their slots, which never
+/// change during a run), new pairs start from zero.
 #[test]
 fn rebuild_keeps_history_of_persisting_pairs() {
     let mut rng = Rng::new(4);
@@ -192,23 +199,22 @@ fn rebuild_keeps_history_of_persisting_pairs() {
     let wall_marker = |i: u32, w: u32| Vec3::new(i as f64, w as f64, -0.25);
     let before_pairs = listed_pairs(&nl, &p);
     for (k, &(a, b)) in before_pairs.iter().enumerate() {
-        nl.pair_history[k] = pair_marker(a, b);
+        nl.pair_history_mut()[k] = pair_marker(a, b);
     }
     let before_walls = listed_walls(&nl, &p);
     for (k, &(i, w)) in before_walls.iter().enumerate() {
-        nl.wall_history[k] = wall_marker(i, w);
+        nl.wall_history_mut()[k] = wall_marker(i, w);
     }
     let before_pairs: HashSet<_> = before_pairs.into_iter().collect();
     let before_walls: HashSet<_> = before_walls.into_iter().collect();
 
-    // Move every particle by up to 4 skins per axis and reverse the slot order.
-    let mut init: Vec<ParticleInit> = (0..n)
+    // Move every particle by up to 4 skins per axis, keeping its slot.
+    let init: Vec<ParticleInit> = (0..n)
         .map(|k| {
             let d = 4.0 * skin * Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
             particle(p.id[k], 0, r[k], 2500.0, x[k] + d, Vec3::ZERO)
         })
         .collect();
-    init.reverse();
     let moved = Particles::from_init(&init);
     nl.build(&moved, &walls);
     let brute = brute_pairs(&moved, skin);
@@ -220,18 +226,18 @@ fn rebuild_keeps_history_of_persisting_pairs() {
     let (mut kept, mut fresh) = (0, 0);
     for (k, &(a, b)) in after_pairs.iter().enumerate() {
         if before_pairs.contains(&(a, b)) {
-            assert_eq!(nl.pair_history[k], pair_marker(a, b), "pair ({a}, {b})");
+            assert_eq!(nl.pair_history()[k], pair_marker(a, b), "pair ({a}, {b})");
             kept += 1;
         } else {
-            assert_eq!(nl.pair_history[k], Vec3::ZERO, "new pair ({a}, {b})");
+            assert_eq!(nl.pair_history()[k], Vec3::ZERO, "new pair ({a}, {b})");
             fresh += 1;
         }
     }
     for (k, &(i, w)) in after_walls.iter().enumerate() {
         if before_walls.contains(&(i, w)) {
-            assert_eq!(nl.wall_history[k], wall_marker(i, w), "wall pair ({i}, {w})");
+            assert_eq!(nl.wall_history()[k], wall_marker(i, w), "wall pair ({i}, {w})");
         } else {
-            assert_eq!(nl.wall_history[k], Vec3::ZERO, "new wall pair ({i}, {w})");
+            assert_eq!(nl.wall_history()[k], Vec3::ZERO, "new wall pair ({i}, {w})");
         }
     }
     eprintln!("{kept} persisting pairs, {fresh} new pairs");
@@ -257,7 +263,7 @@ fn build_cost_is_linear() {
             let mut nl = NeighborList::new(skin);
             nl.build(&particles_from(&x, &r), &[]);
             let c = nl.stats().distance_checks as f64 / n as f64;
-            eprintln!("N = {n}: {c:.2} distance checks per particle, {} pairs", nl.pairs.len());
+            eprintln!("N = {n}: {c:.2} distance checks per particle, {} pairs", nl.pair_count());
             c
         })
         .collect();

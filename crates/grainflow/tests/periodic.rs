@@ -27,8 +27,7 @@ fn nearest_image_pairs_match_brute_force() {
     let skin = 0.0004;
     let mut nl = NeighborList::with_periodic(skin, per);
     nl.build(&p, &[]);
-    let got: BTreeSet<(u32, u32)> =
-        nl.pairs.iter().map(|&[i, j]| (p.id[i as usize], p.id[j as usize])).collect();
+    let got: BTreeSet<(u32, u32)> = nl.pairs().map(|[i, j]| (p.id[i as usize], p.id[j as usize])).collect();
     let mut want = BTreeSet::new();
     for i in 0..p.len() {
         for j in i + 1..p.len() {

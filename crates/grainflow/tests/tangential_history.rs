@@ -39,8 +39,8 @@ fn sliding_contact(integrator: Integrator) -> Simulation {
 
 fn stored_slip(sim: &Simulation) -> Vec3 {
     let nl = sim.neighbors();
-    assert_eq!(nl.wall_history.len(), 1, "one particle-wall pair");
-    nl.wall_history[0]
+    assert_eq!(nl.wall_history().len(), 1, "one particle-wall pair");
+    nl.wall_history()[0]
 }
 
 fn check_slip(what: &str, sim: &Simulation) {
@@ -144,23 +144,23 @@ fn history_is_reset_when_contact_ends() {
             sim.step();
             let p = sim.particles();
             let nl = sim.neighbors();
-            for (k, &[i, _]) in nl.wall_pairs.iter().enumerate() {
+            for (k, &[i, _]) in nl.wall_pairs().iter().enumerate() {
                 let gap = p.position[i as usize].y - p.radius[i as usize];
                 if gap < 0.0 {
-                    loaded_wall |= nl.wall_history[k] != Vec3::ZERO;
+                    loaded_wall |= nl.wall_history()[k] != Vec3::ZERO;
                 } else if loaded_wall && gap > 1e-6 {
                     // Separated (by more than a step's travel) after a loaded contact.
-                    assert_eq!(nl.wall_history[k], Vec3::ZERO, "{integrator:?} wall");
+                    assert_eq!(nl.wall_history()[k], Vec3::ZERO, "{integrator:?} wall");
                     checked_wall += 1;
                 }
             }
-            for (k, &[i, j]) in nl.pairs.iter().enumerate() {
+            for (k, [i, j]) in nl.pairs().enumerate() {
                 let (i, j) = (i as usize, j as usize);
                 let gap = (p.position[j] - p.position[i]).length() - p.radius[i] - p.radius[j];
                 if gap < 0.0 {
-                    loaded_pair |= nl.pair_history[k] != Vec3::ZERO;
+                    loaded_pair |= nl.pair_history()[k] != Vec3::ZERO;
                 } else if loaded_pair && gap > 1e-6 {
-                    assert_eq!(nl.pair_history[k], Vec3::ZERO, "{integrator:?} pair");
+                    assert_eq!(nl.pair_history()[k], Vec3::ZERO, "{integrator:?} pair");
                     checked_pair += 1;
                 }
             }
