@@ -299,6 +299,8 @@ fn run_simulation(
     if let Some(problem) = health_problem(&sim, domain) {
         return Err(RunError::Engine(grainflow::EngineError::BadReference(problem)));
     }
+    // The last state that passed the health check, kept in memory (one copy of the state,
+    // its buffer reused) and written out only if a later check fails.
     let mut last_good = (sim.step_index(), sim.checkpoint(hash));
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
@@ -330,7 +332,8 @@ fn run_simulation(
             // Keeping a copy of the state costs a pass over it: refresh it at outputs and
             // every tenth check, not at every check.
             if output_now || step % (10 * HEALTH_EVERY) == 0 {
-                last_good = (step, sim.checkpoint(hash));
+                last_good.0 = step;
+                sim.checkpoint_into(hash, &mut last_good.1);
             }
         }
         let t_out = Instant::now();

@@ -59,10 +59,9 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     h
 }
 
-#[derive(Default)]
-struct Enc(Vec<u8>);
+struct Enc<'a>(&'a mut Vec<u8>);
 
-impl Enc {
+impl Enc<'_> {
     fn u64(&mut self, v: u64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
@@ -93,9 +92,11 @@ impl Enc {
             }
         }
     }
-    fn pairs(&mut self, v: &[[u32; 2]]) {
-        let flat: Vec<u32> = v.iter().flatten().copied().collect();
-        self.u32s(&flat);
+    fn pairs(&mut self, count: usize, v: impl Iterator<Item = [u32; 2]>) {
+        self.u64(2 * count as u64);
+        for x in v.flatten() {
+            self.0.extend_from_slice(&x.to_le_bytes());
+        }
     }
 }
 
@@ -154,7 +155,41 @@ impl<'a> Dec<'a> {
 impl Simulation {
     /// The simulation's complete dynamic state as checkpoint bytes, tagged with `case_hash`.
     pub fn checkpoint(&self, case_hash: &str) -> Vec<u8> {
-        let mut e = Enc::default();
+        let mut out = Vec::new();
+        self.checkpoint_into(case_hash, &mut out);
+        out
+    }
+
+    /// As [`checkpoint`](Self::checkpoint), into `out` (cleared first; its allocation is
+    /// reused, so keeping a rolling copy of the state costs one copy, not two).
+    pub fn checkpoint_into(&self, case_hash: &str, out: &mut Vec<u8>) {
+        out.clear();
+        let p = self.particles();
+        let nl = self.neighbors();
+        // The exact size, so that the buffer is allocated once.
+        let (n, pairs, walls) = (p.len(), nl.pair_count(), nl.wall_pairs().len());
+        let anchors = self.motion_anchors();
+        let size = 20
+            + 8
+            + case_hash.len()
+            + 6 * 8
+            + 2 * (8 + 4 * n)
+            + 3 * (8 + 8 * n)
+            + 5 * (8 + 24 * n)
+            + 2 * (8 + 24 * p.accel_prev.len())
+            + 16
+            + (8 + 8 * pairs)
+            + (8 + 24 * pairs)
+            + (8 + 8 * walls)
+            + (8 + 24 * walls)
+            + (8 + 24 * nl.reference_len())
+            + (8 + 24 * anchors.len())
+            + 8;
+        out.reserve_exact(size);
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&0u64.to_le_bytes());
+        let mut e = Enc(out);
         e.bytes(case_hash.as_bytes());
         let (step, history_started, forces_current) = self.counters();
         e.u64(step);
@@ -164,32 +199,26 @@ impl Simulation {
         e.f64(t_start);
         e.u64(history_started as u64);
         e.u64(forces_current as u64);
-        let p = self.particles();
         e.u32s(&p.id);
         e.u32s(&p.phase);
-        for v in [&p.radius, &p.mass, &p.inertia, &p.inv_mass, &p.inv_inertia] {
+        for v in [&p.radius, &p.mass, &p.inertia] {
             e.f64s(v);
         }
         for v in [&p.position, &p.velocity, &p.omega, &p.force, &p.torque, &p.accel_prev, &p.alpha_prev] {
             e.vec3s(v);
         }
-        let n = self.neighbors().state();
-        e.f64(n.skin);
-        e.u64(n.built as u64);
-        e.pairs(&n.pairs);
-        e.vec3s(&n.pair_history);
-        e.pairs(&n.wall_pairs);
-        e.vec3s(&n.wall_history);
-        e.vec3s(&n.reference);
-        e.vec3s(&self.motion_anchors());
-        let payload = e.0;
-        let mut out = Vec::with_capacity(payload.len() + 32);
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        out.extend_from_slice(&payload);
-        out.extend_from_slice(&fnv1a(&payload).to_le_bytes());
-        out
+        e.f64(nl.skin());
+        e.u64(nl.is_built() as u64);
+        e.pairs(pairs, nl.pairs());
+        e.vec3s(nl.pair_history());
+        e.pairs(walls, nl.wall_pairs().iter().copied());
+        e.vec3s(nl.wall_history());
+        e.vec3s(nl.reference());
+        e.vec3s(&anchors);
+        let len = (out.len() - 20) as u64;
+        out[12..20].copy_from_slice(&len.to_le_bytes());
+        let sum = fnv1a(&out[20..]);
+        out.extend_from_slice(&sum.to_le_bytes());
     }
 
     /// Rebuilds a simulation of `config` from checkpoint bytes written for `case_hash`
@@ -237,8 +266,6 @@ impl Simulation {
             radius: d.f64s("radii")?,
             mass: d.f64s("masses")?,
             inertia: d.f64s("inertia")?,
-            inv_mass: d.f64s("inverse masses")?,
-            inv_inertia: d.f64s("inverse inertia")?,
             ..Default::default()
         };
         for v in [

@@ -1,7 +1,7 @@
 //! Time integration (reference: MFIX-DEM model §6, step 3).
 //!
 //! a = F/m + g and α = T/I are formed from the accumulators filled by the contact stage
-//! (as products with the stored 1/m and 1/I). Each function integrates the particle slots in
+//! (as products with 1/m and 1/I). Each function integrates the particle slots in
 //! `range`; the simulation passes the runs of slots that are not prescribed (prescribed
 //! particles are overwritten after the step, so integrating them would be wasted work).
 
@@ -40,18 +40,22 @@ const CHUNK: usize = 4096;
 /// MFIX's `EULER` step. With `parallel`, on the current rayon pool (the result is the same:
 /// every particle is updated on its own).
 pub fn euler(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
-    let kernel =
-        |x: &mut [Vec3], v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], im: &[f64], ii: &[f64]| {
-            for i in 0..x.len() {
-                let (a, alpha) = (f[i] * im[i] + gravity, t[i] * ii[i]);
-                v[i] += dt * a;
-                x[i] += dt * v[i];
-                w[i] += dt * alpha;
-            }
-        };
+    let kernel = |x: &mut [Vec3],
+                  v: &mut [Vec3],
+                  w: &mut [Vec3],
+                  f: &[Vec3],
+                  t: &[Vec3],
+                  m: &[f64],
+                  inertia: &[f64]| {
+        for i in 0..x.len() {
+            let (a, alpha) = (f[i] * (1.0 / m[i]) + gravity, t[i] * (1.0 / inertia[i]));
+            v[i] += dt * a;
+            x[i] += dt * v[i];
+            w[i] += dt * alpha;
+        }
+    };
     let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
-    let (f, t, im, ii) =
-        (&p.force[r.clone()], &p.torque[r.clone()], &p.inv_mass[r.clone()], &p.inv_inertia[r]);
+    let (f, t, m, inertia) = (&p.force[r.clone()], &p.torque[r.clone()], &p.mass[r.clone()], &p.inertia[r]);
     if parallel {
         use rayon::prelude::*;
         (
@@ -60,13 +64,13 @@ pub fn euler(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, paralle
             w.par_chunks_mut(CHUNK),
             f.par_chunks(CHUNK),
             t.par_chunks(CHUNK),
-            im.par_chunks(CHUNK),
-            ii.par_chunks(CHUNK),
+            m.par_chunks(CHUNK),
+            inertia.par_chunks(CHUNK),
         )
             .into_par_iter()
-            .for_each(|(x, v, w, f, t, im, ii)| kernel(x, v, w, f, t, im, ii));
+            .for_each(|(x, v, w, f, t, m, inertia)| kernel(x, v, w, f, t, m, inertia));
     } else {
-        kernel(x, v, w, f, t, im, ii);
+        kernel(x, v, w, f, t, m, inertia);
     }
 }
 
@@ -88,11 +92,11 @@ pub fn adams_bashforth(
                   alp: &mut [Vec3],
                   f: &[Vec3],
                   t: &[Vec3],
-                  im: &[f64],
-                  ii: &[f64]| {
+                  m: &[f64],
+                  inertia: &[f64]| {
         for i in 0..x.len() {
-            let a = f[i] * im[i] + gravity;
-            let alpha = t[i] * ii[i];
+            let a = f[i] * (1.0 / m[i]) + gravity;
+            let alpha = t[i] * (1.0 / inertia[i]);
             let (a_prev, alpha_prev) = if first { (a, alpha) } else { (ap[i], alp[i]) };
             let v0 = v[i];
             let v1 = v0 + h * (3.0 * a - a_prev);
@@ -105,8 +109,7 @@ pub fn adams_bashforth(
     };
     let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
     let (ap, alp) = (&mut p.accel_prev[r.clone()], &mut p.alpha_prev[r.clone()]);
-    let (f, t, im, ii) =
-        (&p.force[r.clone()], &p.torque[r.clone()], &p.inv_mass[r.clone()], &p.inv_inertia[r]);
+    let (f, t, m, inertia) = (&p.force[r.clone()], &p.torque[r.clone()], &p.mass[r.clone()], &p.inertia[r]);
     if parallel {
         use rayon::prelude::*;
         (
@@ -117,31 +120,35 @@ pub fn adams_bashforth(
             alp.par_chunks_mut(CHUNK),
             f.par_chunks(CHUNK),
             t.par_chunks(CHUNK),
-            im.par_chunks(CHUNK),
-            ii.par_chunks(CHUNK),
+            m.par_chunks(CHUNK),
+            inertia.par_chunks(CHUNK),
         )
             .into_par_iter()
-            .for_each(|(x, v, w, ap, alp, f, t, im, ii)| kernel(x, v, w, ap, alp, f, t, im, ii));
+            .for_each(|(x, v, w, ap, alp, f, t, m, inertia)| kernel(x, v, w, ap, alp, f, t, m, inertia));
     } else {
-        kernel(x, v, w, ap, alp, f, t, im, ii);
+        kernel(x, v, w, ap, alp, f, t, m, inertia);
     }
 }
 
 /// Velocity Verlet, first half: kick by Δt/2 with the current accelerations, then drift by Δt.
 pub fn verlet_kick_drift(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
     let h = 0.5 * dt;
-    let kernel =
-        |x: &mut [Vec3], v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], im: &[f64], ii: &[f64]| {
-            for i in 0..x.len() {
-                let (a, alpha) = (f[i] * im[i] + gravity, t[i] * ii[i]);
-                v[i] += h * a;
-                w[i] += h * alpha;
-                x[i] += dt * v[i];
-            }
-        };
+    let kernel = |x: &mut [Vec3],
+                  v: &mut [Vec3],
+                  w: &mut [Vec3],
+                  f: &[Vec3],
+                  t: &[Vec3],
+                  m: &[f64],
+                  inertia: &[f64]| {
+        for i in 0..x.len() {
+            let (a, alpha) = (f[i] * (1.0 / m[i]) + gravity, t[i] * (1.0 / inertia[i]));
+            v[i] += h * a;
+            w[i] += h * alpha;
+            x[i] += dt * v[i];
+        }
+    };
     let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
-    let (f, t, im, ii) =
-        (&p.force[r.clone()], &p.torque[r.clone()], &p.inv_mass[r.clone()], &p.inv_inertia[r]);
+    let (f, t, m, inertia) = (&p.force[r.clone()], &p.torque[r.clone()], &p.mass[r.clone()], &p.inertia[r]);
     if parallel {
         use rayon::prelude::*;
         (
@@ -150,29 +157,28 @@ pub fn verlet_kick_drift(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: 
             w.par_chunks_mut(CHUNK),
             f.par_chunks(CHUNK),
             t.par_chunks(CHUNK),
-            im.par_chunks(CHUNK),
-            ii.par_chunks(CHUNK),
+            m.par_chunks(CHUNK),
+            inertia.par_chunks(CHUNK),
         )
             .into_par_iter()
-            .for_each(|(x, v, w, f, t, im, ii)| kernel(x, v, w, f, t, im, ii));
+            .for_each(|(x, v, w, f, t, m, inertia)| kernel(x, v, w, f, t, m, inertia));
     } else {
-        kernel(x, v, w, f, t, im, ii);
+        kernel(x, v, w, f, t, m, inertia);
     }
 }
 
 /// Velocity Verlet, second half: kick by Δt/2 with the new accelerations.
 pub fn verlet_kick(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
     let h = 0.5 * dt;
-    let kernel = |v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], im: &[f64], ii: &[f64]| {
+    let kernel = |v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], m: &[f64], inertia: &[f64]| {
         for i in 0..v.len() {
-            let (a, alpha) = (f[i] * im[i] + gravity, t[i] * ii[i]);
+            let (a, alpha) = (f[i] * (1.0 / m[i]) + gravity, t[i] * (1.0 / inertia[i]));
             v[i] += h * a;
             w[i] += h * alpha;
         }
     };
     let (v, w) = (&mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
-    let (f, t, im, ii) =
-        (&p.force[r.clone()], &p.torque[r.clone()], &p.inv_mass[r.clone()], &p.inv_inertia[r]);
+    let (f, t, m, inertia) = (&p.force[r.clone()], &p.torque[r.clone()], &p.mass[r.clone()], &p.inertia[r]);
     if parallel {
         use rayon::prelude::*;
         (
@@ -180,12 +186,12 @@ pub fn verlet_kick(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, p
             w.par_chunks_mut(CHUNK),
             f.par_chunks(CHUNK),
             t.par_chunks(CHUNK),
-            im.par_chunks(CHUNK),
-            ii.par_chunks(CHUNK),
+            m.par_chunks(CHUNK),
+            inertia.par_chunks(CHUNK),
         )
             .into_par_iter()
-            .for_each(|(v, w, f, t, im, ii)| kernel(v, w, f, t, im, ii));
+            .for_each(|(v, w, f, t, m, inertia)| kernel(v, w, f, t, m, inertia));
     } else {
-        kernel(v, w, f, t, im, ii);
+        kernel(v, w, f, t, m, inertia);
     }
 }

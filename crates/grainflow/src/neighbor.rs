@@ -170,6 +170,21 @@ impl NeighborList {
         Ok(())
     }
 
+    /// Whether the list has been built.
+    pub fn is_built(&self) -> bool {
+        self.built
+    }
+
+    /// Positions at the last build.
+    pub fn reference(&self) -> &[Vec3] {
+        &self.reference
+    }
+
+    /// Number of reference positions (the particle count once built).
+    pub fn reference_len(&self) -> usize {
+        self.reference.len()
+    }
+
     /// Number of particle pairs in the list.
     pub fn pair_count(&self) -> usize {
         self.partners.len()
@@ -287,6 +302,7 @@ impl NeighborList {
     fn build_pairs(&mut self, p: &Particles) {
         let n = p.len();
         self.fresh.clear();
+        self.fresh.reserve(self.partners.len() + self.partners.len() / 8);
         if n >= 2 {
             let skin = self.skin;
             let per = self.periodic;
@@ -427,29 +443,45 @@ impl NeighborList {
 
     /// Replaces the pairs by the sorted `fresh` keys: each takes the history of the same pair
     /// in the old list (both are in (a, b) order, so one merge pass finds it), zero if new.
+    ///
+    /// Done in place, so that a rebuild needs no second copy of the histories: the histories
+    /// of persisting pairs are first packed to the front of the buffer (in order), then spread
+    /// backwards to their new places (a packed entry never lies behind its new place).
     fn renew_pairs(&mut self, n: usize) {
-        let mut history = Vec::with_capacity(self.fresh.len());
-        let (old_off, old_partners, old_hist) = (&self.offsets, &self.partners, &self.pair_history);
-        let (mut a_old, mut k) = (0usize, 0usize);
-        for &key in &self.fresh {
-            let mut h = Vec3::ZERO;
-            while k < old_partners.len() {
-                while old_off[a_old + 1] <= k {
+        let mut persists = vec![0u64; self.fresh.len().div_ceil(64)];
+        let (mut a_old, mut k, mut kept) = (0usize, 0usize, 0usize);
+        for (f, &key) in self.fresh.iter().enumerate() {
+            while k < self.partners.len() {
+                while self.offsets[a_old + 1] <= k {
                     a_old += 1;
                 }
-                let old_key = pair_key(a_old as u32, old_partners[k]);
+                let old_key = pair_key(a_old as u32, self.partners[k]);
                 if old_key < key {
                     k += 1;
                     continue;
                 }
                 if old_key == key {
-                    h = old_hist[k];
+                    self.pair_history[kept] = self.pair_history[k];
+                    kept += 1;
+                    persists[f / 64] |= 1 << (f % 64);
+                    k += 1;
                 }
                 break;
             }
-            history.push(h);
         }
-        self.pair_history = history;
+        let len = self.fresh.len();
+        // Exact growth: an amortised doubling would leave up to twice the history allocated.
+        self.pair_history.reserve_exact(len.saturating_sub(self.pair_history.len()));
+        self.pair_history.resize(len, Vec3::ZERO);
+        let mut src = kept;
+        for f in (0..len).rev() {
+            self.pair_history[f] = if persists[f / 64] >> (f % 64) & 1 == 1 {
+                src -= 1;
+                self.pair_history[src]
+            } else {
+                Vec3::ZERO
+            };
+        }
         self.offsets.clear();
         self.offsets.resize(n + 1, 0);
         for &key in &self.fresh {
@@ -459,7 +491,10 @@ impl NeighborList {
             self.offsets[a + 1] += self.offsets[a];
         }
         self.partners.clear();
+        self.partners.reserve_exact(len);
         self.partners.extend(self.fresh.iter().map(|&key| key as u32));
+        // The pairs of the next build are about as many; the scratch is not kept meanwhile.
+        self.fresh = Vec::new();
     }
 
     fn build_walls(&mut self, p: &Particles, walls: &[Wall]) {

@@ -156,6 +156,11 @@ impl Simulation {
             }
             None => default_skin(particles.max_radius()),
         };
+        let mut particles = particles;
+        if config.integrator == Integrator::AdamsBashforth && particles.accel_prev.is_empty() {
+            particles.accel_prev = vec![Vec3::ZERO; particles.len()];
+            particles.alpha_prev = vec![Vec3::ZERO; particles.len()];
+        }
         let motion = motion::resolve(&config.motion, &particles)?;
         let free = motion::free_runs(&motion, particles.len());
         let periodic = config.periodic.unwrap_or(Periodic::NONE);
@@ -667,17 +672,14 @@ fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
         p.radius.len(),
         p.mass.len(),
         p.inertia.len(),
-        p.inv_mass.len(),
-        p.inv_inertia.len(),
         p.position.len(),
         p.velocity.len(),
         p.omega.len(),
         p.force.len(),
         p.torque.len(),
-        p.accel_prev.len(),
-        p.alpha_prev.len(),
     ];
-    if lens.iter().any(|&l| l != n) {
+    let history_ok = [p.accel_prev.len(), p.alpha_prev.len()].iter().all(|&l| l == n || l == 0);
+    if lens.iter().any(|&l| l != n) || !history_ok {
         return Err(EngineError::BadReference("particle arrays have different lengths".into()));
     }
     let mut ids: Vec<u32> = p.id.clone();

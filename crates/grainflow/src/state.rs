@@ -19,10 +19,6 @@ pub struct Particles {
     pub mass: Vec<f64>,
     /// Moment of inertia (2/5)·m·R², kg·m².
     pub inertia: Vec<f64>,
-    /// 1/m, 1/kg (the integrators multiply by it instead of dividing by m).
-    pub inv_mass: Vec<f64>,
-    /// 1/I, 1/(kg·m²).
-    pub inv_inertia: Vec<f64>,
     /// Centre position, m.
     pub position: Vec<Vec3>,
     /// Velocity, m/s.
@@ -33,9 +29,11 @@ pub struct Particles {
     pub force: Vec<Vec3>,
     /// Torque accumulator, N·m.
     pub torque: Vec<Vec3>,
-    /// Previous step's linear acceleration (Adams–Bashforth history), m/s².
+    /// Previous step's linear acceleration (Adams–Bashforth history), m/s²; empty unless the
+    /// Adams–Bashforth integrator runs.
     pub accel_prev: Vec<Vec3>,
-    /// Previous step's angular acceleration (Adams–Bashforth history), rad/s².
+    /// Previous step's angular acceleration (Adams–Bashforth history), rad/s²; empty unless
+    /// the Adams–Bashforth integrator runs.
     pub alpha_prev: Vec<Vec3>,
 }
 
@@ -68,15 +66,13 @@ impl Particles {
             radius: Vec::with_capacity(n),
             mass: Vec::with_capacity(n),
             inertia: Vec::with_capacity(n),
-            inv_mass: Vec::with_capacity(n),
-            inv_inertia: Vec::with_capacity(n),
             position: v3(),
             velocity: v3(),
             omega: v3(),
             force: v3(),
             torque: v3(),
-            accel_prev: v3(),
-            alpha_prev: v3(),
+            accel_prev: Vec::new(),
+            alpha_prev: Vec::new(),
         }
     }
 
@@ -98,15 +94,11 @@ impl Particles {
         self.mass.push(m);
         let inertia = sphere_inertia(m, q.radius);
         self.inertia.push(inertia);
-        self.inv_mass.push(1.0 / m);
-        self.inv_inertia.push(1.0 / inertia);
         self.position.push(q.position);
         self.velocity.push(q.velocity);
         self.omega.push(q.omega);
         self.force.push(Vec3::ZERO);
         self.torque.push(Vec3::ZERO);
-        self.accel_prev.push(Vec3::ZERO);
-        self.alpha_prev.push(Vec3::ZERO);
     }
 
     /// Number of particles.
@@ -140,7 +132,7 @@ impl Particles {
             &self.accel_prev,
             &self.alpha_prev,
         ];
-        let f = [&self.radius, &self.mass, &self.inertia, &self.inv_mass, &self.inv_inertia];
+        let f = [&self.radius, &self.mass, &self.inertia];
         v3.iter().map(|v| v.capacity() * std::mem::size_of::<Vec3>()).sum::<usize>()
             + f.iter().map(|v| v.capacity() * 8).sum::<usize>()
             + (self.id.capacity() + self.phase.capacity()) * 4
