@@ -182,7 +182,7 @@ impl Simulation {
             + (8 + 24 * pairs)
             + (8 + 8 * walls)
             + (8 + 24 * walls)
-            + (8 + 24 * nl.reference_len())
+            + (8 + 24 * nl.reference().len())
             + (8 + 24 * anchors.len())
             + 8;
         out.reserve_exact(size);

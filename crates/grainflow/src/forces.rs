@@ -24,7 +24,7 @@ use std::ops::Range;
 
 use crate::boundary::Periodic;
 use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
-use crate::contact::law::{contact_force, rolling_torque};
+use crate::contact::law::{ContactForce, contact_force, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
 use crate::math::Vec3;
 use crate::wall::Wall;
@@ -86,6 +86,8 @@ pub(crate) struct ForcePlan {
     made_for: Option<(u64, usize)>,
     /// Rows of each block.
     blocks: Vec<Range<usize>>,
+    /// End of each block's wall pairs in the wall list.
+    wall_ends: Vec<usize>,
     /// Crossing pairs (row a, pair index k), grouped by block in list order.
     crossing: Vec<(u32, usize)>,
     /// Start of each block's crossing pairs in `crossing` (blocks + 1 entries).
@@ -104,14 +106,22 @@ impl ForcePlan {
         use std::mem::size_of;
         self.blocks.capacity() * size_of::<Range<usize>>()
             + self.crossing.capacity() * size_of::<(u32, usize)>()
-            + (self.crossing_start.capacity() + self.incoming_start.capacity()) * size_of::<usize>()
+            + (self.wall_ends.capacity() + self.crossing_start.capacity() + self.incoming_start.capacity())
+                * size_of::<usize>()
             + self.incoming.capacity() * 4
             + self.loads.capacity() * size_of::<Option<PairLoad>>()
     }
 
     /// Cuts `n` slots into `n_blocks` blocks with about equal pair counts, unless it was done
     /// for this neighbour-list build already.
-    pub fn prepare(&mut self, build: u64, n_blocks: usize, offsets: &[usize], partners: &[u32]) {
+    pub fn prepare(
+        &mut self,
+        build: u64,
+        n_blocks: usize,
+        offsets: &[usize],
+        partners: &[u32],
+        wall_pairs: &[[u32; 2]],
+    ) {
         if self.made_for == Some((build, n_blocks)) {
             return;
         }
@@ -131,6 +141,9 @@ impl ForcePlan {
             self.blocks.push(start..end);
             start = end;
         }
+        self.wall_ends.clear();
+        self.wall_ends
+            .extend(self.blocks.iter().map(|r| wall_pairs.partition_point(|&[i, _]| (i as usize) < r.end)));
         self.crossing.clear();
         self.crossing_start.clear();
         self.incoming_start.clear();
@@ -197,15 +210,14 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
 ) -> f64 {
     use rayon::prelude::*;
     let blocks = &plan.blocks;
-    let pair_bounds: Vec<usize> = blocks.iter().map(|r| x.offsets[r.end]).collect();
-    let wall_bounds: Vec<usize> =
-        blocks.iter().map(|r| x.wall_pairs.partition_point(|&[i, _]| (i as usize) < r.end)).collect();
-    let slot_bounds: Vec<usize> = blocks.iter().map(|r| r.end).collect();
+    let pair_ends = || blocks.iter().map(|r| x.offsets[r.end]);
+    let slot_ends = || blocks.iter().map(|r| r.end);
+    let wall_ends = &plan.wall_ends;
 
     // Pass 1: the crossing pairs, each block's on its thread.
     {
-        let hist = split_at_bounds(&mut *out.pair_history, &pair_bounds);
-        let loads = split_at_bounds(&mut plan.loads[..], &plan.crossing_start[1..]);
+        let hist = split_at_ends(&mut *out.pair_history, pair_ends());
+        let loads = split_at_ends(&mut plan.loads[..], plan.crossing_start[1..].iter().copied());
         let crossing = &plan.crossing;
         let starts = &plan.crossing_start;
         hist.into_par_iter().zip(loads).enumerate().for_each(|(t, (hist, loads))| {
@@ -217,10 +229,10 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
         });
     }
     // Pass 2: each block's walls, arriving crossing pairs and own rows.
-    let force = split_at_bounds(&mut *out.force, &slot_bounds);
-    let torque = split_at_bounds(&mut *out.torque, &slot_bounds);
-    let hist = split_at_bounds(&mut *out.pair_history, &pair_bounds);
-    let whist = split_at_bounds(&mut *out.wall_history, &wall_bounds);
+    let force = split_at_ends(&mut *out.force, slot_ends());
+    let torque = split_at_ends(&mut *out.torque, slot_ends());
+    let hist = split_at_ends(&mut *out.pair_history, pair_ends());
+    let whist = split_at_ends(&mut *out.wall_history, wall_ends.iter().copied());
     let incoming =
         Incoming::Crossing { start: &plan.incoming_start, index: &plan.incoming, loads: &plan.loads };
     let crossing_start = &plan.crossing_start;
@@ -233,7 +245,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
         .enumerate()
         .map(|(t, (((force, torque), hist), whist))| {
             let rows = blocks[t].clone();
-            let w0 = if t == 0 { 0 } else { wall_bounds[t - 1] };
+            let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
             block::<HERTZ, INCREMENTAL>(
                 clock,
                 x,
@@ -252,10 +264,10 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
 }
 
 /// Splits `s` at the given ends of consecutive parts (the last end must be `s.len()`).
-fn split_at_bounds<'s, T>(mut s: &'s mut [T], ends: &[usize]) -> Vec<&'s mut [T]> {
+fn split_at_ends<T>(mut s: &mut [T], ends: impl ExactSizeIterator<Item = usize>) -> Vec<&mut [T]> {
     let mut parts = Vec::with_capacity(ends.len());
     let mut at = 0;
-    for &end in ends {
+    for end in ends {
         let (head, tail) = s.split_at_mut(end - at);
         parts.push(head);
         s = tail;
@@ -275,7 +287,6 @@ enum Incoming<'a> {
 /// `hist` the histories of their pairs, `whist` those of their wall pairs (starting at wall
 /// pair `w0`), `own_crossing` the loads of their crossing pairs in list order. With `clock`,
 /// returns the seconds spent on the walls.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     clock: bool,
@@ -355,27 +366,9 @@ fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
         return None;
     };
     let c = x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize);
-    let c = if law.damping.per_particle_mass() {
-        scaled_damping(c, law.damping, pair_mass(x.mass, x.held, a, b))
-    } else {
-        *c
-    };
     let (wa, wb) = (x.omega[a], x.omega[b]);
     let v_r = relative_velocity(&g, x.velocity[a], x.velocity[b], wa, wb);
-    let mut hn = *h;
-    let f = contact_force::<HERTZ, INCREMENTAL>(
-        law.history,
-        law.clip_attraction,
-        law.coulomb,
-        &c,
-        &g,
-        v_r,
-        &mut hn,
-        x.dt,
-    );
-    if x.advance {
-        *h = hn;
-    }
+    let f = law_force::<HERTZ, INCREMENTAL>(x, c, || pair_mass(x.mass, x.held, a, b), &g, v_r, h);
     Some(PairLoad {
         f: f.total(),
         ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
@@ -401,15 +394,32 @@ fn wall_load<const HERTZ: bool, const INCREMENTAL: bool>(
         return None;
     };
     let c = x.coeffs.wall(x.phase[i] as usize, wall.material);
-    let c = if law.damping.per_particle_mass() { scaled_damping(c, law.damping, x.mass[i]) } else { *c };
     let v_r = relative_velocity(&g, x.velocity[i], Vec3::ZERO, x.omega[i], Vec3::ZERO);
+    let f = law_force::<HERTZ, INCREMENTAL>(x, c, || x.mass[i], &g, v_r, h);
+    Some((f.total(), f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, x.omega[i])))
+}
+
+/// The law's force for a contact with coefficients `c`, whose damping is scaled by the
+/// contact's effective mass `m_eff` when the law asks for it; advances the history `h` when
+/// the step stores it.
+#[inline(always)]
+fn law_force<const HERTZ: bool, const INCREMENTAL: bool>(
+    x: &ForceInputs,
+    c: &ContactCoeffs,
+    m_eff: impl FnOnce() -> f64,
+    g: &ContactGeometry,
+    v_r: Vec3,
+    h: &mut Vec3,
+) -> ContactForce {
+    let law = &x.law;
+    let c = if law.damping.per_particle_mass() { scaled_damping(c, law.damping, m_eff()) } else { *c };
     let mut hn = *h;
     let f = contact_force::<HERTZ, INCREMENTAL>(
         law.history,
         law.clip_attraction,
         law.coulomb,
         &c,
-        &g,
+        g,
         v_r,
         &mut hn,
         x.dt,
@@ -417,7 +427,7 @@ fn wall_load<const HERTZ: bool, const INCREMENTAL: bool>(
     if x.advance {
         *h = hn;
     }
-    Some((f.total(), f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, x.omega[i])))
+    f
 }
 
 /// Effective mass of the particles in slots i and j: m_i m_j/(m_i + m_j), or the other one's

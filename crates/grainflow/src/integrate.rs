@@ -37,41 +37,98 @@ impl Integrator {
 /// Particles per piece of work when integrating on several threads.
 const CHUNK: usize = 4096;
 
-/// MFIX's `EULER` step. With `parallel`, on the current rayon pool (the result is the same:
-/// every particle is updated on its own).
-pub fn euler(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
-    let kernel = |x: &mut [Vec3],
-                  v: &mut [Vec3],
-                  w: &mut [Vec3],
-                  f: &[Vec3],
-                  t: &[Vec3],
-                  m: &[f64],
-                  inertia: &[f64]| {
-        for i in 0..x.len() {
-            let (a, alpha) = (f[i] * (1.0 / m[i]) + gravity, t[i] * (1.0 / inertia[i]));
-            v[i] += dt * a;
-            x[i] += dt * v[i];
-            w[i] += dt * alpha;
+/// The arrays of a run of particle slots that the integrators read and write. The
+/// Adams–Bashforth history is empty unless that integrator runs.
+struct Slots<'a> {
+    x: &'a mut [Vec3],
+    v: &'a mut [Vec3],
+    w: &'a mut [Vec3],
+    a_prev: &'a mut [Vec3],
+    alpha_prev: &'a mut [Vec3],
+    f: &'a [Vec3],
+    t: &'a [Vec3],
+    m: &'a [f64],
+    inertia: &'a [f64],
+}
+
+impl<'a> Slots<'a> {
+    fn of(p: &'a mut Particles, r: Range<usize>) -> Self {
+        let history = |h: &'a mut Vec<Vec3>| if h.is_empty() { &mut h[..] } else { &mut h[r.clone()] };
+        Slots {
+            x: &mut p.position[r.clone()],
+            v: &mut p.velocity[r.clone()],
+            w: &mut p.omega[r.clone()],
+            a_prev: history(&mut p.accel_prev),
+            alpha_prev: history(&mut p.alpha_prev),
+            f: &p.force[r.clone()],
+            t: &p.torque[r.clone()],
+            m: &p.mass[r.clone()],
+            inertia: &p.inertia[r],
         }
-    };
-    let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
-    let (f, t, m, inertia) = (&p.force[r.clone()], &p.torque[r.clone()], &p.mass[r.clone()], &p.inertia[r]);
-    if parallel {
-        use rayon::prelude::*;
-        (
-            x.par_chunks_mut(CHUNK),
-            v.par_chunks_mut(CHUNK),
-            w.par_chunks_mut(CHUNK),
-            f.par_chunks(CHUNK),
-            t.par_chunks(CHUNK),
-            m.par_chunks(CHUNK),
-            inertia.par_chunks(CHUNK),
-        )
-            .into_par_iter()
-            .for_each(|(x, v, w, f, t, m, inertia)| kernel(x, v, w, f, t, m, inertia));
-    } else {
-        kernel(x, v, w, f, t, m, inertia);
     }
+
+    fn split_at(self, k: usize) -> (Self, Self) {
+        fn cut<T>(s: &mut [T], k: usize) -> (&mut [T], &mut [T]) {
+            if s.is_empty() { (&mut [], &mut []) } else { s.split_at_mut(k) }
+        }
+        let (x, x2) = self.x.split_at_mut(k);
+        let (v, v2) = self.v.split_at_mut(k);
+        let (w, w2) = self.w.split_at_mut(k);
+        let (a_prev, a_prev2) = cut(self.a_prev, k);
+        let (alpha_prev, alpha_prev2) = cut(self.alpha_prev, k);
+        let (f, f2) = self.f.split_at(k);
+        let (t, t2) = self.t.split_at(k);
+        let (m, m2) = self.m.split_at(k);
+        let (inertia, inertia2) = self.inertia.split_at(k);
+        (
+            Slots { x, v, w, a_prev, alpha_prev, f, t, m, inertia },
+            Slots {
+                x: x2,
+                v: v2,
+                w: w2,
+                a_prev: a_prev2,
+                alpha_prev: alpha_prev2,
+                f: f2,
+                t: t2,
+                m: m2,
+                inertia: inertia2,
+            },
+        )
+    }
+
+    /// a = F/m + g and α = T/I of slot i.
+    #[inline(always)]
+    fn accelerations(&self, i: usize, gravity: Vec3) -> (Vec3, Vec3) {
+        (self.f[i] * (1.0 / self.m[i]) + gravity, self.t[i] * (1.0 / self.inertia[i]))
+    }
+}
+
+/// Applies `kernel` to the slots in `r`; with `parallel`, in pieces on the current rayon pool
+/// (the result is the same: every particle is updated on its own).
+fn for_slots(p: &mut Particles, r: Range<usize>, parallel: bool, kernel: impl Fn(Slots) + Sync) {
+    fn run(s: Slots, kernel: &(impl Fn(Slots) + Sync)) {
+        let n = s.x.len();
+        if n > CHUNK {
+            let (a, b) = s.split_at(n / 2);
+            rayon::join(|| run(a, kernel), || run(b, kernel));
+        } else {
+            kernel(s);
+        }
+    }
+    let s = Slots::of(p, r);
+    if parallel { run(s, &kernel) } else { kernel(s) }
+}
+
+/// MFIX's `EULER` step.
+pub fn euler(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
+    for_slots(p, r, parallel, |s| {
+        for i in 0..s.x.len() {
+            let (a, alpha) = s.accelerations(i, gravity);
+            s.v[i] += dt * a;
+            s.x[i] += dt * s.v[i];
+            s.w[i] += dt * alpha;
+        }
+    });
 }
 
 /// MFIX's `ADAMS_BASHFORTH` step. `first` marks the first step of the run, where the previous
@@ -85,113 +142,42 @@ pub fn adams_bashforth(
     parallel: bool,
 ) {
     let h = 0.5 * dt;
-    let kernel = |x: &mut [Vec3],
-                  v: &mut [Vec3],
-                  w: &mut [Vec3],
-                  ap: &mut [Vec3],
-                  alp: &mut [Vec3],
-                  f: &[Vec3],
-                  t: &[Vec3],
-                  m: &[f64],
-                  inertia: &[f64]| {
-        for i in 0..x.len() {
-            let a = f[i] * (1.0 / m[i]) + gravity;
-            let alpha = t[i] * (1.0 / inertia[i]);
-            let (a_prev, alpha_prev) = if first { (a, alpha) } else { (ap[i], alp[i]) };
-            let v0 = v[i];
+    for_slots(p, r, parallel, |s| {
+        for i in 0..s.x.len() {
+            let (a, alpha) = s.accelerations(i, gravity);
+            let (a_prev, alpha_prev) = if first { (a, alpha) } else { (s.a_prev[i], s.alpha_prev[i]) };
+            let v0 = s.v[i];
             let v1 = v0 + h * (3.0 * a - a_prev);
-            x[i] += h * (v0 + v1);
-            v[i] = v1;
-            w[i] += h * (3.0 * alpha - alpha_prev);
-            ap[i] = a;
-            alp[i] = alpha;
+            s.x[i] += h * (v0 + v1);
+            s.v[i] = v1;
+            s.w[i] += h * (3.0 * alpha - alpha_prev);
+            s.a_prev[i] = a;
+            s.alpha_prev[i] = alpha;
         }
-    };
-    let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
-    let (ap, alp) = (&mut p.accel_prev[r.clone()], &mut p.alpha_prev[r.clone()]);
-    let (f, t, m, inertia) = (&p.force[r.clone()], &p.torque[r.clone()], &p.mass[r.clone()], &p.inertia[r]);
-    if parallel {
-        use rayon::prelude::*;
-        (
-            x.par_chunks_mut(CHUNK),
-            v.par_chunks_mut(CHUNK),
-            w.par_chunks_mut(CHUNK),
-            ap.par_chunks_mut(CHUNK),
-            alp.par_chunks_mut(CHUNK),
-            f.par_chunks(CHUNK),
-            t.par_chunks(CHUNK),
-            m.par_chunks(CHUNK),
-            inertia.par_chunks(CHUNK),
-        )
-            .into_par_iter()
-            .for_each(|(x, v, w, ap, alp, f, t, m, inertia)| kernel(x, v, w, ap, alp, f, t, m, inertia));
-    } else {
-        kernel(x, v, w, ap, alp, f, t, m, inertia);
-    }
+    });
 }
 
 /// Velocity Verlet, first half: kick by Δt/2 with the current accelerations, then drift by Δt.
 pub fn verlet_kick_drift(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
     let h = 0.5 * dt;
-    let kernel = |x: &mut [Vec3],
-                  v: &mut [Vec3],
-                  w: &mut [Vec3],
-                  f: &[Vec3],
-                  t: &[Vec3],
-                  m: &[f64],
-                  inertia: &[f64]| {
-        for i in 0..x.len() {
-            let (a, alpha) = (f[i] * (1.0 / m[i]) + gravity, t[i] * (1.0 / inertia[i]));
-            v[i] += h * a;
-            w[i] += h * alpha;
-            x[i] += dt * v[i];
+    for_slots(p, r, parallel, |s| {
+        for i in 0..s.x.len() {
+            let (a, alpha) = s.accelerations(i, gravity);
+            s.v[i] += h * a;
+            s.w[i] += h * alpha;
+            s.x[i] += dt * s.v[i];
         }
-    };
-    let (x, v, w) = (&mut p.position[r.clone()], &mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
-    let (f, t, m, inertia) = (&p.force[r.clone()], &p.torque[r.clone()], &p.mass[r.clone()], &p.inertia[r]);
-    if parallel {
-        use rayon::prelude::*;
-        (
-            x.par_chunks_mut(CHUNK),
-            v.par_chunks_mut(CHUNK),
-            w.par_chunks_mut(CHUNK),
-            f.par_chunks(CHUNK),
-            t.par_chunks(CHUNK),
-            m.par_chunks(CHUNK),
-            inertia.par_chunks(CHUNK),
-        )
-            .into_par_iter()
-            .for_each(|(x, v, w, f, t, m, inertia)| kernel(x, v, w, f, t, m, inertia));
-    } else {
-        kernel(x, v, w, f, t, m, inertia);
-    }
+    });
 }
 
 /// Velocity Verlet, second half: kick by Δt/2 with the new accelerations.
 pub fn verlet_kick(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
     let h = 0.5 * dt;
-    let kernel = |v: &mut [Vec3], w: &mut [Vec3], f: &[Vec3], t: &[Vec3], m: &[f64], inertia: &[f64]| {
-        for i in 0..v.len() {
-            let (a, alpha) = (f[i] * (1.0 / m[i]) + gravity, t[i] * (1.0 / inertia[i]));
-            v[i] += h * a;
-            w[i] += h * alpha;
+    for_slots(p, r, parallel, |s| {
+        for i in 0..s.v.len() {
+            let (a, alpha) = s.accelerations(i, gravity);
+            s.v[i] += h * a;
+            s.w[i] += h * alpha;
         }
-    };
-    let (v, w) = (&mut p.velocity[r.clone()], &mut p.omega[r.clone()]);
-    let (f, t, m, inertia) = (&p.force[r.clone()], &p.torque[r.clone()], &p.mass[r.clone()], &p.inertia[r]);
-    if parallel {
-        use rayon::prelude::*;
-        (
-            v.par_chunks_mut(CHUNK),
-            w.par_chunks_mut(CHUNK),
-            f.par_chunks(CHUNK),
-            t.par_chunks(CHUNK),
-            m.par_chunks(CHUNK),
-            inertia.par_chunks(CHUNK),
-        )
-            .into_par_iter()
-            .for_each(|(v, w, f, t, m, inertia)| kernel(v, w, f, t, m, inertia));
-    } else {
-        kernel(v, w, f, t, m, inertia);
-    }
+    });
 }

@@ -91,6 +91,18 @@ fn pair_key(a: u32, b: u32) -> u64 {
     ((a as u64) << 32) | b as u64
 }
 
+/// The row offsets (`n` + 1 entries) of the pairs with the given sorted keys.
+fn row_offsets(keys: impl Iterator<Item = u64>, n: usize, offsets: &mut Vec<usize>) {
+    offsets.clear();
+    offsets.resize(n + 1, 0);
+    for key in keys {
+        offsets[(key >> 32) as usize + 1] += 1;
+    }
+    for a in 0..n {
+        offsets[a + 1] += offsets[a];
+    }
+}
+
 impl NeighborList {
     /// An empty list with the given skin (m).
     pub fn new(skin: f64) -> Self {
@@ -154,14 +166,7 @@ impl NeighborList {
         }
         self.skin = s.skin;
         self.built = s.built;
-        self.offsets.clear();
-        self.offsets.resize(n + 1, 0);
-        for &(key, _) in &pairs {
-            self.offsets[(key >> 32) as usize + 1] += 1;
-        }
-        for a in 0..n {
-            self.offsets[a + 1] += self.offsets[a];
-        }
+        row_offsets(pairs.iter().map(|e| e.0), n, &mut self.offsets);
         self.partners = pairs.iter().map(|e| e.0 as u32).collect();
         self.pair_history = pairs.iter().map(|e| e.1).collect();
         self.wall_pairs = walls.iter().map(|e| [(e.0 >> 32) as u32, e.0 as u32]).collect();
@@ -178,11 +183,6 @@ impl NeighborList {
     /// Positions at the last build.
     pub fn reference(&self) -> &[Vec3] {
         &self.reference
-    }
-
-    /// Number of reference positions (the particle count once built).
-    pub fn reference_len(&self) -> usize {
-        self.reference.len()
     }
 
     /// Number of particle pairs in the list.
@@ -482,14 +482,7 @@ impl NeighborList {
                 Vec3::ZERO
             };
         }
-        self.offsets.clear();
-        self.offsets.resize(n + 1, 0);
-        for &key in &self.fresh {
-            self.offsets[(key >> 32) as usize + 1] += 1;
-        }
-        for a in 0..n {
-            self.offsets[a + 1] += self.offsets[a];
-        }
+        row_offsets(self.fresh.iter().copied(), n, &mut self.offsets);
         self.partners.clear();
         self.partners.reserve_exact(len);
         self.partners.extend(self.fresh.iter().map(|&key| key as u32));

@@ -464,14 +464,15 @@ impl Simulation {
         use NormalModel::*;
         use TangentialModel::*;
         match (self.law.normal, self.law.tangential) {
-            (LinearSpringDashpot, MfixTotal) => self.force_loop::<false, false>(advance_history),
-            (LinearSpringDashpot, IncrementalMindlin) => self.force_loop::<false, true>(advance_history),
-            (Hertz, MfixTotal) => self.force_loop::<true, false>(advance_history),
-            (Hertz, IncrementalMindlin) => self.force_loop::<true, true>(advance_history),
+            (LinearSpringDashpot, MfixTotal) => self.force_loop::<false, false>(advance_history, par),
+            (LinearSpringDashpot, IncrementalMindlin) => self.force_loop::<false, true>(advance_history, par),
+            (Hertz, MfixTotal) => self.force_loop::<true, false>(advance_history, par),
+            (Hertz, IncrementalMindlin) => self.force_loop::<true, true>(advance_history, par),
         }
     }
 
-    fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool) {
+    /// The force stage for one law; with `par`, on the thread pool.
+    fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool, par: bool) {
         let clock = self.timing.map(|_| std::time::Instant::now());
         let p = &mut self.particles;
         let build = self.neighbors.stats().builds;
@@ -497,18 +498,19 @@ impl Simulation {
         let out =
             forces::ForceOutputs { force: &mut p.force, torque: &mut p.torque, pair_history, wall_history };
         let timed = clock.is_some();
-        let wall_seconds = match &self.pool {
-            Some(pool) if p.position.len() >= forces::MIN_PARALLEL_PARTICLES => {
+        let wall_seconds = match self.pool.as_ref().filter(|_| par) {
+            Some(pool) => {
                 let plan = &mut self.plan;
                 plan.prepare(
                     build,
                     forces::BLOCKS_PER_THREAD * pool.current_num_threads(),
                     offsets,
                     partners,
+                    wall_pairs,
                 );
                 pool.install(|| forces::parallel::<HERTZ, INCREMENTAL>(&x, plan, out, timed))
             }
-            _ => forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
+            None => forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
         };
         if let (Some(c), Some(t)) = (clock, self.timing.as_mut()) {
             let total = c.elapsed().as_secs_f64();
@@ -628,13 +630,6 @@ pub struct MemoryUse {
     pub neighbors: usize,
     /// Blocks and crossing pairs of the parallel force stage.
     pub threads: usize,
-}
-
-impl MemoryUse {
-    /// All of it.
-    pub fn total(&self) -> usize {
-        self.particles + self.neighbors + self.threads
-    }
 }
 
 /// The other side of a contact.
