@@ -121,7 +121,11 @@ pub(crate) fn free_runs(rules: &[ResolvedMotion], n: usize) -> Vec<std::ops::Ran
     runs
 }
 
-pub(crate) fn apply(rules: &[ResolvedMotion], p: &mut Particles) {
+/// Puts every prescribed particle where its rule says, at rest. Returns true if that changed
+/// any position, velocity or angular velocity (bit for bit): a held particle already at its
+/// anchor and at rest changes nothing, so the forces of the state stay valid.
+pub(crate) fn apply(rules: &[ResolvedMotion], p: &mut Particles) -> bool {
+    let mut changed = false;
     for r in rules {
         let mut x = r.anchor.to_array();
         if let Some(l) = r.leader {
@@ -132,8 +136,66 @@ pub(crate) fn apply(rules: &[ResolvedMotion], p: &mut Particles) {
                 }
             }
         }
-        p.position[r.slot] = Vec3::from_array(x);
-        p.velocity[r.slot] = Vec3::ZERO;
-        p.omega[r.slot] = Vec3::ZERO;
+        let x = Vec3::from_array(x);
+        let s = r.slot;
+        // Compared as bits, so that -0.0 and 0.0 (or any NaN) count as a change.
+        let same = |a: Vec3, b: Vec3| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits);
+        changed |=
+            !(same(p.position[s], x) && same(p.velocity[s], Vec3::ZERO) && same(p.omega[s], Vec3::ZERO));
+        p.position[s] = x;
+        p.velocity[s] = Vec3::ZERO;
+        p.omega[s] = Vec3::ZERO;
+    }
+    changed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::state::ParticleInit;
+
+    fn two_particles() -> Particles {
+        let q = |id: u32, x: f64| ParticleInit {
+            id,
+            phase: 0,
+            radius: 0.5,
+            density: 1.0,
+            position: Vec3::new(x, 0.0, 0.0),
+            velocity: Vec3::ZERO,
+            omega: Vec3::ZERO,
+        };
+        Particles::from_init(&[q(1, 0.0), q(2, 2.0)])
+    }
+
+    #[test]
+    fn applying_a_rule_reports_whether_the_state_changed() {
+        let mut p = two_particles();
+        let hold = resolve(&[PrescribedMotion { particle: 1, rule: MotionRule::Hold }], &p).unwrap();
+        // At its anchor and at rest: nothing changes, so the forces of the state stay valid.
+        assert!(!apply(&hold, &mut p));
+        // Any drift of position, velocity or spin is undone and reported.
+        p.velocity[0] = Vec3::new(0.0, 0.0, -1e-300);
+        assert!(apply(&hold, &mut p));
+        assert_eq!(p.velocity[0], Vec3::ZERO);
+        assert!(!apply(&hold, &mut p));
+        p.position[0].x = 1e-16;
+        assert!(apply(&hold, &mut p));
+        assert_eq!(p.position[0].x, 0.0);
+        p.omega[0].y = -0.0;
+        assert!(apply(&hold, &mut p), "-0.0 is not the rest state's bits");
+        // A follower moves with its leader: a change whenever the leader moved.
+        let follow = resolve(
+            &[PrescribedMotion {
+                particle: 2,
+                rule: MotionRule::Follow { leader: 1, axes: [true, false, false] },
+            }],
+            &p,
+        )
+        .unwrap();
+        assert!(apply(&follow, &mut p), "particle 2 jumps to its leader's x");
+        assert!(!apply(&follow, &mut p));
+        p.position[0].x = 0.25;
+        assert!(apply(&follow, &mut p));
+        assert_eq!(p.position[1].x, 0.25);
     }
 }

@@ -398,13 +398,14 @@ impl Simulation {
                 for r in self.free.clone() {
                     integrate::verlet_kick(&mut self.particles, r, g, dt, par);
                 }
-                // Prescribed motion moves particles after this evaluation: their partners'
-                // forces must then be evaluated again before the next half kick.
-                self.forces_current = self.motion.is_empty();
             }
         }
         self.history_started = true;
-        motion::apply(&self.motion, &mut self.particles);
+        // Prescribed motion that moves a particle after this evaluation makes the forces stale:
+        // they are evaluated again before the next half kick. Particles held at rest where they
+        // are change nothing, and the forces of this step stay those of the state.
+        let moved = motion::apply(&self.motion, &mut self.particles);
+        self.forces_current = !moved;
         if self.periodic.any() {
             let per = self.periodic;
             if par {
