@@ -92,18 +92,59 @@ impl Periodic {
         Vec3::from_array(d)
     }
 
-    /// A position brought back into [lo, hi) on the periodic axes.
+    /// A position brought back into [lo, hi) on the periodic axes. A coordinate already inside
+    /// is left exactly as it is (the common case, checked first: a step moves few particles
+    /// across a face).
     #[inline(always)]
     pub fn wrap(&self, x: Vec3) -> Vec3 {
         let mut x = x.to_array();
-        let (lo, l) = (self.lo.to_array(), self.lengths().to_array());
+        let (lo, hi) = (self.lo.to_array(), self.hi.to_array());
         for k in 0..3 {
-            if self.axes[k] {
-                let w = lo[k] + (x[k] - lo[k]).rem_euclid(l[k]);
-                // rem_euclid can round up to exactly l for tiny negative offsets.
-                x[k] = if w >= lo[k] + l[k] { lo[k] } else { w };
+            if self.axes[k] && !(x[k] >= lo[k] && x[k] < hi[k]) {
+                x[k] = wrap_coordinate(x[k], lo[k], hi[k]);
             }
         }
         Vec3::from_array(x)
+    }
+}
+
+/// `x` brought into [lo, hi).
+#[cold]
+fn wrap_coordinate(x: f64, lo: f64, hi: f64) -> f64 {
+    let w = lo + (x - lo).rem_euclid(hi - lo);
+    // rem_euclid can round up to exactly the length for tiny negative offsets.
+    if w >= hi { lo } else { w }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrapping_keeps_inside_coordinates_and_brings_the_others_into_the_box() {
+        let per = Periodic {
+            lo: Vec3::new(-0.3, 0.1, 0.0),
+            hi: Vec3::new(0.7, 2.1, 1.0),
+            axes: [true, true, false],
+        };
+        // Inside: untouched to the bit, even where lo + ((x − lo) mod L) would round.
+        let inside = Vec3::new(0.1 + 1e-17, 0.3, 5.0);
+        assert_eq!(per.wrap(inside), inside);
+        // One length out on either side, several lengths out, and a hair below lo (whose
+        // remainder rounds up to L): all land in [lo, hi); z is not periodic.
+        for x in [Vec3::new(0.75, -0.4, -3.0), Vec3::new(-7.25, 9.9, 2.0), Vec3::new(-0.3 - 6e-17, 2.1, 0.5)]
+        {
+            let w = per.wrap(x).to_array();
+            let l = per.lengths().to_array();
+            let (lo, hi) = (per.lo.to_array(), per.hi.to_array());
+            for k in 0..2 {
+                assert!(w[k] >= lo[k] && w[k] < hi[k], "{x:?} wrapped to {w:?}");
+                // The same point of the lattice: an integer number of lengths away (to
+                // rounding of a few ulps of the coordinates involved).
+                let n = (x.to_array()[k] - w[k]) / l[k];
+                assert!((n - n.round()).abs() < 1e-12, "{x:?} → {w:?}: shift {n} lengths");
+            }
+            assert_eq!(w[2], x.z);
+        }
     }
 }
