@@ -688,9 +688,12 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         }
     }
     let particles = Particles::from_init(&init);
+    // A large bed's inputs are as large as its state: let them go before the checks below.
+    drop(init);
 
-    // Prescribed motion.
-    let ids: std::collections::HashSet<u32> = particles.id.iter().copied().collect();
+    // Prescribed motion (the ids are gathered only if there is any).
+    let ids: std::collections::HashSet<u32> =
+        if raw.motion.is_empty() { Default::default() } else { particles.id.iter().copied().collect() };
     let mut motion = Vec::new();
     for (k, m) in raw.motion.iter().enumerate() {
         let table = format!("[[motion]] #{}", k + 1);

@@ -10,7 +10,6 @@ use crate::error::CaseError;
 use grainflow::Vec3;
 use grainflow::material::Phase;
 use grainflow::state::ParticleInit;
-use std::collections::HashMap;
 
 /// The box bounds a data file declares (lower, upper corner), if it has them.
 pub fn box_bounds(text: &str) -> Option<(Vec3, Vec3)> {
@@ -33,13 +32,16 @@ pub fn box_bounds(text: &str) -> Option<(Vec3, Vec3)> {
 pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
     let err =
         |line: usize, message: String| CaseError::ParticleFile { path: path.to_string(), line, message };
-    let lines: Vec<&str> = text.lines().collect();
+    // Large beds come in large files: the lines are read where they are, and the atoms are
+    // kept sorted by id (for the Velocities section) instead of in an id index.
     let mut expected_atoms = None;
     let mut section = "";
     let mut atoms: Vec<ParticleInit> = Vec::new();
-    let mut index: HashMap<u32, usize> = HashMap::new();
+    let mut sorted = true;
     let mut velocities = 0usize;
-    for (k, raw) in lines.iter().enumerate() {
+    let mut last_line = 0;
+    for (k, raw) in text.lines().enumerate() {
+        last_line = k + 1;
         let line_no = k + 1;
         let line = raw.split('#').next().unwrap_or("").trim();
         if k == 0 {
@@ -61,6 +63,7 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
         }
         if head.starts_with("Velocities") {
             section = "Velocities";
+            sort_by_id(&mut atoms, &mut sorted, text, path)?;
             continue;
         }
         if head.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) {
@@ -76,10 +79,13 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
         };
         match section {
             "" if f.len() == 2 && f[1] == "atoms" => {
-                expected_atoms = Some(
-                    f[0].parse::<usize>()
-                        .map_err(|_| err(line_no, format!("'{}' is not an atom count", f[0])))?,
-                );
+                let n = f[0]
+                    .parse::<usize>()
+                    .map_err(|_| err(line_no, format!("'{}' is not an atom count", f[0])))?;
+                expected_atoms = Some(n);
+                // Room for all of them at once (a header that overstates the count cannot
+                // ask for more than the file could hold: an atom line has 14 characters or more).
+                atoms.reserve_exact(n.min(text.len() / 14));
             }
             "Atoms" => {
                 if f.len() != 7 && f.len() != 10 {
@@ -104,9 +110,7 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
                 if !(d > 0.0 && rho > 0.0) {
                     return Err(err(line_no, format!("diameter {d} and density {rho} must be positive")));
                 }
-                if index.insert(id, atoms.len()).is_some() {
-                    return Err(err(line_no, format!("atom id {id} appears twice")));
-                }
+                sorted &= atoms.last().is_none_or(|a| a.id < id);
                 atoms.push(ParticleInit {
                     id,
                     phase: (ty - 1) as u32,
@@ -126,7 +130,7 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
                 }
                 let id: u32 =
                     f[0].parse().map_err(|_| err(line_no, format!("id '{}' is not a whole number", f[0])))?;
-                let slot = *index.get(&id).ok_or_else(|| {
+                let slot = atoms.binary_search_by_key(&id, |a| a.id).map_err(|_| {
                     err(line_no, format!("velocity for atom {id}, which the Atoms section does not have"))
                 })?;
                 atoms[slot].velocity = Vec3::new(num(f[1], "vx")?, num(f[2], "vy")?, num(f[3], "vz")?);
@@ -139,23 +143,62 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
     if let Some(n) = expected_atoms {
         if n != atoms.len() {
             return Err(err(
-                lines.len(),
+                last_line,
                 format!("the header declares {n} atoms but the Atoms section has {}", atoms.len()),
             ));
         }
     }
     if atoms.is_empty() {
-        return Err(err(lines.len(), "no Atoms section with particles".into()));
+        return Err(err(last_line, "no Atoms section with particles".into()));
     }
     if velocities != 0 && velocities != atoms.len() {
         return Err(err(
-            lines.len(),
+            last_line,
             format!("the Velocities section covers {velocities} of {} atoms", atoms.len()),
         ));
     }
     // LAMMPS writes atoms in no particular order; keep them sorted by id.
-    atoms.sort_by_key(|a| a.id);
+    sort_by_id(&mut atoms, &mut sorted, text, path)?;
     Ok(atoms)
+}
+
+/// Sorts the atoms by id unless they are known to be sorted; an id that appears twice is an
+/// error naming the line of its second appearance.
+fn sort_by_id(
+    atoms: &mut [ParticleInit],
+    sorted: &mut bool,
+    text: &str,
+    path: &str,
+) -> Result<(), CaseError> {
+    if !*sorted {
+        // Ids are unique (checked below), so an unstable sort orders them as a stable one,
+        // without its buffer of half the atoms.
+        atoms.sort_unstable_by_key(|a| a.id);
+        *sorted = true;
+    }
+    let Some(w) = atoms.windows(2).find(|w| w[0].id == w[1].id) else {
+        return Ok(());
+    };
+    let id = w[0].id.to_string();
+    // The second line of the Atoms section that starts with this id.
+    let mut in_atoms = false;
+    let line = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            let head = l.trim();
+            if head.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) {
+                in_atoms = head.starts_with("Atoms");
+            }
+            in_atoms && head.split_whitespace().next() == Some(id.as_str())
+        })
+        .nth(1)
+        .map_or(0, |(k, _)| k + 1);
+    Err(CaseError::ParticleFile {
+        path: path.to_string(),
+        line,
+        message: format!("atom id {id} appears twice"),
+    })
 }
 
 #[cfg(test)]
@@ -210,6 +253,10 @@ mod tests {
         bad(&DATA.replace("3 atoms", "4 atoms"), "declares 4 atoms");
         bad(&DATA.replace("0.012 0.022 0.032", "0.012 0.022"), "line 14: expected 7 values");
         bad(&DATA.replace("1 1 2 3 4 5 6", "9 1 2 3 4 5 6"), "atom 9");
+        bad(
+            &DATA.replace("3 1 0.002 2500 0.012", "2 1 0.002 2500 0.012"),
+            "line 14: atom id 2 appears twice",
+        );
         bad(&DATA.replace("0.011 0.021", "0.011 abc"), "y = 'abc'");
     }
 }

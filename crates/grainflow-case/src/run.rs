@@ -13,7 +13,7 @@
 //!   in progress finishes, a checkpoint is written and the outputs are closed properly.
 
 use crate::case::{Case, OutputSettings};
-use crate::output::{TIMESERIES_HEADER, TimeSeriesWriter, snapshot_csv, write_atomic};
+use crate::output::{TIMESERIES_HEADER, TimeSeriesWriter, snapshot_csv, write_atomic, write_atomic_with};
 use crate::vtk::VtkSeries;
 use grainflow::{Diagnostics, Simulation, Vec3};
 use std::path::{Path, PathBuf};
@@ -53,6 +53,9 @@ pub struct RunOptions {
     pub stop: Option<Arc<AtomicBool>>,
     /// Threads of the force stage (None: one). The results do not depend on it.
     pub threads: Option<usize>,
+    /// Largest state (bytes) kept in memory as the last good state; larger ones are kept in
+    /// a file (None: [`LAST_GOOD_IN_MEMORY`]).
+    pub last_good_in_memory: Option<usize>,
 }
 
 /// What a finished (or interrupted) run reports.
@@ -196,6 +199,73 @@ fn earlier_rows(path: &Path, step: u64) -> Vec<String> {
         .collect()
 }
 
+/// States up to this size (bytes) are kept in memory as the last good state; larger ones
+/// are kept in a file, so that the copy does not add to the run's memory (about 300 bytes
+/// per particle, as much as the simulation itself).
+pub const LAST_GOOD_IN_MEMORY: usize = 64 << 20;
+
+/// The last state that passed the health check, written to [`LAST_GOOD_FILE`] only if a
+/// later check fails. Small states are kept in memory (one buffer, reused); larger ones are
+/// streamed to a hidden file in the output folder (renamed into place on a failure, removed
+/// when the run ends otherwise).
+struct LastGood<'a> {
+    step: u64,
+    hash: &'a str,
+    out: &'a Path,
+    /// The bytes in memory, or None when they are on disk.
+    bytes: Option<Vec<u8>>,
+}
+
+impl<'a> LastGood<'a> {
+    fn new(
+        sim: &Simulation,
+        hash: &'a str,
+        out: &'a Path,
+        max_in_memory: usize,
+    ) -> Result<Self, OutputError> {
+        let in_memory = sim.checkpoint_size(hash) <= max_in_memory;
+        let mut kept = LastGood { step: 0, hash, out, bytes: in_memory.then(Vec::new) };
+        kept.keep(sim)?;
+        Ok(kept)
+    }
+
+    fn rolling_path(&self) -> PathBuf {
+        self.out.join(format!(".{LAST_GOOD_FILE}.rolling"))
+    }
+
+    /// Keeps the current state.
+    fn keep(&mut self, sim: &Simulation) -> Result<(), OutputError> {
+        self.step = sim.step_index();
+        match &mut self.bytes {
+            Some(b) => sim.checkpoint_into(self.hash, b),
+            None => {
+                let path = self.rolling_path();
+                write_atomic_with(&path, |w| sim.write_checkpoint(self.hash, w)).map_err(io_err(&path))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the kept state to [`LAST_GOOD_FILE`]; returns its step and path.
+    fn save(&self) -> Result<(u64, PathBuf), OutputError> {
+        let saved = self.out.join(LAST_GOOD_FILE);
+        match &self.bytes {
+            Some(b) => write_atomic(&saved, b).map_err(io_err(&saved))?,
+            None => std::fs::rename(self.rolling_path(), &saved).map_err(io_err(&saved))?,
+        }
+        Ok((self.step, saved))
+    }
+}
+
+impl Drop for LastGood<'_> {
+    /// The kept state goes with the run (after a failure it was renamed into place).
+    fn drop(&mut self) {
+        if self.bytes.is_none() {
+            let _ = std::fs::remove_file(self.rolling_path());
+        }
+    }
+}
+
 /// The first problem of the current state, if any: non-finite values, a particle outside
 /// the domain box, an overlap beyond [`HEALTH_MAX_OVERLAP`].
 pub fn health_problem(sim: &Simulation, domain: (Vec3, Vec3)) -> Option<String> {
@@ -269,7 +339,8 @@ fn run_simulation(
     };
     let checkpoint_path = out.join(CHECKPOINT_FILE);
     let write_checkpoint = |sim: &Simulation| -> Result<(), OutputError> {
-        write_atomic(&checkpoint_path, &sim.checkpoint(hash)).map_err(io_err(&checkpoint_path))
+        write_atomic_with(&checkpoint_path, |w| sim.write_checkpoint(hash, w))
+            .map_err(io_err(&checkpoint_path))
     };
     let progress_every = sim.total_steps().div_ceil(1000).max(1);
     let emit = |sim: &Simulation,
@@ -299,9 +370,8 @@ fn run_simulation(
     if let Some(problem) = health_problem(&sim, domain) {
         return Err(RunError::Engine(grainflow::EngineError::BadReference(problem)));
     }
-    // The last state that passed the health check, kept in memory (one copy of the state,
-    // its buffer reused) and written out only if a later check fails.
-    let mut last_good = (sim.step_index(), sim.checkpoint(hash));
+    let mut last_good =
+        LastGood::new(&sim, hash, out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
@@ -324,16 +394,14 @@ fn run_simulation(
         let output_now = step % every == 0 || end;
         if step % HEALTH_EVERY == 0 || output_now {
             if let Some(message) = health_problem(&sim, domain) {
-                let saved = out.join(LAST_GOOD_FILE);
-                write_atomic(&saved, &last_good.1).map_err(io_err(&saved))?;
+                let (good_step, saved) = last_good.save()?;
                 ts.finish().map_err(io_err(&ts_path))?;
-                return Err(RunError::Unhealthy { message, good_step: last_good.0, saved });
+                return Err(RunError::Unhealthy { message, good_step, saved });
             }
             // Keeping a copy of the state costs a pass over it: refresh it at outputs and
             // every tenth check, not at every check.
             if output_now || step % (10 * HEALTH_EVERY) == 0 {
-                last_good.0 = step;
-                sim.checkpoint_into(hash, &mut last_good.1);
+                last_good.keep(&sim)?;
             }
         }
         let t_out = Instant::now();

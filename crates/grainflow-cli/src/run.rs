@@ -211,6 +211,7 @@ pub fn main(args: RunArgs) -> ExitCode {
                 .map(usize::from)
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
         ),
+        last_good_in_memory: None,
     };
     let info = RunInfo {
         case: &args.case,

@@ -11,11 +11,14 @@ use crate::math::Vec3;
 use crate::neighbor::NeighborState;
 use crate::simulation::{Simulation, SimulationConfig};
 use crate::state::Particles;
+use std::io::{self, Write};
 use thiserror::Error;
 
 /// The checkpoint format this build writes and reads (2: pairs by slots, without id keys).
 pub const FORMAT_VERSION: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
+/// Bytes before the payload: signature, version, payload length.
+const HEADER: usize = 20;
 
 /// Why a checkpoint cannot be used.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -50,8 +53,9 @@ pub enum CheckpointError {
     Mismatch(String),
 }
 
-fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+fn fnv1a_update(mut h: u64, bytes: &[u8]) -> u64 {
     for b in bytes {
         h ^= *b as u64;
         h = h.wrapping_mul(0x0000_0100_0000_01b3);
@@ -59,44 +63,48 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     h
 }
 
-struct Enc<'a>(&'a mut Vec<u8>);
+fn fnv1a(bytes: &[u8]) -> u64 {
+    fnv1a_update(FNV_OFFSET, bytes)
+}
 
-impl Enc<'_> {
-    fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
+/// Writes the payload to `w`, keeping its checksum and length.
+struct Enc<W: Write> {
+    w: W,
+    sum: u64,
+    written: usize,
+}
+
+impl<W: Write> Enc<W> {
+    fn put(&mut self, b: &[u8]) -> io::Result<()> {
+        self.sum = fnv1a_update(self.sum, b);
+        self.written += b.len();
+        self.w.write_all(b)
     }
-    fn f64(&mut self, v: f64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
+    fn u64(&mut self, v: u64) -> io::Result<()> {
+        self.put(&v.to_le_bytes())
     }
-    fn bytes(&mut self, b: &[u8]) {
-        self.u64(b.len() as u64);
-        self.0.extend_from_slice(b);
+    fn f64(&mut self, v: f64) -> io::Result<()> {
+        self.put(&v.to_le_bytes())
     }
-    fn u32s(&mut self, v: &[u32]) {
-        self.u64(v.len() as u64);
-        for x in v {
-            self.0.extend_from_slice(&x.to_le_bytes());
-        }
+    fn bytes(&mut self, b: &[u8]) -> io::Result<()> {
+        self.u64(b.len() as u64)?;
+        self.put(b)
     }
-    fn f64s(&mut self, v: &[f64]) {
-        self.u64(v.len() as u64);
-        for x in v {
-            self.f64(*x);
-        }
+    fn u32s(&mut self, v: &[u32]) -> io::Result<()> {
+        self.u64(v.len() as u64)?;
+        v.iter().try_for_each(|x| self.put(&x.to_le_bytes()))
     }
-    fn vec3s(&mut self, v: &[Vec3]) {
-        self.u64(v.len() as u64);
-        for x in v {
-            for c in x.to_array() {
-                self.f64(c);
-            }
-        }
+    fn f64s(&mut self, v: &[f64]) -> io::Result<()> {
+        self.u64(v.len() as u64)?;
+        v.iter().try_for_each(|x| self.f64(*x))
     }
-    fn pairs(&mut self, count: usize, v: impl Iterator<Item = [u32; 2]>) {
-        self.u64(2 * count as u64);
-        for x in v.flatten() {
-            self.0.extend_from_slice(&x.to_le_bytes());
-        }
+    fn vec3s(&mut self, v: &[Vec3]) -> io::Result<()> {
+        self.u64(v.len() as u64)?;
+        v.iter().flat_map(|x| x.to_array()).try_for_each(|c| self.f64(c))
+    }
+    fn pairs(&mut self, count: usize, v: impl Iterator<Item = [u32; 2]>) -> io::Result<()> {
+        self.u64(2 * count as u64)?;
+        v.flatten().try_for_each(|x| self.put(&x.to_le_bytes()))
     }
 }
 
@@ -164,14 +172,21 @@ impl Simulation {
     /// reused, so keeping a rolling copy of the state costs one copy, not two).
     pub fn checkpoint_into(&self, case_hash: &str, out: &mut Vec<u8>) {
         out.clear();
+        out.reserve_exact(self.checkpoint_size(case_hash));
+        self.write_checkpoint(case_hash, &mut *out).expect("writing to memory cannot fail");
+    }
+
+    /// The size of the checkpoint in bytes.
+    pub fn checkpoint_size(&self, case_hash: &str) -> usize {
+        HEADER + self.payload_size(case_hash) + 8
+    }
+
+    /// Size of the payload (between the header and the checksum).
+    fn payload_size(&self, case_hash: &str) -> usize {
         let p = self.particles();
         let nl = self.neighbors();
-        // The exact size, so that the buffer is allocated once.
         let (n, pairs, walls) = (p.len(), nl.pair_count(), nl.wall_pairs().len());
-        let anchors = self.motion_anchors();
-        let size = 20
-            + 8
-            + case_hash.len()
+        8 + case_hash.len()
             + 6 * 8
             + 2 * (8 + 4 * n)
             + 3 * (8 + 8 * n)
@@ -183,42 +198,53 @@ impl Simulation {
             + (8 + 8 * walls)
             + (8 + 24 * walls)
             + (8 + 24 * nl.reference().len())
-            + (8 + 24 * anchors.len())
-            + 8;
-        out.reserve_exact(size);
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        out.extend_from_slice(&0u64.to_le_bytes());
-        let mut e = Enc(out);
-        e.bytes(case_hash.as_bytes());
+            + (8 + 24 * self.motion_anchors().len())
+    }
+
+    /// Streams the checkpoint to `w` (no copy of the state in memory: a large state can go
+    /// straight to a file). The bytes are those of [`checkpoint`](Self::checkpoint).
+    pub fn write_checkpoint(&self, case_hash: &str, mut w: impl Write) -> io::Result<()> {
+        let payload = self.payload_size(case_hash);
+        w.write_all(MAGIC)?;
+        w.write_all(&FORMAT_VERSION.to_le_bytes())?;
+        w.write_all(&(payload as u64).to_le_bytes())?;
+        let mut e = Enc { w, sum: FNV_OFFSET, written: 0 };
+        let p = self.particles();
+        let nl = self.neighbors();
+        e.bytes(case_hash.as_bytes())?;
         let (step, history_started, forces_current) = self.counters();
-        e.u64(step);
+        e.u64(step)?;
         let (time, dt, t_start) = self.timing();
-        e.f64(time);
-        e.f64(dt);
-        e.f64(t_start);
-        e.u64(history_started as u64);
-        e.u64(forces_current as u64);
-        e.u32s(&p.id);
-        e.u32s(&p.phase);
+        e.f64(time)?;
+        e.f64(dt)?;
+        e.f64(t_start)?;
+        e.u64(history_started as u64)?;
+        e.u64(forces_current as u64)?;
+        e.u32s(&p.id)?;
+        e.u32s(&p.phase)?;
         for v in [&p.radius, &p.mass, &p.inertia] {
-            e.f64s(v);
+            e.f64s(v)?;
         }
         for v in [&p.position, &p.velocity, &p.omega, &p.force, &p.torque, &p.accel_prev, &p.alpha_prev] {
-            e.vec3s(v);
+            e.vec3s(v)?;
         }
-        e.f64(nl.skin());
-        e.u64(nl.is_built() as u64);
-        e.pairs(pairs, nl.pairs());
-        e.vec3s(nl.pair_history());
-        e.pairs(walls, nl.wall_pairs().iter().copied());
-        e.vec3s(nl.wall_history());
-        e.vec3s(nl.reference());
-        e.vec3s(&anchors);
-        let len = (out.len() - 20) as u64;
-        out[12..20].copy_from_slice(&len.to_le_bytes());
-        let sum = fnv1a(&out[20..]);
-        out.extend_from_slice(&sum.to_le_bytes());
+        e.f64(nl.skin())?;
+        e.u64(nl.is_built() as u64)?;
+        e.pairs(nl.pair_count(), nl.pairs())?;
+        e.vec3s(nl.pair_history())?;
+        e.pairs(nl.wall_pairs().len(), nl.wall_pairs().iter().copied())?;
+        e.vec3s(nl.wall_history())?;
+        e.vec3s(nl.reference())?;
+        e.vec3s(&self.motion_anchors())?;
+        // The header announced the payload's length before it was written.
+        if e.written != payload {
+            return Err(io::Error::other(format!(
+                "internal error: checkpoint payload of {} bytes announced as {payload}",
+                e.written
+            )));
+        }
+        let sum = e.sum;
+        e.w.write_all(&sum.to_le_bytes())
     }
 
     /// Rebuilds a simulation of `config` from checkpoint bytes written for `case_hash`

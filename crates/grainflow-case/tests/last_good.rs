@@ -1,0 +1,62 @@
+//! The last good state of a run that fails its health check is the same whether it was kept
+//! in memory (small states) or in a file (large states, so that the copy does not add to the
+//! run's memory): byte for byte, and it restarts. A healthy run leaves no copy behind.
+
+use grainflow_case::run::{LAST_GOOD_FILE, RunError, RunOptions, run_case};
+use std::path::Path;
+
+/// The settling-bed example, shortened; with `unstable`, its time step forced 30× above the
+/// safe one, so that it blows up within a few hundred steps.
+fn case(dir: &Path, unstable: bool) -> grainflow_case::Case {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/settling-bed");
+    let mut text = std::fs::read_to_string(format!("{root}/case.toml"))
+        .expect("example")
+        .replace("particles.csv", &format!("{root}/particles.csv"))
+        .replace("t_stop = 0.5", "t_stop = 0.05");
+    if unstable {
+        text = text.replace("integrator = \"euler\"", "integrator = \"euler\"\ndt = 4e-4\nforce_dt = true");
+    }
+    let path = dir.join(if unstable { "bad.toml" } else { "good.toml" });
+    std::fs::write(&path, text).expect("write case");
+    grainflow_case::load(&path).expect("case loads")
+}
+
+fn options(max_in_memory: usize) -> RunOptions {
+    RunOptions { last_good_in_memory: Some(max_in_memory), ..RunOptions::default() }
+}
+
+#[test]
+fn last_good_state_kept_in_a_file_equals_the_one_kept_in_memory() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut saved = Vec::new();
+    for (name, max_in_memory) in [("memory", usize::MAX), ("file", 0)] {
+        let out = dir.path().join(name);
+        let result = run_case(case(dir.path(), true), &out, &options(max_in_memory), |_| {});
+        let Err(RunError::Unhealthy { good_step, saved: path, .. }) = result else {
+            panic!("{name}: the forced time step should fail the health check: {result:?}");
+        };
+        assert_eq!(path, out.join(LAST_GOOD_FILE));
+        let rolling: Vec<_> = std::fs::read_dir(&out)
+            .expect("out")
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().contains("rolling"))
+            .collect();
+        assert!(rolling.is_empty(), "{name}: rolling copy left behind: {rolling:?}");
+        saved.push((good_step, std::fs::read(&path).expect("saved state")));
+    }
+    assert_eq!(saved[0].0, saved[1].0, "same step kept");
+    assert!(saved[0].1 == saved[1].1, "the two copies differ");
+}
+
+#[test]
+fn a_healthy_run_leaves_no_copy_of_its_last_good_state() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("out");
+    run_case(case(dir.path(), false), &out, &options(0), |_| {}).expect("healthy run");
+    let names: Vec<String> = std::fs::read_dir(&out)
+        .expect("out")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into())
+        .collect();
+    assert!(names.iter().all(|n| !n.contains("last-good")), "{names:?}");
+    assert!(names.contains(&"timeseries.csv".to_string()), "{names:?}");
+}
