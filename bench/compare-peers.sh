@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # grainflow against LAMMPS and LIGGGHTS on the three yardstick cases of ../shared/peers/, in
 # the same session: (1) physics — from the same LAMMPS state, the kinetic energy after 1 000
-# steps in both codes; (2) speed — particle-steps per second on one core, median of RUNS runs
-# each, and the ratios. Results go to bench/results/<date>-<host>.md with a machine
-# description. Installs the peers from Debian's packages if they are missing.
+# steps in both codes; (2) speed — particle-steps per second, median of RUNS runs each: LAMMPS
+# and LIGGGHTS on one core, grainflow on 1 and 2 threads, and the ratios. Results go to
+# bench/results/<date>-<host>.md with a machine description. Installs the peers from Debian's
+# packages if they are missing.
 #
 #   bench/compare-peers.sh              (RUNS=3 NRUN=2000 by default)
 set -euo pipefail
@@ -34,18 +35,22 @@ lmp_ke() { awk '/^Step/{f=1;next} f && $1==1000 {print $3; exit}' "$1"; }
 loop_time() { awk '/^Loop time of/{print $4; exit}' "$1"; }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
 
+declare -A LIG_IN=( [box_hm]="$PEERS/liggghts/in.box_walls.liggghts -var model hm -var mdir $PEERS/liggghts -var data $DATA/box_hm_settled.data"
+                    [box_lsd]="$PEERS/liggghts/in.box_walls.liggghts -var model lsd -var mdir $PEERS/liggghts -var data $DATA/box_lsd_settled.data"
+                    [chute]="$PEERS/liggghts/in.chute_like.liggghts -var data $DATA/chute_eq.data" )
 declare -A LMP_IN=( [box_hm]="$PEERS/lammps/in.box_walls_run.lmp -var model hm -var data $DATA/box_hm_settled.data"
                     [box_lsd]="$PEERS/lammps/in.box_walls_run.lmp -var model lsd -var data $DATA/box_lsd_settled.data"
                     [chute]="$PEERS/lammps/in.chute_like_run.lmp -var data $DATA/chute_eq.data" )
 out="$ROOT/bench/results/$(date +%Y-%m-%d)-$(hostname).md"
 {
-  echo "# grainflow vs LAMMPS, $(date -u +%Y-%m-%dT%H:%MZ)"
+  echo "# grainflow vs LAMMPS and LIGGGHTS, $(date -u +%Y-%m-%dT%H:%MZ)"
   echo
   echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}'), $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB;"
-  echo "$(lmp -h | sed -n 2p | sed 's/^ *//'); grainflow $($GF --version | awk '{print $2}'); one core each."
+  echo "$(lmp -h | sed -n 2p | sed 's/^ *//'); LIGGGHTS $(liggghts -h 2>/dev/null | grep -m1 -o 'LIGGGHTS[^(]*' | sed 's/LIGGGHTS//; s/ *$//'); grainflow $($GF --version | awk '{print $2}')."
+  echo "Peers on one core; grainflow on 1 thread (-j 1) and on 2 threads (-j 2)."
   echo
-  echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS Mps/s | grainflow Mps/s | ratio |"
-  echo "|---|---|---|---|---|---|---|"
+  echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS | LIGGGHTS | grainflow 1 thread | ÷ LAMMPS | ÷ LIGGGHTS | grainflow 2 threads | 2 threads ÷ 1 |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|"
 } > "$out"
 for c in box_hm box_lsd chute; do
   # Physics: 1 000 steps from the same state.
@@ -61,17 +66,24 @@ for c in box_hm box_lsd chute; do
     lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp.$c.t$i -screen none
     awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lmp.$c.t$i
   done | median > lmp.$c.speed
-  dtl=$(awk '/^dt = /{print $3}' $c.toml)
   for i in $(seq "$RUNS"); do
-    sed "s|^t_stop = .*|t_stop = $(python3 -c "print($NRUN*$dtl)")|; s|^interval = .*|interval = 1e9|" $c.toml > $c.speed.toml
-    $GF run $c.speed.toml --out gf.$c.t$i -q | awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'
-  done | median > gf.$c.speed
-  python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat gf.$c.speed)" >> "$out" <<'PY'
+    liggghts -in ${LIG_IN[$c]} -var nrun "$NRUN" -log lig.$c.t$i -screen none
+    awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lig.$c.t$i
+  done | median > lig.$c.speed
+  dtl=$(awk '/^dt = /{print $3}' $c.toml)
+  sed "s|^t_stop = .*|t_stop = $(python3 -c "print($NRUN*$dtl)")|; s|^interval = .*|interval = 1e9|" $c.toml > $c.speed.toml
+  for j in 1 2; do
+    for i in $(seq "$RUNS"); do
+      $GF run $c.speed.toml -j $j --out gf.$c.t$i -q | awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'
+    done | median > gf.$c.speed.$j
+  done
+  python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat lig.$c.speed)" "$(cat gf.$c.speed.1)" "$(cat gf.$c.speed.2)" >> "$out" <<'PY'
 import sys
-c, kl, kg, sl, sg = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])
-print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sg:.2f} | {sg/sl:.2f} |")
+c = sys.argv[1]
+kl, kg, sl, sli, g1, g2 = map(float, sys.argv[2:])
+print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sli:.2f} | {g1:.2f} | {g1/sl:.2f} | {g1/sli:.2f} | {g2:.2f} | {g2/g1:.2f} |")
 PY
 done
 echo >> "$out"
-echo "Speeds are medians of $RUNS runs of $NRUN steps (particle-steps per second, millions)." >> "$out"
+echo "Speeds are medians of $RUNS runs of $NRUN steps, in millions of particle-steps per second." >> "$out"
 cat "$out"
