@@ -78,15 +78,18 @@ impl Periodic {
     /// inside the box, so separations lie within (−L, L) and one shift by L suffices.
     #[inline(always)]
     pub fn min_image(&self, d: Vec3) -> Vec3 {
-        self.images().nearest(d)
-    }
-
-    /// The lengths in the form a loop over pairs uses (computed once, outside the loop).
-    #[inline(always)]
-    pub fn images(&self) -> Images {
+        let mut d = d.to_array();
         let l = self.lengths().to_array();
-        let half = std::array::from_fn(|k| if self.axes[k] { 0.5 * l[k] } else { f64::INFINITY });
-        Images { length: l, half }
+        for k in 0..3 {
+            if self.axes[k] {
+                if d[k] > 0.5 * l[k] {
+                    d[k] -= l[k];
+                } else if d[k] < -0.5 * l[k] {
+                    d[k] += l[k];
+                }
+            }
+        }
+        Vec3::from_array(d)
     }
 
     /// A position brought back into [lo, hi) on the periodic axes. A coordinate already inside
@@ -102,31 +105,6 @@ impl Periodic {
             }
         }
         Vec3::from_array(x)
-    }
-}
-
-/// The periodic lengths as a pair loop uses them: on each axis the length L and L/2, with
-/// L/2 = ∞ on an axis that is not periodic (so that its tests never fire, without a test of
-/// the axis).
-#[derive(Debug, Clone, Copy)]
-pub struct Images {
-    length: [f64; 3],
-    half: [f64; 3],
-}
-
-impl Images {
-    /// The nearest image of a separation vector (see [`Periodic::min_image`]).
-    #[inline(always)]
-    pub fn nearest(&self, d: Vec3) -> Vec3 {
-        let mut d = d.to_array();
-        for k in 0..3 {
-            if d[k] > self.half[k] {
-                d[k] -= self.length[k];
-            } else if d[k] < -self.half[k] {
-                d[k] += self.length[k];
-            }
-        }
-        Vec3::from_array(d)
     }
 }
 

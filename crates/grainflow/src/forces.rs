@@ -23,9 +23,7 @@
 use std::ops::Range;
 
 use crate::boundary::Periodic;
-use crate::contact::geometry::{
-    self, ContactGeometry, pair_contact_separation, relative_velocity, wall_contact,
-};
+use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
 use crate::contact::law::{ContactForce, contact_force, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
 use crate::math::Vec3;
@@ -325,32 +323,20 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
             }
         }
     }
-    // Then the rows, in order. Every slot below r1 indexes the per-particle slices: checked
-    // once here, so that the loop needs no bounds checks on them.
-    let n = x.position.len();
-    assert!(
-        r1 <= n && [x.velocity.len(), x.omega.len(), x.radius.len(), x.mass.len(), x.phase.len()] == [n; 5]
-    );
-    let images = x.periodic.images();
+    // Then the rows, in order.
     let k0 = x.offsets[r0];
     let mut crossing = own_crossing.iter();
     for a in rows {
-        let (k_lo, k_hi) = (x.offsets[a], x.offsets[a + 1]);
-        let (xa, ra) = (x.position[a], x.radius[a]);
         let (mut fa, mut ta) = (force[a - r0], torque[a - r0]);
-        for (&b, h) in x.partners[k_lo..k_hi].iter().zip(&mut hist[k_lo - k0..k_hi - k0]) {
-            let b = b as usize;
+        for k in x.offsets[a]..x.offsets[a + 1] {
+            let b = x.partners[k] as usize;
             let load = if b < r1 {
-                let d = images.nearest(x.position[b] - xa);
-                let d2 = d.length_squared();
-                if !geometry::touching(d2, ra, x.radius[b]) {
-                    *h = Vec3::ZERO;
-                    continue;
+                let l = pair_load::<HERTZ, INCREMENTAL>(x, a, b, &mut hist[k - k0]);
+                if let Some(l) = l {
+                    force[b - r0] -= l.f;
+                    torque[b - r0] += l.tb;
                 }
-                let l = touching_pair_load::<HERTZ, INCREMENTAL>(x, a, b, d, d2, h);
-                force[b - r0] -= l.f;
-                torque[b - r0] += l.tb;
-                Some(l)
+                l
             } else {
                 crossing.next().copied().flatten()
             };
@@ -374,44 +360,22 @@ fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
     b: usize,
     h: &mut Vec3,
 ) -> Option<PairLoad> {
-    let d = x.periodic.images().nearest(x.position[b] - x.position[a]);
-    let d2 = d.length_squared();
-    if !geometry::touching(d2, x.radius[a], x.radius[b]) {
+    let law = &x.law;
+    let Some(g) = pair_geometry(x, a, b) else {
         *h = Vec3::ZERO;
         return None;
-    }
-    Some(touching_pair_load::<HERTZ, INCREMENTAL>(x, a, b, d, d2, h))
-}
-
-/// The load of the touching pair (a, b), a < b, with separation `d` = x_b − x_a (nearest
-/// image) and `d2` = |d|², advancing its tangential history `h`.
-#[inline(always)]
-fn touching_pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
-    x: &ForceInputs,
-    a: usize,
-    b: usize,
-    d: Vec3,
-    d2: f64,
-    h: &mut Vec3,
-) -> PairLoad {
-    let law = &x.law;
-    let (ra, rb) = (x.radius[a], x.radius[b]);
-    let g = if law.lever == LeverArm::RadicalPlane {
-        geometry::touching_pair_geometry(d, d2, ra, rb)
-    } else {
-        geometry::touching_pair_geometry_radius_levers(d, d2, ra, rb)
     };
     let c = x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize);
     let (wa, wb) = (x.omega[a], x.omega[b]);
     let v_r = relative_velocity(&g, x.velocity[a], x.velocity[b], wa, wb);
     let f = law_force::<HERTZ, INCREMENTAL>(x, c, || pair_mass(x.mass, x.held, a, b), &g, v_r, h);
-    PairLoad {
+    Some(PairLoad {
         f: f.total(),
         ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
             + rolling_torque(c.mu_roll, f.elastic_normal, wa),
         tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
             + rolling_torque(c.mu_roll, f.elastic_normal, wb),
-    }
+    })
 }
 
 /// The force and torque of particle i against wall w, advancing the history `h`; None (and
@@ -493,6 +457,12 @@ pub(crate) fn scaled_damping(c: &ContactCoeffs, damping: NormalDamping, m_eff: f
     ContactCoeffs { eta_n: c.eta_n * s, eta_t: c.eta_t * s, ..*c }
 }
 
+/// Pair geometry of slots a, b with the law's lever arm, if they touch.
+#[inline(always)]
+fn pair_geometry(x: &ForceInputs, a: usize, b: usize) -> Option<ContactGeometry> {
+    pair_geometry_of(x.position, x.radius, a, b, x.law.lever, &x.periodic)
+}
+
 /// Pair geometry of slots i, j with lever arm `lever`, if they touch.
 #[inline(always)]
 pub(crate) fn pair_geometry_of(
@@ -504,7 +474,7 @@ pub(crate) fn pair_geometry_of(
     per: &Periodic,
 ) -> Option<ContactGeometry> {
     let d = position[j] - position[i];
-    let d = per.min_image(d);
+    let d = if per.any() { per.min_image(d) } else { d };
     let mut g = pair_contact_separation(d, radius[i], radius[j])?;
     if lever != LeverArm::RadicalPlane {
         (g.lever_i, g.lever_j) = (radius[i], radius[j]);

@@ -29,30 +29,14 @@ pub fn pair_contact(xi: Vec3, xj: Vec3, ri: f64, rj: f64) -> Option<ContactGeome
 #[inline(always)]
 pub fn pair_contact_separation(dvec: Vec3, ri: f64, rj: f64) -> Option<ContactGeometry> {
     let d2 = dvec.length_squared();
-    touching(d2, ri, rj).then(|| touching_pair_geometry(dvec, d2, ri, rj))
-}
-
-/// MFIX's contact test on the squared centre distance `d2`: 0 < d2 ≤ (R_i + R_j − 1e-15)².
-#[inline(always)]
-pub fn touching(d2: f64, ri: f64, rj: f64) -> bool {
-    let lim = ri + rj - 1e-15;
-    !(d2 > lim * lim || d2 == 0.0)
-}
-
-/// The geometry of a pair that passed [`touching`], from its separation `dvec` and its
-/// square `d2`.
-#[inline(always)]
-pub fn touching_pair_geometry(dvec: Vec3, d2: f64, ri: f64, rj: f64) -> ContactGeometry {
+    let rsum = ri + rj;
+    let lim = rsum - 1e-15;
+    if d2 > lim * lim || d2 == 0.0 {
+        return None;
+    }
     let d = d2.sqrt();
     let lever_i = (d2 + ri * ri - rj * rj) / (2.0 * d);
-    ContactGeometry { normal: dvec / d, overlap: (ri + rj) - d, lever_i, lever_j: d - lever_i }
-}
-
-/// As [`touching_pair_geometry`] with the radii as lever arms (not the radical plane).
-#[inline(always)]
-pub fn touching_pair_geometry_radius_levers(dvec: Vec3, d2: f64, ri: f64, rj: f64) -> ContactGeometry {
-    let d = d2.sqrt();
-    ContactGeometry { normal: dvec / d, overlap: (ri + rj) - d, lever_i: ri, lever_j: rj }
+    Some(ContactGeometry { normal: dvec / d, overlap: rsum - d, lever_i, lever_j: d - lever_i })
 }
 
 /// Geometry against a plane through `point` whose unit normal `wall_normal` points into the
