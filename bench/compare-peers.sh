@@ -46,7 +46,7 @@ out="$ROOT/bench/results/$(date +%Y-%m-%d)-$(hostname).md"
   echo "# grainflow vs LAMMPS and LIGGGHTS, $(date -u +%Y-%m-%dT%H:%MZ)"
   echo
   echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}'), $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB;"
-  echo "$(lmp -h | sed -n 2p | sed 's/^ *//'); LIGGGHTS $(liggghts -h 2>/dev/null | grep -m1 -o 'LIGGGHTS[^(]*' | sed 's/LIGGGHTS//; s/ *$//'); grainflow $($GF --version | awk '{print $2}')."
+  echo "$(lmp -h | sed -n 2p | sed 's/^ *//'); $(liggghts -h 2>/dev/null | sed -n 's/.*(Version \(.*\), compiled.*/\1/p' | head -1); grainflow $($GF --version | awk '{print $2}')."
   echo "Peers on one core; grainflow on 1 thread (-j 1) and on 2 threads (-j 2)."
   echo
   echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS | LIGGGHTS | grainflow 1 thread | ÷ LAMMPS | ÷ LIGGGHTS | grainflow 2 threads | 2 threads ÷ 1 |"
