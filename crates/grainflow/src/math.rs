@@ -20,3 +20,10 @@ pub fn sphere_inertia(m: f64, r: f64) -> f64 {
 pub fn component(v: Vec3, axis: usize) -> f64 {
     v.to_array()[axis]
 }
+
+/// `a` if `c`, else `b`, component by component: a select rather than a branch, so that loops
+/// over contacts stay vectorisable.
+#[inline(always)]
+pub fn pick(c: bool, a: Vec3, b: Vec3) -> Vec3 {
+    Vec3::select(glam::BVec3::splat(c), a, b)
+}

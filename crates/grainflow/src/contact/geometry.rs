@@ -29,14 +29,27 @@ pub fn pair_contact(xi: Vec3, xj: Vec3, ri: f64, rj: f64) -> Option<ContactGeome
 #[inline(always)]
 pub fn pair_contact_separation(dvec: Vec3, ri: f64, rj: f64) -> Option<ContactGeometry> {
     let d2 = dvec.length_squared();
-    let rsum = ri + rj;
-    let lim = rsum - 1e-15;
-    if d2 > lim * lim || d2 == 0.0 {
-        return None;
-    }
+    pair_touching(d2, ri, rj).then(|| pair_geometry(dvec, ri, rj))
+}
+
+/// MFIX's contact test for centres `d2` = |x_j − x_i|² apart: 0 < d² ≤ (R_i + R_j − 1e-15)².
+#[inline(always)]
+pub fn pair_touching(d2: f64, ri: f64, rj: f64) -> bool {
+    let lim = ri + rj - 1e-15;
+    // `&`, not `&&`: both tests are cheap, and a loop over pairs stays free of branches.
+    // (A NaN distance counts as touching, as it always has: the health check reports it.)
+    let apart = d2 > lim * lim;
+    !apart & (d2 != 0.0)
+}
+
+/// The geometry of a pair that [`pair_touching`] found in contact, from their separation
+/// `dvec` = x_j − x_i. Branch-free.
+#[inline(always)]
+pub fn pair_geometry(dvec: Vec3, ri: f64, rj: f64) -> ContactGeometry {
+    let d2 = dvec.length_squared();
     let d = d2.sqrt();
     let lever_i = (d2 + ri * ri - rj * rj) / (2.0 * d);
-    Some(ContactGeometry { normal: dvec / d, overlap: rsum - d, lever_i, lever_j: d - lever_i })
+    ContactGeometry { normal: dvec / d, overlap: ri + rj - d, lever_i, lever_j: d - lever_i }
 }
 
 /// Geometry against a plane through `point` whose unit normal `wall_normal` points into the

@@ -6,7 +6,7 @@
 
 use super::geometry::ContactGeometry;
 use super::{ContactCoeffs, ContactLaw, CoulombCap, HistoryFrame, NormalModel, TangentialModel};
-use crate::math::Vec3;
+use crate::math::{Vec3, pick};
 
 /// The forces of one contact on particle i (particle j, if any, gets the opposite force).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,6 +44,11 @@ impl ContactForce {
 ///
 /// Per MFIX: trial s = h + Δt·v_t; F_t = −k·s − c·v_t; if |F_t| > μ·|F_n| then
 /// F_t = −μ·|F_n|·s/|s| and s ← (μ·|F_n|/k)·s/|s|; h ← s after every contact step.
+///
+/// Written without data-dependent branches: every case's value is formed and the right one
+/// picked, so that a loop over contacts compiles to vector instructions
+/// (see `forces`). The picked values are the same operations in the same order as a branching
+/// form, so the results do not depend on how the function is compiled.
 #[inline(always)]
 pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     frame: HistoryFrame,
@@ -68,76 +73,56 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     } else {
         (c.kn * delta, c.eta_n * v_n, c.kt, c.eta_t)
     };
-    let mut fn_total = fn_el + fn_damp;
-    if clip && fn_total < 0.0 {
-        fn_total = 0.0;
-    }
+    let fn_total = fn_el + fn_damp;
+    let fn_total = if clip && fn_total < 0.0 { 0.0 } else { fn_total };
     let f_n = -fn_total * n;
     let fn_mag = fn_total.abs();
 
-    let mut h = *history;
-    match frame {
-        HistoryFrame::Mfix => {}
-        HistoryFrame::Project => h -= h.dot(n) * n,
-        HistoryFrame::Rotate => {
-            let len = h.length();
-            h -= h.dot(n) * n;
-            let plen = h.length();
-            if plen > 0.0 {
-                h *= len / plen;
-            }
-        }
-    }
+    // The history in the current tangent plane: as stored (MFIX), projected, or projected
+    // and rescaled to its stored length (rotated).
+    let h = *history;
+    let projected = h - h.dot(n) * n;
+    let (len, plen) = (h.length(), projected.length());
+    let rotated = pick(plen > 0.0, projected * (len / plen), projected);
+    let h = pick(frame == HistoryFrame::Mfix, h, pick(frame == HistoryFrame::Project, projected, rotated));
 
     let limit = c.mu * fn_mag;
-    let f_t = if INCREMENTAL {
+    let lammps = cap == CoulombCap::Lammps;
+    let (f_t, stored) = if INCREMENTAL {
         // History holds the elastic tangential force.
         let f_el = h - k * dt * v_t;
         let trial = f_el - damp_t * v_t;
-        if trial.length_squared() > limit * limit {
-            let len = f_el.length();
-            if len == 0.0 {
-                *history = Vec3::ZERO;
-                Vec3::ZERO
-            } else if cap == CoulombCap::Lammps {
-                let capped = (limit / trial.length()) * trial;
-                *history = capped + damp_t * v_t;
-                capped
-            } else {
-                let capped = (limit / len) * f_el;
-                *history = capped;
-                capped
-            }
-        } else {
-            *history = f_el;
-            trial
-        }
+        let len = f_el.length();
+        // Beyond the limit: LAMMPS scales the trial force down, MFIX the spring.
+        let lammps_capped = (limit / trial.length()) * trial;
+        let mfix_capped = (limit / len) * f_el;
+        let capped = pick(lammps, lammps_capped, mfix_capped);
+        let capped_stored = pick(lammps, lammps_capped + damp_t * v_t, mfix_capped);
+        let sliding = trial.length_squared() > limit * limit;
+        let stuck = len == 0.0;
+        (
+            pick(sliding, pick(stuck, Vec3::ZERO, capped), trial),
+            pick(sliding, pick(stuck, Vec3::ZERO, capped_stored), f_el),
+        )
     } else {
         // History holds the total tangential displacement.
-        let mut s = h + dt * v_t;
-        if frame == HistoryFrame::Project {
-            s -= s.dot(n) * n;
-        }
+        let s = h + dt * v_t;
+        let s = pick(frame == HistoryFrame::Project, s - s.dot(n) * n, s);
         let trial = -k * s - damp_t * v_t;
-        if trial.length_squared() > limit * limit {
-            let len = s.length();
-            if len == 0.0 {
-                *history = Vec3::ZERO;
-                Vec3::ZERO
-            } else if cap == CoulombCap::Lammps {
-                let capped = (limit / trial.length()) * trial;
-                *history = if k > 0.0 { -(capped + damp_t * v_t) / k } else { Vec3::ZERO };
-                capped
-            } else {
-                let dir = s / len;
-                *history = if k > 0.0 { (limit / k) * dir } else { Vec3::ZERO };
-                -limit * dir
-            }
-        } else {
-            *history = s;
-            trial
-        }
+        let len = s.length();
+        let dir = s / len;
+        let lammps_capped = (limit / trial.length()) * trial;
+        let capped = pick(lammps, lammps_capped, -limit * dir);
+        let capped_stored = pick(lammps, -(lammps_capped + damp_t * v_t) / k, (limit / k) * dir);
+        let capped_stored = pick(k > 0.0, capped_stored, Vec3::ZERO);
+        let sliding = trial.length_squared() > limit * limit;
+        let stuck = len == 0.0;
+        (
+            pick(sliding, pick(stuck, Vec3::ZERO, capped), trial),
+            pick(sliding, pick(stuck, Vec3::ZERO, capped_stored), s),
+        )
     };
+    *history = stored;
     ContactForce { normal: f_n, tangential: f_t, elastic_normal: fn_el }
 }
 
@@ -190,14 +175,12 @@ pub fn contact_force_dyn(
     }
 }
 
-/// Rolling-friction torque on a particle spinning at ω: −μ_r·|F_n,elastic|·ω̂ (zero at ω = 0).
+/// Rolling-friction torque on a particle spinning at ω: −μ_r·|F_n,elastic|·ω̂ (zero at ω = 0
+/// or μ_r = 0). Branch-free, like [`contact_force`].
 #[inline(always)]
 pub fn rolling_torque(mu_roll: f64, elastic_normal: f64, omega: Vec3) -> Vec3 {
-    if mu_roll == 0.0 {
-        return Vec3::ZERO;
-    }
     let w = omega.length();
-    if w > 0.0 { (-mu_roll * elastic_normal / w) * omega } else { Vec3::ZERO }
+    pick(mu_roll != 0.0 && w > 0.0, (-mu_roll * elastic_normal / w) * omega, Vec3::ZERO)
 }
 
 /// Elastic energy stored in the normal spring: ½·k_n·δ² (LSD) or (2/5)·K_n·δ^2.5 (Hertz), J.
