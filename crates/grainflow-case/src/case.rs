@@ -677,7 +677,11 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
     }
     match praw.order.as_deref() {
         None | Some("input") => {}
-        Some("spatial") => sort_along_morton_curve(&mut init, min, max),
+        Some("spatial") => {
+            let r_max = init.iter().map(|p| p.radius).fold(0.0, f64::max);
+            let cut = 2.0 * r_max + skin.unwrap_or_else(|| grainflow::simulation::default_skin(r_max));
+            sort_into_bins(&mut init, min, 0.5 * cut);
+        }
         Some(other) => {
             return Err(CaseError::invalid(
                 "[particles]",
@@ -846,24 +850,19 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
     })
 }
 
-/// Sorts particles along a Morton (Z-order) curve over the domain box, 2^21 cells per axis, so
-/// that particles close in space are close in memory.
-fn sort_along_morton_curve(init: &mut [ParticleInit], lo: Vec3, hi: Vec3) {
-    fn spread(v: u64) -> u64 {
-        // Interleave: bit k of v goes to bit 3k.
-        let mut x = v & 0x1f_ffff;
-        x = (x | x << 32) & 0x1f00000000ffff;
-        x = (x | x << 16) & 0x1f0000ff0000ff;
-        x = (x | x << 8) & 0x100f00f00f00f00f;
-        x = (x | x << 4) & 0x10c30c30c30c30c3;
-        (x | x << 2) & 0x1249249249249249
-    }
-    let scale = (hi - lo).max(Vec3::splat(f64::MIN_POSITIVE));
+/// Sorts particles into cubic bins of edge `bin` over the domain from `lo`, bin by bin with x
+/// fastest, then y, then z (ties by id). Particles close in space end up close in memory, and
+/// the force loop meets a particle's neighbours in a few steady streams (the rows of bins
+/// around it), which the processor's prefetcher follows; a Morton curve, tried first, keeps
+/// neighbours as close but scatters the accesses and ran slower. LAMMPS sorts its atoms the
+/// same way, into bins of half the neighbour cut-off.
+fn sort_into_bins(init: &mut [ParticleInit], lo: Vec3, bin: f64) {
     let key = |x: Vec3| {
-        let u = ((x - lo) / scale).clamp(Vec3::ZERO, Vec3::ONE) * ((1u64 << 21) - 1) as f64;
-        spread(u.x as u64) | spread(u.y as u64) << 1 | spread(u.z as u64) << 2
+        // Saturating casts: positions are checked later, and any order is correct.
+        let b = ((x - lo) / bin).floor();
+        (b.z as i64, b.y as i64, b.x as i64)
     };
-    init.sort_by_key(|p| (key(p.position), p.id));
+    init.sort_by_cached_key(|p| (key(p.position), p.id));
 }
 
 /// Default of `[particles] max_initial_overlap`.

@@ -309,9 +309,10 @@ pub struct RawParticles {
     /// or of the radius (walls). Default 0.05.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_initial_overlap: Option<f64>,
-    /// Slot order of the particles in memory: "input" (as listed) or "spatial" (along a
-    /// Morton space-filling curve, so that neighbours sit close in memory — faster for large
-    /// beds). Default "input". Results do not depend on it beyond rounding of sums.
+    /// Slot order of the particles in memory: "input" (as listed) or "spatial" (sorted into
+    /// bins of half the neighbour cut-off, x fastest, then y, then z, so that neighbours sit
+    /// close in memory — faster for large beds). Default "input". Results do not depend on it
+    /// beyond rounding of sums.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub order: Option<String>,
     /// Particles listed inline.
