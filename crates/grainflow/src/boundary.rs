@@ -92,6 +92,12 @@ impl Periodic {
         Vec3::from_array(d)
     }
 
+    /// [`min_image`](Self::min_image) if any axis is periodic, else `d` itself.
+    #[inline(always)]
+    pub fn nearest(&self, d: Vec3) -> Vec3 {
+        if self.any() { self.min_image(d) } else { d }
+    }
+
     /// A position brought back into [lo, hi) on the periodic axes. A coordinate already inside
     /// is left exactly as it is (the common case, checked first: a step moves few particles
     /// across a face).

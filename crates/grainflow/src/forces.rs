@@ -11,6 +11,16 @@
 //! order; keeping it fixed makes the results bit-identical from run to run and for any number
 //! of threads.
 //!
+//! ## Batches
+//! The contacts' loads do not depend on each other, only their sums do. So a block first tests
+//! a stretch of its pairs for contact, without branching on the outcome, and lists the touching
+//! ones; it then gathers their inputs into batches of 16 (one array per component),
+//! computes a batch's loads in one loop that compiles to vector instructions, and adds them to
+//! the particles in list order — the order above. The contact law is the same function as for
+//! a single contact, written without data-dependent branches; the AVX2 and AVX-512 copies of
+//! the loop round exactly as scalar code does (no fused multiply–add), so results do not
+//! depend on the processor (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`).
+//!
 //! ## Threads
 //! The slots are cut into blocks of consecutive rows with about equal pair counts. A pair whose
 //! two particles lie in one block is computed by that block's thread, which adds it to both
@@ -23,8 +33,10 @@
 use std::ops::Range;
 
 use crate::boundary::Periodic;
-use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
-use crate::contact::law::{ContactForce, contact_force, rolling_torque};
+use crate::contact::geometry::{
+    ContactGeometry, pair_contact_separation, pair_geometry, pair_touching, relative_velocity, wall_contact,
+};
+use crate::contact::law::{contact_force, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
 use crate::math::Vec3;
 use crate::wall::Wall;
@@ -304,11 +316,16 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     let (r0, r1) = (rows.start, rows.end);
     force.fill(Vec3::ZERO);
     torque.fill(Vec3::ZERO);
-    // Walls first, as MFIX does.
-    for (h, &[i, w]) in whist.iter_mut().zip(&x.wall_pairs[w0..]) {
-        if let Some((f, t)) = wall_load::<HERTZ, INCREMENTAL>(x, i as usize, w as usize, h) {
-            force[i as usize - r0] += f;
-            torque[i as usize - r0] += t;
+    // Walls first, as MFIX does: the touching wall pairs listed, then their loads computed a
+    // batch at a time and added in list order.
+    let mut lanes = Lanes::new();
+    let wall_pairs = &x.wall_pairs[w0..w0 + whist.len()];
+    let mut at = 0;
+    let mut found_walls = [0usize; FOUND];
+    while at < wall_pairs.len() {
+        let n = find_wall_contacts(x, wall_pairs, &mut at, whist, &mut found_walls);
+        for group in found_walls[..n].chunks(LANES) {
+            lanes.add_wall_loads::<HERTZ, INCREMENTAL>(x, r0, wall_pairs, group, force, torque, whist);
         }
     }
     let wall_seconds = t0.map_or(0.0, |t| t.elapsed().as_secs_f64());
@@ -323,32 +340,494 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
             }
         }
     }
-    // Then the rows, in order.
-    let k0 = x.offsets[r0];
+    // Then the rows, in order, a stretch at a time: first the contact test of the stretch's
+    // pairs, which lists the touching ones; then their loads, computed a batch at a time and
+    // added in list order.
+    let mut cursor = Cursor { a: r0, k: x.offsets[r0] };
+    let mut found = [(0u32, 0usize); FOUND];
     let mut crossing = own_crossing.iter();
-    for a in rows {
-        let (mut fa, mut ta) = (force[a - r0], torque[a - r0]);
-        for k in x.offsets[a]..x.offsets[a + 1] {
-            let b = x.partners[k] as usize;
-            let load = if b < r1 {
-                let l = pair_load::<HERTZ, INCREMENTAL>(x, a, b, &mut hist[k - k0]);
-                if let Some(l) = l {
-                    force[b - r0] -= l.f;
-                    torque[b - r0] += l.tb;
-                }
-                l
-            } else {
-                crossing.next().copied().flatten()
-            };
-            if let Some(l) = load {
-                fa += l.f;
-                ta += l.ta;
-            }
+    while cursor.a < r1 {
+        let n = find_contacts(x, r0..r1, &mut cursor, hist, &mut found);
+        for group in found[..n].chunks(LANES) {
+            lanes.add_loads::<HERTZ, INCREMENTAL>(x, r0..r1, group, &mut crossing, force, torque, hist);
         }
-        force[a - r0] = fa;
-        torque[a - r0] = ta;
     }
     wall_seconds
+}
+
+/// Touching pairs listed per stretch of rows.
+const FOUND: usize = 256;
+
+/// Where the contact test of a block's rows has got to: pair k of row a.
+struct Cursor {
+    a: usize,
+    k: usize,
+}
+
+/// Lists, as (a, k), the pairs from `cursor` on that touch and the crossing pairs (whose loads
+/// were computed before), until the rows end or `found` is full; clears the histories of the
+/// pairs that do not touch, and returns how many it listed. The test does not branch on its
+/// outcome (which no predictor could guess): every pair is written into the next place,
+/// which only a touching pair keeps.
+#[inline(never)]
+fn find_contacts(
+    x: &ForceInputs,
+    rows: Range<usize>,
+    cursor: &mut Cursor,
+    hist: &mut [Vec3],
+    found: &mut [(u32, usize); FOUND],
+) -> usize {
+    let (r0, r1) = (rows.start, rows.end);
+    let k0 = x.offsets[r0];
+    let mut n = 0;
+    let Cursor { mut a, mut k } = *cursor;
+    while a < r1 {
+        let (xa, ra) = (x.position[a], x.radius[a]);
+        let end = x.offsets[a + 1];
+        while k < end {
+            if n == FOUND {
+                *cursor = Cursor { a, k };
+                return n;
+            }
+            let b = x.partners[k] as usize;
+            let keep = if b < r1 {
+                let d = x.periodic.nearest(x.position[b] - xa);
+                let touching = pair_touching(d.length_squared(), ra, x.radius[b]);
+                // The history kept or cleared by a bit mask: a select here compiles to a
+                // branch, which mispredicts as often as the test itself.
+                let mask = (touching as u64).wrapping_neg();
+                let keep = |v: f64| f64::from_bits(v.to_bits() & mask);
+                let h = &mut hist[k - k0];
+                *h = Vec3::new(keep(h.x), keep(h.y), keep(h.z));
+                touching
+            } else {
+                true
+            };
+            found[n] = (a as u32, k);
+            n += keep as usize;
+            k += 1;
+        }
+        a += 1;
+    }
+    *cursor = Cursor { a, k };
+    n
+}
+
+/// Contacts in a batch: the vector width times a few, so that the loads of a batch compile to
+/// a handful of vector passes.
+const LANES: usize = 16;
+
+/// What the force law needs of one touching pair (a, b), gathered from the particle arrays.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct PairInput {
+    /// x_b − x_a, the nearest image on periodic axes, m.
+    d: Vec3,
+    ra: f64,
+    rb: f64,
+    va: Vec3,
+    vb: Vec3,
+    wa: Vec3,
+    wb: Vec3,
+    /// The stored tangential history.
+    h: Vec3,
+    c: ContactCoeffs,
+    /// The contact's effective mass (0 if the damping does not use it).
+    m_eff: f64,
+}
+
+/// Lists, as indices into `wall_pairs`, the wall pairs from `at` on that touch, until the list
+/// ends or `found` is full; clears the histories of the others and returns how many it listed.
+/// Like [`find_contacts`], without a branch on the test's outcome.
+#[inline(never)]
+fn find_wall_contacts(
+    x: &ForceInputs,
+    wall_pairs: &[[u32; 2]],
+    at: &mut usize,
+    hist: &mut [Vec3],
+    found: &mut [usize; FOUND],
+) -> usize {
+    let mut n = 0;
+    while *at < wall_pairs.len() && n < FOUND {
+        let [i, w] = wall_pairs[*at];
+        let (i, wall) = (i as usize, &x.walls[w as usize]);
+        let touching = wall_contact(x.position[i], x.radius[i], wall.point, wall.normal).is_some();
+        let mask = (touching as u64).wrapping_neg();
+        let keep = |v: f64| f64::from_bits(v.to_bits() & mask);
+        let h = &mut hist[*at];
+        *h = Vec3::new(keep(h.x), keep(h.y), keep(h.z));
+        found[n] = *at;
+        n += touching as usize;
+        *at += 1;
+    }
+    n
+}
+
+/// Vectors of a batch, one array per component (the layout vector instructions load).
+#[derive(Debug, Clone, Copy)]
+struct Vec3Lanes([[f64; LANES]; 3]);
+
+impl Vec3Lanes {
+    const ZERO: Vec3Lanes = Vec3Lanes([[0.0; LANES]; 3]);
+
+    #[inline(always)]
+    fn get(&self, i: usize) -> Vec3 {
+        Vec3::new(self.0[0][i], self.0[1][i], self.0[2][i])
+    }
+
+    #[inline(always)]
+    fn set(&mut self, i: usize, v: Vec3) {
+        (self.0[0][i], self.0[1][i], self.0[2][i]) = (v.x, v.y, v.z);
+    }
+}
+
+/// The [`PairInput`]s of a batch, component by component.
+#[derive(Debug, Clone, Copy)]
+struct InputLanes {
+    d: Vec3Lanes,
+    va: Vec3Lanes,
+    vb: Vec3Lanes,
+    wa: Vec3Lanes,
+    wb: Vec3Lanes,
+    h: Vec3Lanes,
+    /// ra, rb, kn, kt, eta_n, eta_t, mu, mu_roll, m_eff.
+    scalars: [[f64; LANES]; 9],
+}
+
+impl InputLanes {
+    const ZERO: InputLanes = InputLanes {
+        d: Vec3Lanes::ZERO,
+        va: Vec3Lanes::ZERO,
+        vb: Vec3Lanes::ZERO,
+        wa: Vec3Lanes::ZERO,
+        wb: Vec3Lanes::ZERO,
+        h: Vec3Lanes::ZERO,
+        scalars: [[0.0; LANES]; 9],
+    };
+
+    #[inline(always)]
+    fn set(&mut self, i: usize, p: &PairInput) {
+        self.d.set(i, p.d);
+        self.va.set(i, p.va);
+        self.vb.set(i, p.vb);
+        self.wa.set(i, p.wa);
+        self.wb.set(i, p.wb);
+        self.h.set(i, p.h);
+        let c = &p.c;
+        for (lane, v) in
+            self.scalars.iter_mut().zip([p.ra, p.rb, c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll, p.m_eff])
+        {
+            lane[i] = v;
+        }
+    }
+
+    #[inline(always)]
+    fn get(&self, i: usize) -> PairInput {
+        // Indexed one by one: `map` over the arrays would copy them and keep the loop scalar.
+        let v = &self.scalars;
+        let [ra, rb, kn, kt, eta_n, eta_t, mu, mu_roll, m_eff] =
+            [v[0][i], v[1][i], v[2][i], v[3][i], v[4][i], v[5][i], v[6][i], v[7][i], v[8][i]];
+        PairInput {
+            d: self.d.get(i),
+            ra,
+            rb,
+            va: self.va.get(i),
+            vb: self.vb.get(i),
+            wa: self.wa.get(i),
+            wb: self.wb.get(i),
+            h: self.h.get(i),
+            c: ContactCoeffs { kn, kt, eta_n, eta_t, mu, mu_roll, m_eff: 0.0 },
+            m_eff,
+        }
+    }
+}
+
+/// The loads and advanced histories of a batch, component by component.
+#[derive(Debug, Clone, Copy)]
+struct OutputLanes {
+    f: Vec3Lanes,
+    ta: Vec3Lanes,
+    tb: Vec3Lanes,
+    h: Vec3Lanes,
+}
+
+impl OutputLanes {
+    const ZERO: OutputLanes =
+        OutputLanes { f: Vec3Lanes::ZERO, ta: Vec3Lanes::ZERO, tb: Vec3Lanes::ZERO, h: Vec3Lanes::ZERO };
+
+    #[inline(always)]
+    fn set(&mut self, i: usize, (l, h): (PairLoad, Vec3)) {
+        self.f.set(i, l.f);
+        self.ta.set(i, l.ta);
+        self.tb.set(i, l.tb);
+        self.h.set(i, h);
+    }
+
+    #[inline(always)]
+    fn get(&self, i: usize) -> (PairLoad, Vec3) {
+        (PairLoad { f: self.f.get(i), ta: self.ta.get(i), tb: self.tb.get(i) }, self.h.get(i))
+    }
+}
+
+/// The inputs and outputs of a batch of touching pairs.
+struct Lanes {
+    input: InputLanes,
+    output: OutputLanes,
+}
+
+impl Lanes {
+    fn new() -> Self {
+        Lanes { input: InputLanes::ZERO, output: OutputLanes::ZERO }
+    }
+
+    /// Computes the loads of the listed pairs `group` (at most [`LANES`]) of the block's
+    /// `rows` and adds them, in order, to the rows' accumulators, storing the advanced
+    /// histories. A crossing pair takes its load from `crossing`.
+    #[inline(always)]
+    fn add_loads<const HERTZ: bool, const INCREMENTAL: bool>(
+        &mut self,
+        x: &ForceInputs,
+        rows: Range<usize>,
+        group: &[(u32, usize)],
+        crossing: &mut std::slice::Iter<Option<PairLoad>>,
+        force: &mut [Vec3],
+        torque: &mut [Vec3],
+        hist: &mut [Vec3],
+    ) {
+        let (r0, r1) = (rows.start, rows.end);
+        let k0 = x.offsets[r0];
+        for (i, &(a, k)) in group.iter().enumerate() {
+            let (a, b) = (a as usize, x.partners[k] as usize);
+            if b < r1 {
+                let d = x.periodic.nearest(x.position[b] - x.position[a]);
+                self.input.set(i, &pair_input(x, a, b, d, hist[k - k0]));
+            }
+        }
+        contact_loads::<HERTZ, INCREMENTAL, false>(&x.law, x.dt, &self.input, &mut self.output);
+        for (i, &(a, k)) in group.iter().enumerate() {
+            let (a, b) = (a as usize, x.partners[k] as usize);
+            let l = if b < r1 {
+                let (l, h) = self.output.get(i);
+                if x.advance {
+                    hist[k - k0] = h;
+                }
+                force[b - r0] -= l.f;
+                torque[b - r0] += l.tb;
+                l
+            } else {
+                match crossing.next() {
+                    Some(Some(l)) => *l,
+                    _ => continue,
+                }
+            };
+            force[a - r0] += l.f;
+            torque[a - r0] += l.ta;
+        }
+    }
+
+    /// As [`add_loads`](Self::add_loads), for the listed wall pairs `group` (indices into
+    /// `wall_pairs`, whose histories are `hist`).
+    #[inline(always)]
+    fn add_wall_loads<const HERTZ: bool, const INCREMENTAL: bool>(
+        &mut self,
+        x: &ForceInputs,
+        r0: usize,
+        wall_pairs: &[[u32; 2]],
+        group: &[usize],
+        force: &mut [Vec3],
+        torque: &mut [Vec3],
+        hist: &mut [Vec3],
+    ) {
+        for (lane, &j) in group.iter().enumerate() {
+            let [i, w] = wall_pairs[j];
+            let (i, wall) = (i as usize, &x.walls[w as usize]);
+            if let Some(g) = wall_geometry(x.position[i], x.radius[i], wall, x.law.lever) {
+                let input = PairInput {
+                    d: g.normal,
+                    ra: g.overlap,
+                    rb: g.lever_i,
+                    va: x.velocity[i],
+                    vb: Vec3::ZERO,
+                    wa: x.omega[i],
+                    wb: Vec3::ZERO,
+                    h: hist[j],
+                    c: *x.coeffs.wall(x.phase[i] as usize, wall.material),
+                    m_eff: x.mass[i],
+                };
+                self.input.set(lane, &input);
+            }
+        }
+        contact_loads::<HERTZ, INCREMENTAL, true>(&x.law, x.dt, &self.input, &mut self.output);
+        for (lane, &j) in group.iter().enumerate() {
+            let i = wall_pairs[j][0] as usize;
+            let (l, h) = self.output.get(lane);
+            if x.advance {
+                hist[j] = h;
+            }
+            force[i - r0] += l.f;
+            torque[i - r0] += l.ta;
+        }
+    }
+}
+
+/// The loads of a batch of touching pairs ([`pair_law`] on every lane) or, with `WALL`, of
+/// particles touching walls ([`wall_law`]). The loop has no branches, so it compiles to vector
+/// instructions; where the processor has wider ones than the build assumes (AVX2, AVX-512), a
+/// copy compiled for them is used. Vector and scalar instructions round alike (IEEE 754, no
+/// fused multiply–add), so every copy gives the same bits.
+#[inline(always)]
+fn contact_loads<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+    law: &ContactLaw,
+    dt: f64,
+    input: &InputLanes,
+    output: &mut OutputLanes,
+) {
+    #[cfg(target_arch = "x86_64")]
+    #[allow(unsafe_code)]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the processor has AVX-512F (checked just above).
+            return unsafe { simd::loads_avx512::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            return unsafe { simd::loads_avx2::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output) };
+        }
+    }
+    loads_lanes::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output)
+}
+
+#[inline(always)]
+fn loads_lanes<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+    law: &ContactLaw,
+    dt: f64,
+    input: &InputLanes,
+    output: &mut OutputLanes,
+) {
+    let law = *law;
+    for i in 0..LANES {
+        let p = input.get(i);
+        let load = if WALL {
+            wall_law::<HERTZ, INCREMENTAL>(&law, dt, &p)
+        } else {
+            pair_law::<HERTZ, INCREMENTAL>(&law, dt, &p)
+        };
+        output.set(i, load);
+    }
+}
+
+/// [`contact_loads`] compiled for wider vector units.
+#[cfg(target_arch = "x86_64")]
+mod simd {
+    use super::*;
+
+    #[target_feature(enable = "avx512f")]
+    pub(super) fn loads_avx512<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+        law: &ContactLaw,
+        dt: f64,
+        input: &InputLanes,
+        output: &mut OutputLanes,
+    ) {
+        loads_lanes::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output)
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub(super) fn loads_avx2<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+        law: &ContactLaw,
+        dt: f64,
+        input: &InputLanes,
+        output: &mut OutputLanes,
+    ) {
+        loads_lanes::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output)
+    }
+}
+
+/// x_b − x_a (nearest image) if pair (a, b) touches.
+#[inline(always)]
+fn touching_pair(x: &ForceInputs, a: usize, b: usize) -> Option<Vec3> {
+    let d = x.periodic.nearest(x.position[b] - x.position[a]);
+    pair_touching(d.length_squared(), x.radius[a], x.radius[b]).then_some(d)
+}
+
+/// The force law's inputs for the touching pair (a, b) at separation `d`, history `h`.
+#[inline(always)]
+fn pair_input(x: &ForceInputs, a: usize, b: usize, d: Vec3, h: Vec3) -> PairInput {
+    let c = *x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize);
+    let m_eff = if x.law.damping.per_particle_mass() { pair_mass(x.mass, x.held, a, b) } else { 0.0 };
+    PairInput {
+        d,
+        ra: x.radius[a],
+        rb: x.radius[b],
+        va: x.velocity[a],
+        vb: x.velocity[b],
+        wa: x.omega[a],
+        wb: x.omega[b],
+        h,
+        c,
+        m_eff,
+    }
+}
+
+/// The load of a touching pair and its advanced tangential history. Branch-free (see
+/// [`contact_force`]).
+#[inline(always)]
+fn pair_law<const HERTZ: bool, const INCREMENTAL: bool>(
+    law: &ContactLaw,
+    dt: f64,
+    p: &PairInput,
+) -> (PairLoad, Vec3) {
+    let mut g = pair_geometry(p.d, p.ra, p.rb);
+    let radical = law.lever == LeverArm::RadicalPlane;
+    g.lever_i = if radical { g.lever_i } else { p.ra };
+    g.lever_j = if radical { g.lever_j } else { p.rb };
+    let v_r = relative_velocity(&g, p.va, p.vb, p.wa, p.wb);
+    let c = scaled_damping(&p.c, law.damping, p.m_eff);
+    let mut h = p.h;
+    let f = contact_force::<HERTZ, INCREMENTAL>(
+        law.history,
+        law.clip_attraction,
+        law.coulomb,
+        &c,
+        &g,
+        v_r,
+        &mut h,
+        dt,
+    );
+    let load = PairLoad {
+        f: f.total(),
+        ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
+            + rolling_torque(c.mu_roll, f.elastic_normal, p.wa),
+        tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
+            + rolling_torque(c.mu_roll, f.elastic_normal, p.wb),
+    };
+    (load, h)
+}
+
+/// The load of a particle touching a wall (its force in `f`, its torque in `ta`) and the
+/// advanced history, from a [`PairInput`] that holds the wall geometry: the normal in `d`, the
+/// overlap in `ra`, the lever arm in `rb`, the particle's velocity and spin in `va`, `wa`, its
+/// mass in `m_eff`. Branch-free.
+#[inline(always)]
+fn wall_law<const HERTZ: bool, const INCREMENTAL: bool>(
+    law: &ContactLaw,
+    dt: f64,
+    p: &PairInput,
+) -> (PairLoad, Vec3) {
+    let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb, lever_j: 0.0 };
+    let v_r = relative_velocity(&g, p.va, Vec3::ZERO, p.wa, Vec3::ZERO);
+    let c = scaled_damping(&p.c, law.damping, p.m_eff);
+    let mut h = p.h;
+    let f = contact_force::<HERTZ, INCREMENTAL>(
+        law.history,
+        law.clip_attraction,
+        law.coulomb,
+        &c,
+        &g,
+        v_r,
+        &mut h,
+        dt,
+    );
+    let torque = f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.wa);
+    (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
 }
 
 /// The load of pair (a, b), a < b, advancing its tangential history `h`; None (and the
@@ -360,74 +839,15 @@ fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
     b: usize,
     h: &mut Vec3,
 ) -> Option<PairLoad> {
-    let law = &x.law;
-    let Some(g) = pair_geometry(x, a, b) else {
+    let Some(d) = touching_pair(x, a, b) else {
         *h = Vec3::ZERO;
         return None;
     };
-    let c = x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize);
-    let (wa, wb) = (x.omega[a], x.omega[b]);
-    let v_r = relative_velocity(&g, x.velocity[a], x.velocity[b], wa, wb);
-    let f = law_force::<HERTZ, INCREMENTAL>(x, c, || pair_mass(x.mass, x.held, a, b), &g, v_r, h);
-    Some(PairLoad {
-        f: f.total(),
-        ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
-            + rolling_torque(c.mu_roll, f.elastic_normal, wa),
-        tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
-            + rolling_torque(c.mu_roll, f.elastic_normal, wb),
-    })
-}
-
-/// The force and torque of particle i against wall w, advancing the history `h`; None (and
-/// the history cleared) when they do not touch.
-#[inline(always)]
-fn wall_load<const HERTZ: bool, const INCREMENTAL: bool>(
-    x: &ForceInputs,
-    i: usize,
-    w: usize,
-    h: &mut Vec3,
-) -> Option<(Vec3, Vec3)> {
-    let law = &x.law;
-    let wall = &x.walls[w];
-    let Some(g) = wall_geometry(x.position[i], x.radius[i], wall, law.lever) else {
-        *h = Vec3::ZERO;
-        return None;
-    };
-    let c = x.coeffs.wall(x.phase[i] as usize, wall.material);
-    let v_r = relative_velocity(&g, x.velocity[i], Vec3::ZERO, x.omega[i], Vec3::ZERO);
-    let f = law_force::<HERTZ, INCREMENTAL>(x, c, || x.mass[i], &g, v_r, h);
-    Some((f.total(), f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, x.omega[i])))
-}
-
-/// The law's force for a contact with coefficients `c`, whose damping is scaled by the
-/// contact's effective mass `m_eff` when the law asks for it; advances the history `h` when
-/// the step stores it.
-#[inline(always)]
-fn law_force<const HERTZ: bool, const INCREMENTAL: bool>(
-    x: &ForceInputs,
-    c: &ContactCoeffs,
-    m_eff: impl FnOnce() -> f64,
-    g: &ContactGeometry,
-    v_r: Vec3,
-    h: &mut Vec3,
-) -> ContactForce {
-    let law = &x.law;
-    let c = if law.damping.per_particle_mass() { scaled_damping(c, law.damping, m_eff()) } else { *c };
-    let mut hn = *h;
-    let f = contact_force::<HERTZ, INCREMENTAL>(
-        law.history,
-        law.clip_attraction,
-        law.coulomb,
-        &c,
-        g,
-        v_r,
-        &mut hn,
-        x.dt,
-    );
+    let (load, advanced) = pair_law::<HERTZ, INCREMENTAL>(&x.law, x.dt, &pair_input(x, a, b, d, *h));
     if x.advance {
-        *h = hn;
+        *h = advanced;
     }
-    f
+    Some(load)
 }
 
 /// Effective mass of the particles in slots i and j: m_i m_j/(m_i + m_j), or the other one's
@@ -449,18 +869,16 @@ pub(crate) fn pair_mass(mass: &[f64], held: &[bool], i: usize, j: usize) -> f64 
 /// (`MassVelocity`), ×√m_eff (`Tsuji`); unchanged otherwise.
 #[inline(always)]
 pub(crate) fn scaled_damping(c: &ContactCoeffs, damping: NormalDamping, m_eff: f64) -> ContactCoeffs {
-    let s = match damping {
-        NormalDamping::MassVelocity => m_eff,
-        NormalDamping::Tsuji => m_eff.sqrt(),
-        NormalDamping::Mfix | NormalDamping::ExactRestitution => return *c,
+    // Both scales are formed and one picked (×1 is exact): no branch in a contact loop.
+    let root = m_eff.sqrt();
+    let s = if damping == NormalDamping::MassVelocity {
+        m_eff
+    } else if damping == NormalDamping::Tsuji {
+        root
+    } else {
+        1.0
     };
     ContactCoeffs { eta_n: c.eta_n * s, eta_t: c.eta_t * s, ..*c }
-}
-
-/// Pair geometry of slots a, b with the law's lever arm, if they touch.
-#[inline(always)]
-fn pair_geometry(x: &ForceInputs, a: usize, b: usize) -> Option<ContactGeometry> {
-    pair_geometry_of(x.position, x.radius, a, b, x.law.lever, &x.periodic)
 }
 
 /// Pair geometry of slots i, j with lever arm `lever`, if they touch.
@@ -474,7 +892,7 @@ pub(crate) fn pair_geometry_of(
     per: &Periodic,
 ) -> Option<ContactGeometry> {
     let d = position[j] - position[i];
-    let d = if per.any() { per.min_image(d) } else { d };
+    let d = per.nearest(d);
     let mut g = pair_contact_separation(d, radius[i], radius[j])?;
     if lever != LeverArm::RadicalPlane {
         (g.lever_i, g.lever_j) = (radius[i], radius[j]);
@@ -486,7 +904,8 @@ pub(crate) fn pair_geometry_of(
 /// for LAMMPS's `pair granular` convention.
 #[inline(always)]
 pub(crate) fn torque_lever(lever: LeverArm, geometric: f64, overlap: f64) -> f64 {
-    if lever == LeverArm::LammpsGranular { geometric - 0.5 * overlap } else { geometric }
+    let shortened = geometric - 0.5 * overlap;
+    if lever == LeverArm::LammpsGranular { shortened } else { geometric }
 }
 
 /// Geometry of a particle at `x` with radius `r` against a wall with the law's lever arm, if
@@ -498,4 +917,155 @@ pub(crate) fn wall_geometry(x: Vec3, r: f64, wall: &Wall, lever: LeverArm) -> Op
         g.lever_i = r;
     }
     Some(g)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::{CoulombCap, HistoryFrame, NormalModel, TangentialModel};
+
+    /// A small deterministic generator (xorshift64*), enough to spread inputs over their ranges.
+    struct Rng(u64);
+
+    impl Rng {
+        fn unit(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            lo + (hi - lo) * self.unit()
+        }
+        fn vec(&mut self, scale: f64) -> Vec3 {
+            Vec3::new(self.range(-scale, scale), self.range(-scale, scale), self.range(-scale, scale))
+        }
+    }
+
+    /// Touching pairs and wall contacts of every kind the law distinguishes: sticking and
+    /// sliding, zero and non-zero history, with and without rolling friction.
+    fn random_inputs(rng: &mut Rng) -> InputLanes {
+        let mut lanes = InputLanes::ZERO;
+        for i in 0..LANES {
+            let (ra, rb) = (rng.range(0.5e-3, 1.5e-3), rng.range(0.5e-3, 1.5e-3));
+            let dir = rng.vec(1.0).normalize_or(Vec3::X);
+            let d = dir * (ra + rb) * rng.range(0.97, 0.9999);
+            let h = if i % 4 == 0 { Vec3::ZERO } else { rng.vec(1e-4) };
+            let kn = rng.range(1e3, 1e6);
+            let c = ContactCoeffs {
+                kn,
+                kt: kn * rng.range(0.0, 1.0),
+                eta_n: rng.range(0.0, 10.0),
+                eta_t: rng.range(0.0, 10.0),
+                mu: if i % 3 == 0 { 0.0 } else { rng.range(0.01, 1.0) },
+                mu_roll: if i % 2 == 0 { 0.0 } else { rng.range(0.0, 1e-4) },
+                m_eff: 0.0,
+            };
+            let p = PairInput {
+                d,
+                ra,
+                rb,
+                va: rng.vec(1.0),
+                vb: rng.vec(1.0),
+                wa: if i % 5 == 0 { Vec3::ZERO } else { rng.vec(100.0) },
+                wb: rng.vec(100.0),
+                h,
+                c,
+                m_eff: rng.range(1e-6, 1e-3),
+            };
+            lanes.set(i, &p);
+        }
+        lanes
+    }
+
+    fn bits(o: &OutputLanes) -> Vec<u64> {
+        [o.f, o.ta, o.tb, o.h].iter().flat_map(|v| v.0.iter().flatten().map(|x| x.to_bits())).collect()
+    }
+
+    /// Every law variant: each lane of the batched loads is, to the bit, the scalar law of that
+    /// lane, whichever instruction set computes the batch (scalar, AVX2, AVX-512 where the
+    /// processor has them). This is what makes results independent of the machine's vector
+    /// width, and equal to the particle-by-particle form of the law.
+    fn batches_equal_lane_by_lane<const HERTZ: bool, const INCREMENTAL: bool>(normal: NormalModel) {
+        let tangential =
+            if INCREMENTAL { TangentialModel::IncrementalMindlin } else { TangentialModel::MfixTotal };
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut cases = 0;
+        for history in [HistoryFrame::Mfix, HistoryFrame::Project, HistoryFrame::Rotate] {
+            for lever in [LeverArm::RadicalPlane, LeverArm::Radius, LeverArm::LammpsGranular] {
+                for damping in [
+                    NormalDamping::Mfix,
+                    NormalDamping::ExactRestitution,
+                    NormalDamping::MassVelocity,
+                    NormalDamping::Tsuji,
+                ] {
+                    for (clip_attraction, coulomb) in
+                        [(false, CoulombCap::Mfix), (true, CoulombCap::Lammps), (true, CoulombCap::Mfix)]
+                    {
+                        let law = ContactLaw {
+                            normal,
+                            tangential,
+                            history,
+                            lever,
+                            damping,
+                            clip_attraction,
+                            coulomb,
+                        };
+                        let dt = 1e-6;
+                        for _ in 0..8 {
+                            let input = random_inputs(&mut rng);
+                            let mut scalar = OutputLanes::ZERO;
+                            let mut wall_scalar = OutputLanes::ZERO;
+                            for i in 0..LANES {
+                                // One lane at a time (`black_box` keeps the compiler from
+                                // turning this loop into vector code as well).
+                                let p = std::hint::black_box(input.get(i));
+                                scalar.set(i, pair_law::<HERTZ, INCREMENTAL>(&law, dt, &p));
+                                wall_scalar.set(i, wall_law::<HERTZ, INCREMENTAL>(&law, dt, &p));
+                            }
+                            let mut batch = OutputLanes::ZERO;
+                            contact_loads::<HERTZ, INCREMENTAL, false>(&law, dt, &input, &mut batch);
+                            assert_eq!(bits(&batch), bits(&scalar), "{law:?}");
+                            contact_loads::<HERTZ, INCREMENTAL, true>(&law, dt, &input, &mut batch);
+                            assert_eq!(bits(&batch), bits(&wall_scalar), "{law:?} (walls)");
+                            loads_lanes::<HERTZ, INCREMENTAL, false>(&law, dt, &input, &mut batch);
+                            assert_eq!(bits(&batch), bits(&scalar), "{law:?} (baseline)");
+                            #[cfg(target_arch = "x86_64")]
+                            #[allow(unsafe_code)]
+                            {
+                                if std::arch::is_x86_feature_detected!("avx2") {
+                                    // SAFETY: the processor has AVX2.
+                                    unsafe {
+                                        simd::loads_avx2::<HERTZ, INCREMENTAL, false>(
+                                            &law, dt, &input, &mut batch,
+                                        )
+                                    };
+                                    assert_eq!(bits(&batch), bits(&scalar), "{law:?} (AVX2)");
+                                }
+                                if std::arch::is_x86_feature_detected!("avx512f") {
+                                    // SAFETY: the processor has AVX-512F.
+                                    unsafe {
+                                        simd::loads_avx512::<HERTZ, INCREMENTAL, false>(
+                                            &law, dt, &input, &mut batch,
+                                        )
+                                    };
+                                    assert_eq!(bits(&batch), bits(&scalar), "{law:?} (AVX-512)");
+                                }
+                            }
+                            cases += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(cases, 3 * 3 * 4 * 3 * 8);
+    }
+
+    #[test]
+    fn batched_loads_equal_the_scalar_law_on_every_instruction_set() {
+        batches_equal_lane_by_lane::<false, false>(NormalModel::LinearSpringDashpot);
+        batches_equal_lane_by_lane::<false, true>(NormalModel::LinearSpringDashpot);
+        batches_equal_lane_by_lane::<true, false>(NormalModel::Hertz);
+        batches_equal_lane_by_lane::<true, true>(NormalModel::Hertz);
+    }
 }
