@@ -783,15 +783,15 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
             if !ids.contains(&id) {
                 return Err(CaseError::invalid(&table, "particles", id, "no particle has this id"));
             }
-            if let MotionRule::Follow { leader, .. } = rule {
-                if !ids.contains(&leader) {
-                    return Err(CaseError::invalid(
-                        &table,
-                        "leader",
-                        leader,
-                        format!("particle {id} would follow id {leader}, which no particle has"),
-                    ));
-                }
+            if let MotionRule::Follow { leader, .. } = rule
+                && !ids.contains(&leader)
+            {
+                return Err(CaseError::invalid(
+                    &table,
+                    "leader",
+                    leader,
+                    format!("particle {id} would follow id {leader}, which no particle has"),
+                ));
             }
             motion.push(PrescribedMotion { particle: id, rule });
         }

@@ -140,13 +140,13 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
             _ => {}
         }
     }
-    if let Some(n) = expected_atoms {
-        if n != atoms.len() {
-            return Err(err(
-                last_line,
-                format!("the header declares {n} atoms but the Atoms section has {}", atoms.len()),
-            ));
-        }
+    if let Some(n) = expected_atoms
+        && n != atoms.len()
+    {
+        return Err(err(
+            last_line,
+            format!("the header declares {n} atoms but the Atoms section has {}", atoms.len()),
+        ));
     }
     if atoms.is_empty() {
         return Err(err(last_line, "no Atoms section with particles".into()));

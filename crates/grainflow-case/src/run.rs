@@ -357,12 +357,12 @@ fn run_simulation(
         Ok(d)
     };
     let mut write_vtk = |sim: &Simulation, force: bool| -> Result<(), OutputError> {
-        if let Some((series, k)) = vtk.as_mut() {
-            if force || sim.step_index() % *k == 0 {
-                series
-                    .write(sim.step_index(), sim.time(), sim.particles(), &sim.contacts())
-                    .map_err(io_err(&vtk_dir))?;
-            }
+        if let Some((series, k)) = vtk.as_mut()
+            && (force || sim.step_index().is_multiple_of(*k))
+        {
+            series
+                .write(sim.step_index(), sim.time(), sim.particles(), &sim.contacts())
+                .map_err(io_err(&vtk_dir))?;
         }
         Ok(())
     };
@@ -375,12 +375,12 @@ fn run_simulation(
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
-    let (first, mut outputs) = if start_step == 0 || start_step % every == 0 {
+    let (first, mut outputs) = if start_step == 0 || start_step.is_multiple_of(every) {
         (emit(&sim, &mut ts, &mut files)?, 1)
     } else {
         (sim.diagnostics(), 0)
     };
-    write_vtk(&sim, start_step == 0 || start_step % every == 0)?;
+    write_vtk(&sim, start_step == 0 || start_step.is_multiple_of(every))?;
     on_progress(&sim);
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
@@ -391,8 +391,8 @@ fn run_simulation(
         sim.step();
         let step = sim.step_index();
         let end = sim.finished();
-        let output_now = step % every == 0 || end;
-        if step % HEALTH_EVERY == 0 || output_now {
+        let output_now = step.is_multiple_of(every) || end;
+        if step.is_multiple_of(HEALTH_EVERY) || output_now {
             if let Some(message) = health_problem(&sim, domain) {
                 let (good_step, saved) = last_good.save()?;
                 ts.finish().map_err(io_err(&ts_path))?;
@@ -400,7 +400,7 @@ fn run_simulation(
             }
             // Keeping a copy of the state costs a pass over it: refresh it at outputs and
             // every tenth check, not at every check.
-            if output_now || step % (10 * HEALTH_EVERY) == 0 {
+            if output_now || step.is_multiple_of(10 * HEALTH_EVERY) {
                 last_good.keep(&sim)?;
             }
         }
@@ -411,11 +411,11 @@ fn run_simulation(
         }
         write_vtk(&sim, end)?;
         output_seconds += t_out.elapsed().as_secs_f64();
-        if step % progress_every == 0 || end {
+        if step.is_multiple_of(progress_every) || end {
             on_progress(&sim);
         }
         let due = match options.checkpoint_every {
-            Some(CheckpointEvery::Steps(n)) => n > 0 && step % n == 0,
+            Some(CheckpointEvery::Steps(n)) => n > 0 && step.is_multiple_of(n),
             Some(CheckpointEvery::WallTime(d)) => last_checkpoint.elapsed() >= d,
             None => false,
         };

@@ -653,17 +653,17 @@ fn checks(mfix: &[ModelRun], converged: &[ModelRun], lever_r: &[ModelRun]) -> Ve
                 format!("|KRω′ − (1 − e_t)v_t0|/v_t0, worst at θ = {:.2}°; exact for any Δt with a constant lever, so only rounding remains", i.impact_angle_deg),
             ));
         }
-        if run.spec.model == Model::Lsd {
-            if let Some(i) = run.impacts.iter().find(|i| i.id == 94) {
-                let et = i.tangential_restitution.unwrap_or(f64::NAN);
-                let theory = lsd_small_angle_et(LSD_KAPPA);
-                out.push(Check::assert(
-                    format!("LSD e_t at θ = {TINY_ANGLE_DEG}°, converged, lever R → {LSD_SMALL_ANGLE_ET}"),
-                    (et - LSD_SMALL_ANGLE_ET).abs(),
-                    1e-3,
-                    format!("e_t = {et:.6}; closed form {theory:.6}; dt = {:.1e} s", run.dt),
-                ));
-            }
+        if run.spec.model == Model::Lsd
+            && let Some(i) = run.impacts.iter().find(|i| i.id == 94)
+        {
+            let et = i.tangential_restitution.unwrap_or(f64::NAN);
+            let theory = lsd_small_angle_et(LSD_KAPPA);
+            out.push(Check::assert(
+                format!("LSD e_t at θ = {TINY_ANGLE_DEG}°, converged, lever R → {LSD_SMALL_ANGLE_ET}"),
+                (et - LSD_SMALL_ANGLE_ET).abs(),
+                1e-3,
+                format!("e_t = {et:.6}; closed form {theory:.6}; dt = {:.1e} s", run.dt),
+            ));
         }
     }
     // MFIX's total-displacement Hertz spring is not conservative (dem05.md, known weaknesses):

@@ -240,10 +240,10 @@ fn plane_sim(base: &Case, sphere: &Sphere, mu: f64) -> Result<Vec<PlaneRun>, Ver
                 let f = u0 / (u0 - u);
                 stick[i] = Some((t0 + f * (t - t0), v0 + f * (v - v0)));
             }
-            if let Some((ts, _)) = stick[i] {
-                if t >= ts + settle {
-                    deviation[i] = deviation[i].max((v - v_star[i]).abs().max(u.abs()) / v_star[i]);
-                }
+            if let Some((ts, _)) = stick[i]
+                && t >= ts + settle
+            {
+                deviation[i] = deviation[i].max((v - v_star[i]).abs().max(u.abs()) / v_star[i]);
             }
             oscillation[i] = oscillation[i].max((p.position[i].y - y0[i]).abs());
             prev[i] = (t, v, u);

@@ -277,10 +277,10 @@ impl Simulation {
         }
         let mut d = Dec(payload);
         let found = String::from_utf8_lossy(&d.bytes("case hash")?).into_owned();
-        if let Some(expected) = case_hash {
-            if found != expected {
-                return Err(CheckpointError::WrongCase { found, expected: expected.into() }.into());
-            }
+        if let Some(expected) = case_hash
+            && found != expected
+        {
+            return Err(CheckpointError::WrongCase { found, expected: expected.into() }.into());
         }
         let step = d.u64("step")?;
         let timing = (d.f64("time")?, d.f64("time step")?, d.f64("start time")?);

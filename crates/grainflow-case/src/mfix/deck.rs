@@ -91,15 +91,15 @@ impl Deck {
                 )));
             }
             (Some(subs), d) => {
-                if let Some(d) = d {
-                    if subs.len() != d as usize {
-                        return Err(bad(format!(
-                            "{} takes {d} subscript{}, e.g. {}",
-                            a.key,
-                            if d == 1 { "" } else { "s" },
-                            show(&a.key, &vec![1; d as usize])
-                        )));
-                    }
+                if let Some(d) = d
+                    && subs.len() != d as usize
+                {
+                    return Err(bad(format!(
+                        "{} takes {d} subscript{}, e.g. {}",
+                        a.key,
+                        if d == 1 { "" } else { "s" },
+                        show(&a.key, &vec![1; d as usize])
+                    )));
                 }
                 let mut rest = Vec::new();
                 for s in &subs[1..] {
@@ -112,10 +112,10 @@ impl Deck {
                     Sub::Index(i) => (i, None),
                     Sub::Range(i, j) => (i, Some((j - i + 1) as usize)),
                 };
-                if let Some(room) = room {
-                    if n > room {
-                        return Err(bad(format!("{n} values for a range of {room} elements")));
-                    }
+                if let Some(room) = room
+                    && n > room
+                {
+                    return Err(bad(format!("{n} values for a range of {room} elements")));
                 }
                 let all_idx = std::iter::once(start).chain(rest.iter().copied());
                 if let Some(low) = all_idx.clone().find(|&i| i < base) {
@@ -140,10 +140,10 @@ impl Deck {
                 continue;
             }
             let entry = Entry { value, loc: a.loc.clone() };
-            if let Some(old) = given.entries.insert(idx.clone(), entry) {
-                if matches!((&old.loc, &a.loc), (Loc::Line { .. }, Loc::Line { .. })) {
-                    self.repeated.push((show(&key, &idx), old.loc, a.loc.clone()));
-                }
+            if let Some(old) = given.entries.insert(idx.clone(), entry)
+                && matches!((&old.loc, &a.loc), (Loc::Line { .. }, Loc::Line { .. }))
+            {
+                self.repeated.push((show(&key, &idx), old.loc, a.loc.clone()));
             }
         }
         Ok(())

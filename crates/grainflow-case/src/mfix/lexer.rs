@@ -195,13 +195,13 @@ fn lex_line(line: &str, loc: &Loc, out: &mut Vec<Assignment>, continuation: bool
         out[target].values.extend(items);
         i = next;
     }
-    if let Some(c) = current {
-        if out[c].values.is_empty() {
-            return Err(syntax(
-                loc,
-                format!("`{}` has no value after `=`; give a value, e.g. `{} = 1.0`", out[c].key, out[c].key),
-            ));
-        }
+    if let Some(c) = current
+        && out[c].values.is_empty()
+    {
+        return Err(syntax(
+            loc,
+            format!("`{}` has no value after `=`; give a value, e.g. `{} = 1.0`", out[c].key, out[c].key),
+        ));
     }
     Ok(())
 }

@@ -575,15 +575,15 @@ impl Translator<'_> {
                     ));
                 }
             }
-            if let Some(l) = &vlen {
-                if l.v <= 0.0 {
-                    return Err(CaseError::invalid(
-                        l.loc.to_string(),
-                        l.key.clone(),
-                        l.text.clone(),
-                        "the domain length must be positive",
-                    ));
-                }
+            if let Some(l) = &vlen
+                && l.v <= 0.0
+            {
+                return Err(CaseError::invalid(
+                    l.loc.to_string(),
+                    l.key.clone(),
+                    l.text.clone(),
+                    "the domain length must be positive",
+                ));
             }
             let (x0, x1) = match (&vmin, &vmax, &vlen) {
                 (Some(a), Some(b), Some(l)) => {
@@ -669,15 +669,15 @@ impl Translator<'_> {
             }
             for key in ["BC_UW_S", "BC_VW_S", "BC_WW_S"] {
                 for idx in d.indices(key).into_iter().filter(|x| x.first() == Some(&i)) {
-                    if let Some(g) = d.real(key, &idx)? {
-                        if g.v != 0.0 {
-                            return Err(CaseError::invalid(
-                                g.loc.to_string(),
-                                g.key,
-                                g.text,
-                                "grainflow cannot run this: moving walls are not supported; only 0 is accepted",
-                            ));
-                        }
+                    if let Some(g) = d.real(key, &idx)?
+                        && g.v != 0.0
+                    {
+                        return Err(CaseError::invalid(
+                            g.loc.to_string(),
+                            g.key,
+                            g.text,
+                            "grainflow cannot run this: moving walls are not supported; only 0 is accepted",
+                        ));
                     }
                 }
             }
@@ -756,10 +756,10 @@ impl Translator<'_> {
     fn phases(&mut self, mmax: usize) -> Result<Vec<Phase>, CaseError> {
         let mut names: BTreeMap<i64, String> = BTreeMap::new();
         for (key, value, _) in &self.lexed.gui {
-            if let Some(m) = key.strip_prefix("solids_phase_name(").and_then(|r| r.strip_suffix(')')) {
-                if let Ok(m) = m.trim().parse::<i64>() {
-                    names.insert(m, value.trim_matches(|c| c == '\'' || c == '"').trim().to_string());
-                }
+            if let Some(m) = key.strip_prefix("solids_phase_name(").and_then(|r| r.strip_suffix(')'))
+                && let Ok(m) = m.trim().parse::<i64>()
+            {
+                names.insert(m, value.trim_matches(|c| c == '\'' || c == '"').trim().to_string());
             }
         }
         let mut phases: Vec<Phase> = Vec::new();
@@ -826,15 +826,16 @@ impl Translator<'_> {
                            what: &str,
                            range: Range|
          -> Result<f64, CaseError> {
-            if let Some(g) = t.real(key, &[lc as i64])? {
-                if g.v == 0.0 && range == limits::EN {
-                    return Err(CaseError::invalid(
-                        g.loc.to_string(),
-                        g.key,
-                        g.text,
-                        "must lie in (0, 1]: MFIX accepts 0 (critical damping) but grainflow's damping needs e > 0; use a small positive value",
-                    ));
-                }
+            if let Some(g) = t.real(key, &[lc as i64])?
+                && g.v == 0.0
+                && range == limits::EN
+            {
+                return Err(CaseError::invalid(
+                    g.loc.to_string(),
+                    g.key,
+                    g.text,
+                    "must lie in (0, 1]: MFIX accepts 0 (critical damping) but grainflow's damping needs e > 0; use a small positive value",
+                ));
             }
             t.required(key, &[lc as i64], range, what, format!("{what}; {}", order_hint(key, n)))
         };
@@ -1126,15 +1127,15 @@ impl Translator<'_> {
         read_file: &dyn Fn(&str) -> Result<String, CaseError>,
     ) -> Result<(RawParticles, String), CaseError> {
         let count = self.deck.int("PARTICLES", &[])?;
-        if let Some(g) = &count {
-            if g.v < 1 {
-                return Err(CaseError::invalid(
-                    g.loc.to_string(),
-                    g.key.clone(),
-                    g.text.clone(),
-                    "must be at least 1: a run without initial particles needs a mass inflow, which grainflow does not have",
-                ));
-            }
+        if let Some(g) = &count
+            && g.v < 1
+        {
+            return Err(CaseError::invalid(
+                g.loc.to_string(),
+                g.key.clone(),
+                g.text.clone(),
+                "must be at least 1: a run without initial particles needs a mass inflow, which grainflow does not have",
+            ));
         }
         let text = read_file(PARTICLE_FILE)?;
         let first = text.lines().next().unwrap_or("").trim();
@@ -1247,14 +1248,14 @@ impl Translator<'_> {
         };
         // MFIX does not check initial overlaps; grainflow's cases refuse more than
         // DEFAULT_MAX_INITIAL_OVERLAP unless told. Say what this deck needs.
-        if let Some((ratio, what)) = largest_overlap(&init, lo, hi) {
-            if ratio > DEFAULT_MAX_INITIAL_OVERLAP {
-                let limit = ((ratio * 100.0).ceil() + 1.0) / 100.0;
-                raw.max_initial_overlap = Some(limit);
-                self.note(format!(
+        if let Some((ratio, what)) = largest_overlap(&init, lo, hi)
+            && ratio > DEFAULT_MAX_INITIAL_OVERLAP
+        {
+            let limit = ((ratio * 100.0).ceil() + 1.0) / 100.0;
+            raw.max_initial_overlap = Some(limit);
+            self.note(format!(
                     "{PARTICLE_FILE}: {what} overlap by {ratio:.3} of the smaller radius at the start; MFIX does not check this, grainflow's own limit ({DEFAULT_MAX_INITIAL_OVERLAP}) is raised to {limit} for this deck ([particles] max_initial_overlap)"
                 ));
-            }
         }
         Ok((raw, extra_source))
     }
