@@ -36,7 +36,7 @@ use crate::boundary::Periodic;
 use crate::contact::geometry::{
     ContactGeometry, pair_contact_separation, pair_geometry, pair_touching, relative_velocity, wall_contact,
 };
-use crate::contact::law::{contact_force, rolling_torque};
+use crate::contact::law::{ContactForce, contact_force, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
 use crate::math::Vec3;
 use crate::wall::Wall;
@@ -780,6 +780,29 @@ fn pair_law<const HERTZ: bool, const INCREMENTAL: bool>(
     g.lever_i = if radical { g.lever_i } else { p.ra };
     g.lever_j = if radical { g.lever_j } else { p.rb };
     let v_r = relative_velocity(&g, p.va, p.vb, p.wa, p.wb);
+    let (f, h) = law_force::<HERTZ, INCREMENTAL>(law, dt, p, &g, v_r);
+    let mu_roll = p.c.mu_roll;
+    let load = PairLoad {
+        f: f.total(),
+        ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
+            + rolling_torque(mu_roll, f.elastic_normal, p.wa),
+        tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
+            + rolling_torque(mu_roll, f.elastic_normal, p.wb),
+    };
+    (load, h)
+}
+
+/// The law's force for a contact of geometry `g` and relative velocity `v_r`, with the
+/// input's coefficients and its damping scaled by the effective mass as the law asks; and the
+/// advanced history.
+#[inline(always)]
+fn law_force<const HERTZ: bool, const INCREMENTAL: bool>(
+    law: &ContactLaw,
+    dt: f64,
+    p: &PairInput,
+    g: &ContactGeometry,
+    v_r: Vec3,
+) -> (ContactForce, Vec3) {
     let c = scaled_damping(&p.c, law.damping, p.m_eff);
     let mut h = p.h;
     let f = contact_force::<HERTZ, INCREMENTAL>(
@@ -787,19 +810,12 @@ fn pair_law<const HERTZ: bool, const INCREMENTAL: bool>(
         law.clip_attraction,
         law.coulomb,
         &c,
-        &g,
+        g,
         v_r,
         &mut h,
         dt,
     );
-    let load = PairLoad {
-        f: f.total(),
-        ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
-            + rolling_torque(c.mu_roll, f.elastic_normal, p.wa),
-        tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
-            + rolling_torque(c.mu_roll, f.elastic_normal, p.wb),
-    };
-    (load, h)
+    (f, h)
 }
 
 /// The load of a particle touching a wall (its force in `f`, its torque in `ta`) and the
@@ -814,19 +830,8 @@ fn wall_law<const HERTZ: bool, const INCREMENTAL: bool>(
 ) -> (PairLoad, Vec3) {
     let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb, lever_j: 0.0 };
     let v_r = relative_velocity(&g, p.va, Vec3::ZERO, p.wa, Vec3::ZERO);
-    let c = scaled_damping(&p.c, law.damping, p.m_eff);
-    let mut h = p.h;
-    let f = contact_force::<HERTZ, INCREMENTAL>(
-        law.history,
-        law.clip_attraction,
-        law.coulomb,
-        &c,
-        &g,
-        v_r,
-        &mut h,
-        dt,
-    );
-    let torque = f.torque(g.lever_i, g.normal) + rolling_torque(c.mu_roll, f.elastic_normal, p.wa);
+    let (f, h) = law_force::<HERTZ, INCREMENTAL>(law, dt, p, &g, v_r);
+    let torque = f.torque(g.lever_i, g.normal) + rolling_torque(p.c.mu_roll, f.elastic_normal, p.wa);
     (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
 }
 
