@@ -418,7 +418,7 @@ fn find_contacts(
 const LANES: usize = 16;
 
 /// What the force law needs of one touching pair (a, b), gathered from the particle arrays.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct PairInput {
     /// x_b − x_a, the nearest image on periodic axes, m.
     d: Vec3,
@@ -598,6 +598,8 @@ impl Lanes {
         for (i, &(a, k)) in group.iter().enumerate() {
             let (a, b) = (a as usize, x.partners[k] as usize);
             if b < r1 {
+                // The separation again, rather than kept from the contact test: the listing
+                // stays (a, k) per pair, and these positions are in cache.
                 let d = x.periodic.nearest(x.position[b] - x.position[a]);
                 self.input.set(i, &pair_input(x, a, b, d, hist[k - k0]));
             }
