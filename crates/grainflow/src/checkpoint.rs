@@ -231,7 +231,7 @@ impl Simulation {
         e.f64(nl.skin())?;
         e.u64(nl.is_built() as u64)?;
         e.pairs(nl.pair_count(), nl.pairs())?;
-        e.vec3s(nl.pair_history())?;
+        e.vec3s(&nl.pair_history())?;
         e.pairs(nl.wall_pairs().len(), nl.wall_pairs().iter().copied())?;
         e.vec3s(nl.wall_history())?;
         e.vec3s(nl.reference())?;

@@ -14,9 +14,11 @@
 //! ## Batches
 //! The contacts' loads do not depend on each other, only their sums do. So a block first tests
 //! a stretch of its pairs for contact, without branching on the outcome, and lists the touching
-//! ones; it then gathers their inputs into batches of 16 (one array per component),
-//! computes a batch's loads in one loop that compiles to vector instructions, and adds them to
-//! the particles in list order — the order above. The contact law is the same function as for
+//! ones; it then gathers their inputs, with the stored history from the last evaluation's
+//! contacts (found by one merge pass: both are in list order), into batches of 16 (one array
+//! per component), computes a batch's loads in one loop that compiles to vector instructions,
+//! and adds them to the particles in list order — the order above — while listing the pairs
+//! with their new histories as the next evaluation's contacts. The contact law is the same function as for
 //! a single contact, written without data-dependent branches; the AVX2 and AVX-512 copies of
 //! the loop round exactly as scalar code does (no fused multiply–add), so results do not
 //! depend on the processor (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`).
@@ -39,6 +41,7 @@ use crate::contact::geometry::{
 use crate::contact::law::{ContactForce, contact_force, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
 use crate::math::Vec3;
+use crate::neighbor::{ContactCursor, PairContacts};
 use crate::wall::Wall;
 
 /// Below this many particles the force stage runs on one thread (the threads' start-up would
@@ -79,6 +82,8 @@ pub(crate) struct ForceInputs<'a> {
     pub advance: bool,
     pub offsets: &'a [usize],
     pub partners: &'a [u32],
+    /// The pairs in contact at the last evaluation, with their histories.
+    pub contacts: &'a PairContacts,
     pub wall_pairs: &'a [[u32; 2]],
 }
 
@@ -86,9 +91,13 @@ pub(crate) struct ForceInputs<'a> {
 pub(crate) struct ForceOutputs<'a> {
     pub force: &'a mut [Vec3],
     pub torque: &'a mut [Vec3],
-    pub pair_history: &'a mut [Vec3],
+    /// Filled with the pairs in contact now, with their (advanced) histories.
+    pub contacts: &'a mut PairContacts,
     pub wall_history: &'a mut [Vec3],
 }
+
+/// A crossing pair's load and history, if in contact.
+type CrossingLoad = Option<(PairLoad, Vec3)>;
 
 /// How the slots are cut into blocks for threads, with the crossing pairs; rebuilt with the
 /// neighbour list.
@@ -108,8 +117,10 @@ pub(crate) struct ForcePlan {
     /// `incoming[incoming_start[b]..incoming_start[b + 1]]`.
     incoming_start: Vec<usize>,
     incoming: Vec<u32>,
-    /// The crossing pairs' loads (None: not in contact).
-    loads: Vec<Option<PairLoad>>,
+    /// The crossing pairs' loads and histories (None: not in contact).
+    loads: Vec<CrossingLoad>,
+    /// The contacts found by each block but the first (which fills the stage's output).
+    contacts: Vec<PairContacts>,
 }
 
 impl ForcePlan {
@@ -121,7 +132,8 @@ impl ForcePlan {
             + (self.wall_ends.capacity() + self.crossing_start.capacity() + self.incoming_start.capacity())
                 * size_of::<usize>()
             + self.incoming.capacity() * 4
-            + self.loads.capacity() * size_of::<Option<PairLoad>>()
+            + self.loads.capacity() * size_of::<CrossingLoad>()
+            + self.contacts.iter().map(PairContacts::heap_bytes).sum::<usize>()
     }
 
     /// Cuts `n` slots into `n_blocks` blocks with about equal pair counts, unless it was done
@@ -186,6 +198,7 @@ impl ForcePlan {
         }
         self.loads.clear();
         self.loads.resize(self.crossing.len(), None);
+        self.contacts.resize_with(n_blocks.saturating_sub(1), PairContacts::default);
     }
 }
 
@@ -203,7 +216,7 @@ pub(crate) fn serial<const HERTZ: bool, const INCREMENTAL: bool>(
         0..n,
         out.force,
         out.torque,
-        out.pair_history,
+        out.contacts,
         out.wall_history,
         0,
         Incoming::None,
@@ -222,28 +235,28 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
 ) -> f64 {
     use rayon::prelude::*;
     let blocks = &plan.blocks;
-    let pair_ends = || blocks.iter().map(|r| x.offsets[r.end]);
     let slot_ends = || blocks.iter().map(|r| r.end);
     let wall_ends = &plan.wall_ends;
 
     // Pass 1: the crossing pairs, each block's on its thread.
     {
-        let hist = split_at_ends(&mut *out.pair_history, pair_ends());
         let loads = split_at_ends(&mut plan.loads[..], plan.crossing_start[1..].iter().copied());
         let crossing = &plan.crossing;
         let starts = &plan.crossing_start;
-        hist.into_par_iter().zip(loads).enumerate().for_each(|(t, (hist, loads))| {
-            let k0 = x.offsets[blocks[t].start];
+        loads.into_par_iter().enumerate().for_each(|(t, loads)| {
+            let mut history = ContactCursor::new(x.contacts, x.offsets[blocks[t].start]);
             for (load, &(a, k)) in loads.iter_mut().zip(&crossing[starts[t]..starts[t + 1]]) {
                 let b = x.partners[k] as usize;
-                *load = pair_load::<HERTZ, INCREMENTAL>(x, a as usize, b, &mut hist[k - k0]);
+                *load = pair_load::<HERTZ, INCREMENTAL>(x, a as usize, b, history.history(k));
             }
         });
     }
-    // Pass 2: each block's walls, arriving crossing pairs and own rows.
+    // Pass 2: each block's walls, arriving crossing pairs and own rows. The first block lists
+    // its contacts in the output, the others in their own lists, appended after.
     let force = split_at_ends(&mut *out.force, slot_ends());
     let torque = split_at_ends(&mut *out.torque, slot_ends());
-    let hist = split_at_ends(&mut *out.pair_history, pair_ends());
+    let found: Vec<&mut PairContacts> =
+        std::iter::once(&mut *out.contacts).chain(plan.contacts.iter_mut()).collect();
     let whist = split_at_ends(&mut *out.wall_history, wall_ends.iter().copied());
     let incoming =
         Incoming::Crossing { start: &plan.incoming_start, index: &plan.incoming, loads: &plan.loads };
@@ -252,10 +265,10 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
     let wall_seconds: f64 = force
         .into_par_iter()
         .zip(torque)
-        .zip(hist)
+        .zip(found)
         .zip(whist)
         .enumerate()
-        .map(|(t, (((force, torque), hist), whist))| {
+        .map(|(t, (((force, torque), found), whist))| {
             let rows = blocks[t].clone();
             let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
             block::<HERTZ, INCREMENTAL>(
@@ -264,7 +277,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
                 rows,
                 force,
                 torque,
-                hist,
+                found,
                 whist,
                 w0,
                 incoming,
@@ -272,6 +285,9 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
             )
         })
         .sum();
+    for c in &plan.contacts[..blocks.len() - 1] {
+        out.contacts.extend(c);
+    }
     wall_seconds / blocks.len().max(1) as f64
 }
 
@@ -292,13 +308,13 @@ fn split_at_ends<T>(mut s: &mut [T], ends: impl ExactSizeIterator<Item = usize>)
 #[derive(Clone, Copy)]
 enum Incoming<'a> {
     None,
-    Crossing { start: &'a [usize], index: &'a [u32], loads: &'a [Option<PairLoad>] },
+    Crossing { start: &'a [usize], index: &'a [u32], loads: &'a [CrossingLoad] },
 }
 
 /// The force stage of the rows `rows`: `force`/`torque` are those rows' accumulators,
-/// `hist` the histories of their pairs, `whist` those of their wall pairs (starting at wall
-/// pair `w0`), `own_crossing` the loads of their crossing pairs in list order. With `clock`,
-/// returns the seconds spent on the walls.
+/// `found` receives their pairs in contact with the advanced histories, `whist` holds the
+/// histories of their wall pairs (starting at wall pair `w0`), `own_crossing` the loads of
+/// their crossing pairs in list order. With `clock`, returns the seconds spent on the walls.
 #[inline(always)]
 fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     clock: bool,
@@ -306,11 +322,11 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     rows: Range<usize>,
     force: &mut [Vec3],
     torque: &mut [Vec3],
-    hist: &mut [Vec3],
+    found_contacts: &mut PairContacts,
     whist: &mut [Vec3],
     w0: usize,
     incoming: Incoming,
-    own_crossing: &[Option<PairLoad>],
+    own_crossing: &[CrossingLoad],
 ) -> f64 {
     let t0 = clock.then(std::time::Instant::now);
     let (r0, r1) = (rows.start, rows.end);
@@ -333,7 +349,7 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     if let Incoming::Crossing { start, index, loads } = incoming {
         for b in rows.clone() {
             for &c in &index[start[b]..start[b + 1]] {
-                if let Some(l) = loads[c as usize] {
+                if let Some((l, _)) = loads[c as usize] {
                     force[b - r0] -= l.f;
                     torque[b - r0] += l.tb;
                 }
@@ -346,10 +362,21 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     let mut cursor = Cursor { a: r0, k: x.offsets[r0] };
     let mut found = [(0u32, 0usize); FOUND];
     let mut crossing = own_crossing.iter();
+    let mut history = ContactCursor::new(x.contacts, x.offsets[r0]);
+    found_contacts.clear();
     while cursor.a < r1 {
-        let n = find_contacts(x, r0..r1, &mut cursor, hist, &mut found);
+        let n = find_contacts(x, r0..r1, &mut cursor, &mut found);
         for group in found[..n].chunks(LANES) {
-            lanes.add_loads::<HERTZ, INCREMENTAL>(x, r0..r1, group, &mut crossing, force, torque, hist);
+            lanes.add_loads::<HERTZ, INCREMENTAL>(
+                x,
+                r0..r1,
+                group,
+                &mut crossing,
+                &mut history,
+                force,
+                torque,
+                found_contacts,
+            );
         }
     }
     wall_seconds
@@ -365,20 +392,17 @@ struct Cursor {
 }
 
 /// Lists, as (a, k), the pairs from `cursor` on that touch and the crossing pairs (whose loads
-/// were computed before), until the rows end or `found` is full; clears the histories of the
-/// pairs that do not touch, and returns how many it listed. The test does not branch on its
-/// outcome (which no predictor could guess): every pair is written into the next place,
-/// which only a touching pair keeps.
+/// were computed before), until the rows end or `found` is full, and returns how many it
+/// listed. The test does not branch on its outcome (which no predictor could guess): every
+/// pair is written into the next place, which only a touching pair keeps.
 #[inline(never)]
 fn find_contacts(
     x: &ForceInputs,
     rows: Range<usize>,
     cursor: &mut Cursor,
-    hist: &mut [Vec3],
     found: &mut [(u32, usize); FOUND],
 ) -> usize {
-    let (r0, r1) = (rows.start, rows.end);
-    let k0 = x.offsets[r0];
+    let r1 = rows.end;
     let mut n = 0;
     let Cursor { mut a, mut k } = *cursor;
     while a < r1 {
@@ -392,14 +416,7 @@ fn find_contacts(
             let b = x.partners[k] as usize;
             let keep = if b < r1 {
                 let d = x.periodic.nearest(x.position[b] - xa);
-                let touching = pair_touching(d.length_squared(), ra, x.radius[b]);
-                // The history kept or cleared by a bit mask: a select here compiles to a
-                // branch, which mispredicts as often as the test itself.
-                let mask = (touching as u64).wrapping_neg();
-                let keep = |v: f64| f64::from_bits(v.to_bits() & mask);
-                let h = &mut hist[k - k0];
-                *h = Vec3::new(keep(h.x), keep(h.y), keep(h.z));
-                touching
+                pair_touching(d.length_squared(), ra, x.radius[b])
             } else {
                 true
             };
@@ -580,28 +597,30 @@ impl Lanes {
     }
 
     /// Computes the loads of the listed pairs `group` (at most [`LANES`]) of the block's
-    /// `rows` and adds them, in order, to the rows' accumulators, storing the advanced
-    /// histories. A crossing pair takes its load from `crossing`.
+    /// `rows` and adds them, in order, to the rows' accumulators, listing the pairs with their
+    /// advanced histories in `found`. The stored histories come from `history`; a crossing
+    /// pair takes its load and history from `crossing`.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn add_loads<const HERTZ: bool, const INCREMENTAL: bool>(
         &mut self,
         x: &ForceInputs,
         rows: Range<usize>,
         group: &[(u32, usize)],
-        crossing: &mut std::slice::Iter<Option<PairLoad>>,
+        crossing: &mut std::slice::Iter<CrossingLoad>,
+        history: &mut ContactCursor,
         force: &mut [Vec3],
         torque: &mut [Vec3],
-        hist: &mut [Vec3],
+        found: &mut PairContacts,
     ) {
         let (r0, r1) = (rows.start, rows.end);
-        let k0 = x.offsets[r0];
         for (i, &(a, k)) in group.iter().enumerate() {
             let (a, b) = (a as usize, x.partners[k] as usize);
             if b < r1 {
                 // The separation again, rather than kept from the contact test: the listing
                 // stays (a, k) per pair, and these positions are in cache.
                 let d = x.periodic.nearest(x.position[b] - x.position[a]);
-                self.input.set(i, &pair_input(x, a, b, d, hist[k - k0]));
+                self.input.set(i, &pair_input(x, a, b, d, history.history(k)));
             }
         }
         contact_loads::<HERTZ, INCREMENTAL, false>(&x.law, x.dt, &self.input, &mut self.output);
@@ -609,15 +628,16 @@ impl Lanes {
             let (a, b) = (a as usize, x.partners[k] as usize);
             let l = if b < r1 {
                 let (l, h) = self.output.get(i);
-                if x.advance {
-                    hist[k - k0] = h;
-                }
+                found.push(k, if x.advance { h } else { self.input.h.get(i) });
                 force[b - r0] -= l.f;
                 torque[b - r0] += l.tb;
                 l
             } else {
                 match crossing.next() {
-                    Some(Some(l)) => *l,
+                    Some(Some((l, h))) => {
+                        found.push(k, *h);
+                        *l
+                    }
                     _ => continue,
                 }
             };
@@ -837,24 +857,18 @@ fn wall_law<const HERTZ: bool, const INCREMENTAL: bool>(
     (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
 }
 
-/// The load of pair (a, b), a < b, advancing its tangential history `h`; None (and the
-/// history cleared) when they do not touch.
+/// The load of pair (a, b), a < b, with stored tangential history `h`, and its history
+/// afterwards (advanced if the stage advances them); None when they do not touch.
 #[inline(always)]
 fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
     x: &ForceInputs,
     a: usize,
     b: usize,
-    h: &mut Vec3,
-) -> Option<PairLoad> {
-    let Some(d) = touching_pair(x, a, b) else {
-        *h = Vec3::ZERO;
-        return None;
-    };
-    let (load, advanced) = pair_law::<HERTZ, INCREMENTAL>(&x.law, x.dt, &pair_input(x, a, b, d, *h));
-    if x.advance {
-        *h = advanced;
-    }
-    Some(load)
+    h: Vec3,
+) -> CrossingLoad {
+    let d = touching_pair(x, a, b)?;
+    let (load, advanced) = pair_law::<HERTZ, INCREMENTAL>(&x.law, x.dt, &pair_input(x, a, b, d, h));
+    Some((load, if x.advance { advanced } else { h }))
 }
 
 /// Effective mass of the particles in slots i and j: m_i m_j/(m_i + m_j), or the other one's

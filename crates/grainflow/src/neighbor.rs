@@ -2,10 +2,14 @@
 //! more than half the skin since the last build.
 //!
 //! The list holds every particle pair closer than R_i + R_j + skin and every particle–wall pair
-//! closer than R + skin, so between rebuilds no contact can be missed. Each entry carries the
-//! contact's tangential history; on a rebuild, entries that persist keep it (matched by the
-//! slots of the two particles, or the slot and the wall index — slots never change during a
-//! run), new entries start from zero.
+//! closer than R + skin, so between rebuilds no contact can be missed. The contacts carry
+//! their tangential history; on a rebuild, those that persist keep it (matched by the slots of
+//! the two particles, or the slot and the wall index — slots never change during a run), new
+//! entries start from zero.
+//!
+//! Only about one candidate pair in three or four touches, so the pairs' histories are kept
+//! apart from the list, for the pairs in contact only ([`PairContacts`]): the force stage
+//! streams through a third of the memory it would with one history per candidate pair.
 
 use crate::boundary::Periodic;
 use crate::math::Vec3;
@@ -21,18 +25,104 @@ pub struct NeighborStats {
     pub distance_checks: u64,
 }
 
+/// The tangential histories of the pairs in contact at the last force evaluation, ascending
+/// by pair index: pair `pair[c]` has history `history[c]`, seen from its lower slot. A pair not
+/// listed has zero history.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PairContacts {
+    /// Pair indices (places in the list order), ascending.
+    pub pair: Vec<usize>,
+    /// Their histories.
+    pub history: Vec<Vec3>,
+}
+
+impl PairContacts {
+    /// Number of listed contacts.
+    pub fn len(&self) -> usize {
+        self.pair.len()
+    }
+
+    /// True when no contact is listed.
+    pub fn is_empty(&self) -> bool {
+        self.pair.is_empty()
+    }
+
+    /// Empties the lists, keeping their memory.
+    pub fn clear(&mut self) {
+        self.pair.clear();
+        self.history.clear();
+    }
+
+    /// Appends pair `k` (above every pair listed) with history `h`.
+    #[inline(always)]
+    pub fn push(&mut self, k: usize, h: Vec3) {
+        self.pair.push(k);
+        self.history.push(h);
+    }
+
+    /// Appends all of `other`'s contacts (which lie above this one's).
+    pub fn extend(&mut self, other: &PairContacts) {
+        self.pair.extend_from_slice(&other.pair);
+        self.history.extend_from_slice(&other.history);
+    }
+
+    /// The histories as one entry per pair of a list of `n_pairs` pairs (zero where not
+    /// listed).
+    pub fn expand(&self, n_pairs: usize) -> Vec<Vec3> {
+        let mut all = vec![Vec3::ZERO; n_pairs];
+        for (&k, &h) in self.pair.iter().zip(&self.history) {
+            all[k] = h;
+        }
+        all
+    }
+
+    pub(crate) fn heap_bytes(&self) -> usize {
+        self.pair.capacity() * std::mem::size_of::<usize>()
+            + self.history.capacity() * std::mem::size_of::<Vec3>()
+    }
+}
+
+/// A cursor over the contacts of [`PairContacts`] that finds the history of pairs asked for in
+/// ascending order.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ContactCursor<'a> {
+    pair: &'a [usize],
+    history: &'a [Vec3],
+    at: usize,
+}
+
+impl<'a> ContactCursor<'a> {
+    /// A cursor at the first contact of `c` with pair index ≥ `k0`.
+    pub fn new(c: &'a PairContacts, k0: usize) -> Self {
+        ContactCursor { pair: &c.pair, history: &c.history, at: c.pair.partition_point(|&k| k < k0) }
+    }
+
+    /// The history of pair `k` (zero if not listed); `k` must not be below the pair asked for
+    /// before.
+    #[inline(always)]
+    pub fn history(&mut self, k: usize) -> Vec3 {
+        while self.at < self.pair.len() && self.pair[self.at] < k {
+            self.at += 1;
+        }
+        if self.at < self.pair.len() && self.pair[self.at] == k { self.history[self.at] } else { Vec3::ZERO }
+    }
+}
+
 /// The Verlet list with its contact histories.
 ///
 /// Pairs are stored as a half list in compressed rows: the partners of slot `a` are the slots
-/// `b > a` in `partners[offsets[a]..offsets[a + 1]]`, ascending. Pair `k` (its place in that
-/// order) carries its tangential history in `pair_history[k]`, seen from the lower slot `a`.
-/// This is the order the force loop walks memory in and sums forces in.
+/// `b > a` in `partners[offsets[a]..offsets[a + 1]]`, ascending. Pair `k` is its place in
+/// that order; the pairs in contact carry their tangential history in [`PairContacts`],
+/// seen from the lower slot `a`. This is the order the force loop walks memory in and sums
+/// forces in.
 #[derive(Debug, Clone, Default)]
 pub struct NeighborList {
     skin: f64,
     offsets: Vec<usize>,
     partners: Vec<u32>,
-    pair_history: Vec<Vec3>,
+    contacts: PairContacts,
+    /// The next force evaluation's contacts (kept to reuse its memory).
+    next_contacts: PairContacts,
     /// Candidate particle–wall pairs (slot, wall index), ordered by slots.
     wall_pairs: Vec<[u32; 2]>,
     wall_history: Vec<Vec3>,
@@ -132,7 +222,7 @@ impl NeighborList {
             skin: self.skin,
             built: self.built,
             pairs: self.pairs().collect(),
-            pair_history: self.pair_history.clone(),
+            pair_history: self.pair_history(),
             wall_pairs: self.wall_pairs.clone(),
             wall_history: self.wall_history.clone(),
             reference: self.reference.clone(),
@@ -168,7 +258,13 @@ impl NeighborList {
         self.built = s.built;
         row_offsets(pairs.iter().map(|e| e.0), n, &mut self.offsets);
         self.partners = pairs.iter().map(|e| e.0 as u32).collect();
-        self.pair_history = pairs.iter().map(|e| e.1).collect();
+        // A zero history is no contact (bit for bit: a negative zero is kept).
+        self.contacts.clear();
+        for (k, e) in pairs.iter().enumerate() {
+            if e.1.to_array().iter().any(|v| v.to_bits() != 0) {
+                self.contacts.push(k, e.1);
+            }
+        }
         self.wall_pairs = walls.iter().map(|e| [(e.0 >> 32) as u32, e.0 as u32]).collect();
         self.wall_history = walls.iter().map(|e| e.1).collect();
         self.reference = s.reference;
@@ -209,14 +305,36 @@ impl NeighborList {
         &self.partners
     }
 
-    /// Tangential history of each pair, seen from the lower slot.
-    pub fn pair_history(&self) -> &[Vec3] {
-        &self.pair_history
+    /// Tangential history of each pair, seen from the lower slot, in list order (zero for the
+    /// pairs not in contact at the last force evaluation).
+    pub fn pair_history(&self) -> Vec<Vec3> {
+        self.contacts.expand(self.partners.len())
     }
 
-    /// Mutable pair histories (for tests and hooks that set a contact's state).
-    pub fn pair_history_mut(&mut self) -> &mut [Vec3] {
-        &mut self.pair_history
+    /// The pairs in contact at the last force evaluation with their histories.
+    pub fn pair_contacts(&self) -> &PairContacts {
+        &self.contacts
+    }
+
+    /// Sets the tangential history of pair `k` (for tests and hooks that set a contact's
+    /// state); a zero history removes the pair from the contacts.
+    pub fn set_pair_history(&mut self, k: usize, h: Vec3) {
+        assert!(k < self.partners.len(), "pair {k} is not in the list");
+        let c = &mut self.contacts;
+        let at = c.pair.partition_point(|&p| p < k);
+        let listed = at < c.pair.len() && c.pair[at] == k;
+        match (listed, h == Vec3::ZERO) {
+            (true, true) => {
+                c.pair.remove(at);
+                c.history.remove(at);
+            }
+            (true, false) => c.history[at] = h,
+            (false, false) => {
+                c.pair.insert(at, k);
+                c.history.insert(at, h);
+            }
+            (false, true) => {}
+        }
     }
 
     /// Candidate particle–wall pairs (slot, wall index), ordered by slots.
@@ -234,11 +352,27 @@ impl NeighborList {
         &mut self.wall_history
     }
 
-    /// The parts the force loop needs at once: (offsets, partners, pair histories, wall
-    /// pairs, wall histories).
+    /// The parts the force loop needs at once: (offsets, partners, pair contacts, the next
+    /// evaluation's pair contacts to fill, wall pairs, wall histories). The filled contacts
+    /// take over with [`commit_contacts`](Self::commit_contacts).
     #[allow(clippy::type_complexity)]
-    pub(crate) fn split_mut(&mut self) -> (&[usize], &[u32], &mut [Vec3], &[[u32; 2]], &mut [Vec3]) {
-        (&self.offsets, &self.partners, &mut self.pair_history, &self.wall_pairs, &mut self.wall_history)
+    pub(crate) fn split_mut(
+        &mut self,
+    ) -> (&[usize], &[u32], &PairContacts, &mut PairContacts, &[[u32; 2]], &mut [Vec3]) {
+        (
+            &self.offsets,
+            &self.partners,
+            &self.contacts,
+            &mut self.next_contacts,
+            &self.wall_pairs,
+            &mut self.wall_history,
+        )
+    }
+
+    /// Makes the contacts filled in by the force stage (see [`split_mut`](Self::split_mut))
+    /// the current ones.
+    pub(crate) fn commit_contacts(&mut self) {
+        std::mem::swap(&mut self.contacts, &mut self.next_contacts);
     }
 
     /// Heap bytes held by the list and its scratch space.
@@ -246,8 +380,9 @@ impl NeighborList {
         use std::mem::size_of;
         self.offsets.capacity() * size_of::<usize>()
             + self.partners.capacity() * 4
-            + (self.pair_history.capacity() + self.wall_history.capacity() + self.reference.capacity())
-                * size_of::<Vec3>()
+            + self.contacts.heap_bytes()
+            + self.next_contacts.heap_bytes()
+            + (self.wall_history.capacity() + self.reference.capacity()) * size_of::<Vec3>()
             + self.wall_pairs.capacity() * 8
             + self.excluded.capacity()
             + (self.cell_count.capacity() + self.cell_of.capacity() + self.sorted.capacity()) * 4
@@ -441,16 +576,18 @@ impl NeighborList {
         self.renew_pairs(n);
     }
 
-    /// Replaces the pairs by the sorted `fresh` keys: each takes the history of the same pair
-    /// in the old list (both are in (a, b) order, so one merge pass finds it), zero if new.
-    ///
-    /// Done in place, so that a rebuild needs no second copy of the histories: the histories
-    /// of persisting pairs are first packed to the front of the buffer (in order), then spread
-    /// backwards to their new places (a packed entry never lies behind its new place).
+    /// Replaces the pairs by the sorted `fresh` keys: each contact moves to the new place of
+    /// its pair, and is dropped if the pair left the list (both lists are in (a, b) order, so
+    /// one merge pass finds them). Done in place: a contact's new place in the contacts is never
+    /// behind its old one.
     fn renew_pairs(&mut self, n: usize) {
-        let mut persists = vec![0u64; self.fresh.len().div_ceil(64)];
         let (mut a_old, mut k, mut kept) = (0usize, 0usize, 0usize);
+        let c = &mut self.contacts;
+        let mut next = 0;
         for (f, &key) in self.fresh.iter().enumerate() {
+            if next == c.pair.len() {
+                break;
+            }
             while k < self.partners.len() {
                 while self.offsets[a_old + 1] <= k {
                     a_old += 1;
@@ -461,27 +598,23 @@ impl NeighborList {
                     continue;
                 }
                 if old_key == key {
-                    self.pair_history[kept] = self.pair_history[k];
-                    kept += 1;
-                    persists[f / 64] |= 1 << (f % 64);
+                    while next < c.pair.len() && c.pair[next] < k {
+                        next += 1;
+                    }
+                    if next < c.pair.len() && c.pair[next] == k {
+                        c.pair[kept] = f;
+                        c.history[kept] = c.history[next];
+                        kept += 1;
+                        next += 1;
+                    }
                     k += 1;
                 }
                 break;
             }
         }
+        c.pair.truncate(kept);
+        c.history.truncate(kept);
         let len = self.fresh.len();
-        // Exact growth: an amortised doubling would leave up to twice the history allocated.
-        self.pair_history.reserve_exact(len.saturating_sub(self.pair_history.len()));
-        self.pair_history.resize(len, Vec3::ZERO);
-        let mut src = kept;
-        for f in (0..len).rev() {
-            self.pair_history[f] = if persists[f / 64] >> (f % 64) & 1 == 1 {
-                src -= 1;
-                self.pair_history[src]
-            } else {
-                Vec3::ZERO
-            };
-        }
         row_offsets(self.fresh.iter().copied(), n, &mut self.offsets);
         self.partners.clear();
         self.partners.reserve_exact(len);

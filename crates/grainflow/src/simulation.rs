@@ -477,7 +477,8 @@ impl Simulation {
         let clock = self.timing.map(|_| std::time::Instant::now());
         let p = &mut self.particles;
         let build = self.neighbors.stats().builds;
-        let (offsets, partners, pair_history, wall_pairs, wall_history) = self.neighbors.split_mut();
+        let (offsets, partners, contacts, next_contacts, wall_pairs, wall_history) =
+            self.neighbors.split_mut();
         let x = forces::ForceInputs {
             position: &p.position,
             velocity: &p.velocity,
@@ -494,10 +495,15 @@ impl Simulation {
             advance: advance_history,
             offsets,
             partners,
+            contacts,
             wall_pairs,
         };
-        let out =
-            forces::ForceOutputs { force: &mut p.force, torque: &mut p.torque, pair_history, wall_history };
+        let out = forces::ForceOutputs {
+            force: &mut p.force,
+            torque: &mut p.torque,
+            contacts: next_contacts,
+            wall_history,
+        };
         let timed = clock.is_some();
         let wall_seconds = match self.pool.as_ref().filter(|_| par) {
             Some(pool) => {
@@ -513,6 +519,7 @@ impl Simulation {
             }
             None => forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
         };
+        self.neighbors.commit_contacts();
         if let (Some(c), Some(t)) = (clock, self.timing.as_mut()) {
             let total = c.elapsed().as_secs_f64();
             t.walls += wall_seconds.min(total);
@@ -554,7 +561,7 @@ impl Simulation {
                 record(i, ContactPartner::Wall(w as usize), g, &c, v_r, h);
             }
         }
-        for ([i, j], &h) in nl.pairs().zip(nl.pair_history()) {
+        for ([i, j], h) in nl.pairs().zip(nl.pair_history()) {
             let (i, j) = (i as usize, j as usize);
             if let Some(g) = pair_geometry_of(&p.position, &p.radius, i, j, lever, &per) {
                 let c = scaled_damping(

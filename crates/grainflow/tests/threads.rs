@@ -22,10 +22,11 @@ use grainflow::{ContactParams, Integrator, Periodic, Simulation, Vec3, Wall};
 fn fingerprint(sim: &Simulation) -> Vec<u64> {
     let p = sim.particles();
     let nl = sim.neighbors();
+    let pair_history = nl.pair_history();
     let vecs = [&p.position, &p.velocity, &p.omega, &p.force, &p.torque];
     vecs.iter()
         .flat_map(|v| v.iter())
-        .chain(nl.pair_history())
+        .chain(&pair_history)
         .chain(nl.wall_history())
         .flat_map(|v| v.to_array())
         .map(f64::to_bits)
