@@ -364,6 +364,10 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     let mut crossing = own_crossing.iter();
     let mut history = ContactCursor::new(x.contacts, x.offsets[r0]);
     found_contacts.clear();
+    let mut lanes = Lanes::new();
+    if let Some(c) = x.coeffs.uniform_pair() {
+        lanes.input.fill_coeffs(c);
+    }
     while cursor.a < r1 {
         let n = find_contacts(x, r0..r1, &mut cursor, &mut found);
         for group in found[..n].chunks(LANES) {
@@ -506,8 +510,10 @@ struct InputLanes {
     wa: Vec3Lanes,
     wb: Vec3Lanes,
     h: Vec3Lanes,
-    /// ra, rb, kn, kt, eta_n, eta_t, mu, mu_roll, m_eff.
-    scalars: [[f64; LANES]; 9],
+    /// ra, rb, m_eff.
+    scalars: [[f64; LANES]; 3],
+    /// kn, kt, eta_n, eta_t, mu, mu_roll.
+    coeffs: [[f64; LANES]; 6],
 }
 
 impl InputLanes {
@@ -518,31 +524,47 @@ impl InputLanes {
         wa: Vec3Lanes::ZERO,
         wb: Vec3Lanes::ZERO,
         h: Vec3Lanes::ZERO,
-        scalars: [[0.0; LANES]; 9],
+        scalars: [[0.0; LANES]; 3],
+        coeffs: [[0.0; LANES]; 6],
     };
 
+    /// Sets lane `i` to `p`.
     #[inline(always)]
     fn set(&mut self, i: usize, p: &PairInput) {
+        self.set_motion(i, p);
+        let c = &p.c;
+        for (lane, v) in self.coeffs.iter_mut().zip([c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll]) {
+            lane[i] = v;
+        }
+    }
+
+    /// Sets lane `i` to `p` but for the coefficients.
+    #[inline(always)]
+    fn set_motion(&mut self, i: usize, p: &PairInput) {
         self.d.set(i, p.d);
         self.va.set(i, p.va);
         self.vb.set(i, p.vb);
         self.wa.set(i, p.wa);
         self.wb.set(i, p.wb);
         self.h.set(i, p.h);
-        let c = &p.c;
-        for (lane, v) in
-            self.scalars.iter_mut().zip([p.ra, p.rb, c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll, p.m_eff])
-        {
+        for (lane, v) in self.scalars.iter_mut().zip([p.ra, p.rb, p.m_eff]) {
             lane[i] = v;
+        }
+    }
+
+    /// Sets the coefficients of every lane to `c`.
+    fn fill_coeffs(&mut self, c: &ContactCoeffs) {
+        for (lane, v) in self.coeffs.iter_mut().zip([c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll]) {
+            *lane = [v; LANES];
         }
     }
 
     #[inline(always)]
     fn get(&self, i: usize) -> PairInput {
         // Indexed one by one: `map` over the arrays would copy them and keep the loop scalar.
-        let v = &self.scalars;
-        let [ra, rb, kn, kt, eta_n, eta_t, mu, mu_roll, m_eff] =
-            [v[0][i], v[1][i], v[2][i], v[3][i], v[4][i], v[5][i], v[6][i], v[7][i], v[8][i]];
+        let (v, c) = (&self.scalars, &self.coeffs);
+        let [ra, rb, m_eff] = [v[0][i], v[1][i], v[2][i]];
+        let [kn, kt, eta_n, eta_t, mu, mu_roll] = [c[0][i], c[1][i], c[2][i], c[3][i], c[4][i], c[5][i]];
         PairInput {
             d: self.d.get(i),
             ra,
@@ -614,13 +636,20 @@ impl Lanes {
         found: &mut PairContacts,
     ) {
         let (r0, r1) = (rows.start, rows.end);
+        let uniform = x.coeffs.uniform_pair().is_some();
         for (i, &(a, k)) in group.iter().enumerate() {
             let (a, b) = (a as usize, x.partners[k] as usize);
             if b < r1 {
                 // The separation again, rather than kept from the contact test: the listing
                 // stays (a, k) per pair, and these positions are in cache.
                 let d = x.periodic.nearest(x.position[b] - x.position[a]);
-                self.input.set(i, &pair_input(x, a, b, d, history.history(k)));
+                let p = pair_input(x, a, b, d, history.history(k));
+                if uniform {
+                    // The coefficient lanes hold the one set of coefficients already.
+                    self.input.set_motion(i, &p);
+                } else {
+                    self.input.set(i, &p);
+                }
             }
         }
         contact_loads::<HERTZ, INCREMENTAL, false>(&x.law, x.dt, &self.input, &mut self.output);
@@ -773,7 +802,10 @@ fn touching_pair(x: &ForceInputs, a: usize, b: usize) -> Option<Vec3> {
 /// The force law's inputs for the touching pair (a, b) at separation `d`, history `h`.
 #[inline(always)]
 fn pair_input(x: &ForceInputs, a: usize, b: usize, d: Vec3, h: Vec3) -> PairInput {
-    let c = *x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize);
+    let c = match x.coeffs.uniform_pair() {
+        Some(c) => *c,
+        None => *x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize),
+    };
     let m_eff = if x.law.damping.per_particle_mass() { pair_mass(x.mass, x.held, a, b) } else { 0.0 };
     PairInput {
         d,
@@ -875,15 +907,16 @@ fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
 /// mass if one of them is held fixed (as LAMMPS does for frozen particles).
 #[inline(always)]
 pub(crate) fn pair_mass(mass: &[f64], held: &[bool], i: usize, j: usize) -> f64 {
-    if !held.is_empty() {
-        if held[i] {
-            return mass[j];
-        }
-        if held[j] {
-            return mass[i];
-        }
+    let (mi, mj) = (mass[i], mass[j]);
+    let both = mi * mj / (mi + mj);
+    if held.is_empty() {
+        return both;
     }
-    mass[i] * mass[j] / (mass[i] + mass[j])
+    // Picked, not branched on: contacts with held particles come and go unpredictably.
+    let pick = |c: bool, a: f64, b: f64| {
+        f64::from_bits((a.to_bits() & (c as u64).wrapping_neg()) | (b.to_bits() & (!c as u64).wrapping_neg()))
+    };
+    pick(held[i], mj, pick(held[j], mi, both))
 }
 
 /// The coefficients with damping that depends on the contact's masses applied: ×m_eff

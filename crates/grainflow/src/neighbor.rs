@@ -25,86 +25,94 @@ pub struct NeighborStats {
     pub distance_checks: u64,
 }
 
+/// A pair in contact and its tangential history, seen from its lower slot.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairContact {
+    /// The pair's index (its place in the list order).
+    pub pair: usize,
+    /// Its tangential history.
+    pub history: Vec3,
+}
+
 /// The tangential histories of the pairs in contact at the last force evaluation, ascending
-/// by pair index: pair `pair[c]` has history `history[c]`, seen from its lower slot. A pair not
-/// listed has zero history.
+/// by pair index. A pair not listed has zero history.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PairContacts {
-    /// Pair indices (places in the list order), ascending.
-    pub pair: Vec<usize>,
-    /// Their histories.
-    pub history: Vec<Vec3>,
+    list: Vec<PairContact>,
 }
 
 impl PairContacts {
     /// Number of listed contacts.
     pub fn len(&self) -> usize {
-        self.pair.len()
+        self.list.len()
     }
 
     /// True when no contact is listed.
     pub fn is_empty(&self) -> bool {
-        self.pair.is_empty()
+        self.list.is_empty()
     }
 
-    /// Empties the lists, keeping their memory.
+    /// The contacts, ascending by pair.
+    pub fn as_slice(&self) -> &[PairContact] {
+        &self.list
+    }
+
+    /// Empties the list, keeping its memory.
     pub fn clear(&mut self) {
-        self.pair.clear();
-        self.history.clear();
+        self.list.clear();
     }
 
     /// Appends pair `k` (above every pair listed) with history `h`.
     #[inline(always)]
     pub fn push(&mut self, k: usize, h: Vec3) {
-        self.pair.push(k);
-        self.history.push(h);
+        self.list.push(PairContact { pair: k, history: h });
     }
 
     /// Appends all of `other`'s contacts (which lie above this one's).
     pub fn extend(&mut self, other: &PairContacts) {
-        self.pair.extend_from_slice(&other.pair);
-        self.history.extend_from_slice(&other.history);
+        self.list.extend_from_slice(&other.list);
     }
 
     /// The histories as one entry per pair of a list of `n_pairs` pairs (zero where not
     /// listed).
     pub fn expand(&self, n_pairs: usize) -> Vec<Vec3> {
         let mut all = vec![Vec3::ZERO; n_pairs];
-        for (&k, &h) in self.pair.iter().zip(&self.history) {
-            all[k] = h;
+        for c in &self.list {
+            all[c.pair] = c.history;
         }
         all
     }
 
     pub(crate) fn heap_bytes(&self) -> usize {
-        self.pair.capacity() * std::mem::size_of::<usize>()
-            + self.history.capacity() * std::mem::size_of::<Vec3>()
+        self.list.capacity() * std::mem::size_of::<PairContact>()
     }
 }
 
-/// A cursor over the contacts of [`PairContacts`] that finds the history of pairs asked for in
-/// ascending order.
+/// A cursor over [`PairContacts`] that finds the history of pairs asked for in ascending
+/// order.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ContactCursor<'a> {
-    pair: &'a [usize],
-    history: &'a [Vec3],
+    list: &'a [PairContact],
     at: usize,
 }
 
 impl<'a> ContactCursor<'a> {
     /// A cursor at the first contact of `c` with pair index ≥ `k0`.
     pub fn new(c: &'a PairContacts, k0: usize) -> Self {
-        ContactCursor { pair: &c.pair, history: &c.history, at: c.pair.partition_point(|&k| k < k0) }
+        ContactCursor { list: &c.list, at: c.list.partition_point(|c| c.pair < k0) }
     }
 
     /// The history of pair `k` (zero if not listed); `k` must not be below the pair asked for
     /// before.
     #[inline(always)]
     pub fn history(&mut self, k: usize) -> Vec3 {
-        while self.at < self.pair.len() && self.pair[self.at] < k {
+        while self.at < self.list.len() && self.list[self.at].pair < k {
             self.at += 1;
         }
-        if self.at < self.pair.len() && self.pair[self.at] == k { self.history[self.at] } else { Vec3::ZERO }
+        match self.list.get(self.at) {
+            Some(c) if c.pair == k => c.history,
+            _ => Vec3::ZERO,
+        }
     }
 }
 
@@ -320,19 +328,15 @@ impl NeighborList {
     /// state); a zero history removes the pair from the contacts.
     pub fn set_pair_history(&mut self, k: usize, h: Vec3) {
         assert!(k < self.partners.len(), "pair {k} is not in the list");
-        let c = &mut self.contacts;
-        let at = c.pair.partition_point(|&p| p < k);
-        let listed = at < c.pair.len() && c.pair[at] == k;
+        let c = &mut self.contacts.list;
+        let at = c.partition_point(|c| c.pair < k);
+        let listed = at < c.len() && c[at].pair == k;
         match (listed, h == Vec3::ZERO) {
             (true, true) => {
-                c.pair.remove(at);
-                c.history.remove(at);
+                c.remove(at);
             }
-            (true, false) => c.history[at] = h,
-            (false, false) => {
-                c.pair.insert(at, k);
-                c.history.insert(at, h);
-            }
+            (true, false) => c[at].history = h,
+            (false, false) => c.insert(at, PairContact { pair: k, history: h }),
             (false, true) => {}
         }
     }
@@ -582,10 +586,10 @@ impl NeighborList {
     /// behind its old one.
     fn renew_pairs(&mut self, n: usize) {
         let (mut a_old, mut k, mut kept) = (0usize, 0usize, 0usize);
-        let c = &mut self.contacts;
+        let c = &mut self.contacts.list;
         let mut next = 0;
         for (f, &key) in self.fresh.iter().enumerate() {
-            if next == c.pair.len() {
+            if next == c.len() {
                 break;
             }
             while k < self.partners.len() {
@@ -598,12 +602,11 @@ impl NeighborList {
                     continue;
                 }
                 if old_key == key {
-                    while next < c.pair.len() && c.pair[next] < k {
+                    while next < c.len() && c[next].pair < k {
                         next += 1;
                     }
-                    if next < c.pair.len() && c.pair[next] == k {
-                        c.pair[kept] = f;
-                        c.history[kept] = c.history[next];
+                    if next < c.len() && c[next].pair == k {
+                        c[kept] = PairContact { pair: f, history: c[next].history };
                         kept += 1;
                         next += 1;
                     }
@@ -612,8 +615,7 @@ impl NeighborList {
                 break;
             }
         }
-        c.pair.truncate(kept);
-        c.history.truncate(kept);
+        c.truncate(kept);
         let len = self.fresh.len();
         row_offsets(self.fresh.iter().copied(), n, &mut self.offsets);
         self.partners.clear();

@@ -126,6 +126,8 @@ pub struct CoeffTable {
     n_wall_materials: usize,
     pairs: Vec<ContactCoeffs>,
     walls: Vec<ContactCoeffs>,
+    /// The coefficients of every phase pair, when they are all the same.
+    uniform_pair: Option<ContactCoeffs>,
 }
 
 /// Index of phase pair (m, l), m ≤ l, in MFIX's upper-triangle order 1-1, 1-2, …, 1-M, 2-2, …
@@ -216,13 +218,21 @@ impl CoeffTable {
                 walls[m * nw + w] = derive(law, &what, p, phases[m].mass(), elastic)?;
             }
         }
-        Ok(CoeffTable { n_phases: n, n_wall_materials: nw, pairs, walls })
+        let uniform_pair = pairs.first().filter(|c0| pairs.iter().all(|c| c == *c0)).copied();
+        Ok(CoeffTable { n_phases: n, n_wall_materials: nw, pairs, walls, uniform_pair })
     }
 
     /// Coefficients of the phase pair (a, b).
     #[inline(always)]
     pub fn pair(&self, a: usize, b: usize) -> &ContactCoeffs {
         &self.pairs[a * self.n_phases + b]
+    }
+
+    /// The coefficients of every phase pair, if they are all the same (one phase, or phases
+    /// that differ in nothing the contact law uses): a force loop need not look them up.
+    #[inline(always)]
+    pub fn uniform_pair(&self) -> Option<&ContactCoeffs> {
+        self.uniform_pair.as_ref()
     }
 
     /// Coefficients of phase `a` against wall material `w`.
