@@ -1,9 +1,11 @@
 //! Time integration (reference: MFIX-DEM model §6, step 3).
 //!
 //! a = F/m + g and α = T/I are formed from the accumulators filled by the contact stage
-//! (as products with 1/m and 1/I). Each function integrates the particle slots in
-//! `range`; the simulation passes the runs of slots that are not prescribed (prescribed
-//! particles are overwritten after the step, so integrating them would be wasted work).
+//! (as products with 1/m and 1/I). Each function integrates the particle slots of the given
+//! runs (ascending, not overlapping); the simulation passes the runs of slots that are not
+//! prescribed (prescribed particles are overwritten after the step, so integrating them would
+//! be wasted work). On threads the runs are shared out in pieces of about equal size: with
+//! particles in a spatial order, held particles cut the slots into hundreds of short runs.
 
 use crate::math::Vec3;
 use crate::state::Particles;
@@ -96,6 +98,24 @@ impl<'a> Slots<'a> {
         )
     }
 
+    /// The slots `r` of these (indices relative to their first slot).
+    fn sub(&mut self, r: Range<usize>) -> Slots<'_> {
+        fn part<T>(s: &mut [T], r: Range<usize>) -> &mut [T] {
+            if s.is_empty() { &mut [] } else { &mut s[r] }
+        }
+        Slots {
+            x: &mut self.x[r.clone()],
+            v: &mut self.v[r.clone()],
+            w: &mut self.w[r.clone()],
+            a_prev: part(self.a_prev, r.clone()),
+            alpha_prev: part(self.alpha_prev, r.clone()),
+            f: &self.f[r.clone()],
+            t: &self.t[r.clone()],
+            m: &self.m[r.clone()],
+            inertia: &self.inertia[r],
+        }
+    }
+
     /// a = F/m + g and α = T/I of slot i.
     #[inline(always)]
     fn accelerations(&self, i: usize, gravity: Vec3) -> (Vec3, Vec3) {
@@ -103,25 +123,53 @@ impl<'a> Slots<'a> {
     }
 }
 
-/// Applies `kernel` to the slots in `r`; with `parallel`, in pieces on the current rayon pool
-/// (the result is the same: every particle is updated on its own).
-fn for_slots(p: &mut Particles, r: Range<usize>, parallel: bool, kernel: impl Fn(Slots) + Sync) {
-    fn run(s: Slots, kernel: &(impl Fn(Slots) + Sync)) {
+/// Applies `kernel` to the slots of `runs`, one run (or piece of a run) at a time; with
+/// `parallel`, in pieces of about [`CHUNK`] slots on the current rayon pool (the result is the
+/// same: every particle is updated on its own).
+fn for_slots(p: &mut Particles, runs: &[Range<usize>], parallel: bool, kernel: impl Fn(Slots) + Sync) {
+    /// One run, cut in halves down to `CHUNK`.
+    fn one(s: Slots, kernel: &(impl Fn(Slots) + Sync)) {
         let n = s.x.len();
         if n > CHUNK {
             let (a, b) = s.split_at(n / 2);
-            rayon::join(|| run(a, kernel), || run(b, kernel));
+            rayon::join(|| one(a, kernel), || one(b, kernel));
         } else {
             kernel(s);
         }
     }
-    let s = Slots::of(p, r);
-    if parallel { run(s, &kernel) } else { kernel(s) }
+    /// The runs `runs` within `s`, whose first slot is `base`: halves of the runs while they
+    /// hold more than `CHUNK` slots.
+    fn many(mut s: Slots, base: usize, runs: &[Range<usize>], kernel: &(impl Fn(Slots) + Sync)) {
+        let slots: usize = runs.iter().map(|r| r.len()).sum();
+        if let [r] = runs {
+            one(s.sub(r.start - base..r.end - base), kernel);
+        } else if slots > CHUNK {
+            let mid = runs.len() / 2;
+            let cut = runs[mid].start;
+            let (a, b) = s.split_at(cut - base);
+            rayon::join(|| many(a, base, &runs[..mid], kernel), || many(b, cut, &runs[mid..], kernel));
+        } else {
+            for r in runs {
+                kernel(s.sub(r.start - base..r.end - base));
+            }
+        }
+    }
+    let (Some(first), Some(last)) = (runs.first(), runs.last()) else {
+        return;
+    };
+    let mut s = Slots::of(p, first.start..last.end);
+    if parallel {
+        many(s, first.start, runs, &kernel);
+    } else {
+        for r in runs {
+            kernel(s.sub(r.start - first.start..r.end - first.start));
+        }
+    }
 }
 
 /// MFIX's `EULER` step.
-pub fn euler(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
-    for_slots(p, r, parallel, |s| {
+pub fn euler(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3, dt: f64, parallel: bool) {
+    for_slots(p, runs, parallel, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += dt * a;
@@ -135,14 +183,14 @@ pub fn euler(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, paralle
 /// accelerations are taken equal to the current ones.
 pub fn adams_bashforth(
     p: &mut Particles,
-    r: Range<usize>,
+    runs: &[Range<usize>],
     gravity: Vec3,
     dt: f64,
     first: bool,
     parallel: bool,
 ) {
     let h = 0.5 * dt;
-    for_slots(p, r, parallel, |s| {
+    for_slots(p, runs, parallel, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             let (a_prev, alpha_prev) = if first { (a, alpha) } else { (s.a_prev[i], s.alpha_prev[i]) };
@@ -158,9 +206,9 @@ pub fn adams_bashforth(
 }
 
 /// Velocity Verlet, first half: kick by Δt/2 with the current accelerations, then drift by Δt.
-pub fn verlet_kick_drift(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
+pub fn verlet_kick_drift(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3, dt: f64, parallel: bool) {
     let h = 0.5 * dt;
-    for_slots(p, r, parallel, |s| {
+    for_slots(p, runs, parallel, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += h * a;
@@ -171,9 +219,9 @@ pub fn verlet_kick_drift(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: 
 }
 
 /// Velocity Verlet, second half: kick by Δt/2 with the new accelerations.
-pub fn verlet_kick(p: &mut Particles, r: Range<usize>, gravity: Vec3, dt: f64, parallel: bool) {
+pub fn verlet_kick(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3, dt: f64, parallel: bool) {
     let h = 0.5 * dt;
-    for_slots(p, r, parallel, |s| {
+    for_slots(p, runs, parallel, |s| {
         for i in 0..s.v.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += h * a;

@@ -374,16 +374,12 @@ impl Simulation {
         match self.integrator {
             Integrator::Euler => {
                 self.compute_forces();
-                for r in self.free.clone() {
-                    integrate::euler(&mut self.particles, r, g, dt, par);
-                }
+                integrate::euler(&mut self.particles, &self.free, g, dt, par);
             }
             Integrator::AdamsBashforth => {
                 self.compute_forces();
                 let first = !self.history_started;
-                for r in self.free.clone() {
-                    integrate::adams_bashforth(&mut self.particles, r, g, dt, first, par);
-                }
+                integrate::adams_bashforth(&mut self.particles, &self.free, g, dt, first, par);
             }
             Integrator::VelocityVerlet => {
                 if !self.forces_current {
@@ -391,13 +387,9 @@ impl Simulation {
                     // springs advance once per step, in the evaluation after the drift.
                     self.evaluate_forces(false);
                 }
-                for r in self.free.clone() {
-                    integrate::verlet_kick_drift(&mut self.particles, r, g, dt, par);
-                }
+                integrate::verlet_kick_drift(&mut self.particles, &self.free, g, dt, par);
                 self.compute_forces();
-                for r in self.free.clone() {
-                    integrate::verlet_kick(&mut self.particles, r, g, dt, par);
-                }
+                integrate::verlet_kick(&mut self.particles, &self.free, g, dt, par);
             }
         }
         self.history_started = true;
