@@ -99,8 +99,11 @@ impl<W: Write> Enc<W> {
         v.iter().try_for_each(|x| self.f64(*x))
     }
     fn vec3s(&mut self, v: &[Vec3]) -> io::Result<()> {
+        self.vec3s_from(v.iter().copied())
+    }
+    fn vec3s_from(&mut self, v: impl ExactSizeIterator<Item = Vec3>) -> io::Result<()> {
         self.u64(v.len() as u64)?;
-        v.iter().flat_map(|x| x.to_array()).try_for_each(|c| self.f64(c))
+        v.flat_map(|x| x.to_array()).try_for_each(|c| self.f64(c))
     }
     fn pairs(&mut self, count: usize, v: impl Iterator<Item = [u32; 2]>) -> io::Result<()> {
         self.u64(2 * count as u64)?;
@@ -231,7 +234,7 @@ impl Simulation {
         e.f64(nl.skin())?;
         e.u64(nl.is_built() as u64)?;
         e.pairs(nl.pair_count(), nl.pairs())?;
-        e.vec3s(&nl.pair_history())?;
+        e.vec3s_from(nl.pair_histories())?;
         e.pairs(nl.wall_pairs().len(), nl.wall_pairs().iter().copied())?;
         e.vec3s(nl.wall_history())?;
         e.vec3s(nl.reference())?;

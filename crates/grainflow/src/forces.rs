@@ -14,11 +14,10 @@
 //! ## Batches
 //! The contacts' loads do not depend on each other, only their sums do. So a block first tests
 //! a stretch of its pairs for contact, without branching on the outcome, and lists the touching
-//! ones; it then gathers their inputs, with the stored history from the last evaluation's
-//! contacts (found by one merge pass: both are in list order), into batches of 16 (one array
-//! per component), computes a batch's loads in one loop that compiles to vector instructions,
-//! and adds them to the particles in list order — the order above — while listing the pairs
-//! with their new histories as the next evaluation's contacts. The contact law is the same function as for
+//! ones (setting each pair's contact flag; a pair that starts touching starts from zero
+//! history); it then gathers their inputs into batches of 16 (one array per component),
+//! computes a batch's loads in one loop that compiles to vector instructions, and adds them to
+//! the particles in list order — the order above — storing the new histories. The contact law is the same function as for
 //! a single contact, written without data-dependent branches; the AVX2 and AVX-512 copies of
 //! the loop round exactly as scalar code does (no fused multiply–add), so results do not
 //! depend on the processor (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`).
@@ -41,7 +40,6 @@ use crate::contact::geometry::{
 use crate::contact::law::{ContactForce, contact_force, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
 use crate::math::Vec3;
-use crate::neighbor::{ContactCursor, PairContacts};
 use crate::wall::Wall;
 
 /// Below this many particles the force stage runs on one thread (the threads' start-up would
@@ -82,8 +80,6 @@ pub(crate) struct ForceInputs<'a> {
     pub advance: bool,
     pub offsets: &'a [usize],
     pub partners: &'a [u32],
-    /// The pairs in contact at the last evaluation, with their histories.
-    pub contacts: &'a PairContacts,
     pub wall_pairs: &'a [[u32; 2]],
 }
 
@@ -91,13 +87,14 @@ pub(crate) struct ForceInputs<'a> {
 pub(crate) struct ForceOutputs<'a> {
     pub force: &'a mut [Vec3],
     pub torque: &'a mut [Vec3],
-    /// Filled with the pairs in contact now, with their (advanced) histories.
-    pub contacts: &'a mut PairContacts,
+    pub pair_history: &'a mut [Vec3],
+    /// Whether each pair touched at the last evaluation (in), touches now (out).
+    pub in_contact: &'a mut [bool],
     pub wall_history: &'a mut [Vec3],
 }
 
-/// A crossing pair's load and history, if in contact.
-type CrossingLoad = Option<(PairLoad, Vec3)>;
+/// A crossing pair's load, if in contact.
+type CrossingLoad = Option<PairLoad>;
 
 /// How the slots are cut into blocks for threads, with the crossing pairs; rebuilt with the
 /// neighbour list.
@@ -117,10 +114,8 @@ pub(crate) struct ForcePlan {
     /// `incoming[incoming_start[b]..incoming_start[b + 1]]`.
     incoming_start: Vec<usize>,
     incoming: Vec<u32>,
-    /// The crossing pairs' loads and histories (None: not in contact).
+    /// The crossing pairs' loads (None: not in contact).
     loads: Vec<CrossingLoad>,
-    /// The contacts found by each block but the first (which fills the stage's output).
-    contacts: Vec<PairContacts>,
 }
 
 impl ForcePlan {
@@ -133,7 +128,6 @@ impl ForcePlan {
                 * size_of::<usize>()
             + self.incoming.capacity() * 4
             + self.loads.capacity() * size_of::<CrossingLoad>()
-            + self.contacts.iter().map(PairContacts::heap_bytes).sum::<usize>()
     }
 
     /// Cuts `n` slots into `n_blocks` blocks with about equal pair counts, unless it was done
@@ -198,7 +192,6 @@ impl ForcePlan {
         }
         self.loads.clear();
         self.loads.resize(self.crossing.len(), None);
-        self.contacts.resize_with(n_blocks.saturating_sub(1), PairContacts::default);
     }
 }
 
@@ -216,7 +209,8 @@ pub(crate) fn serial<const HERTZ: bool, const INCREMENTAL: bool>(
         0..n,
         out.force,
         out.torque,
-        out.contacts,
+        out.pair_history,
+        out.in_contact,
         out.wall_history,
         0,
         Incoming::None,
@@ -235,28 +229,31 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
 ) -> f64 {
     use rayon::prelude::*;
     let blocks = &plan.blocks;
+    let pair_ends = || blocks.iter().map(|r| x.offsets[r.end]);
     let slot_ends = || blocks.iter().map(|r| r.end);
     let wall_ends = &plan.wall_ends;
 
     // Pass 1: the crossing pairs, each block's on its thread.
     {
+        let hist = split_at_ends(&mut *out.pair_history, pair_ends());
+        let flags = split_at_ends(&mut *out.in_contact, pair_ends());
         let loads = split_at_ends(&mut plan.loads[..], plan.crossing_start[1..].iter().copied());
         let crossing = &plan.crossing;
         let starts = &plan.crossing_start;
-        loads.into_par_iter().enumerate().for_each(|(t, loads)| {
-            let mut history = ContactCursor::new(x.contacts, x.offsets[blocks[t].start]);
+        hist.into_par_iter().zip(flags).zip(loads).enumerate().for_each(|(t, ((hist, flags), loads))| {
+            let k0 = x.offsets[blocks[t].start];
             for (load, &(a, k)) in loads.iter_mut().zip(&crossing[starts[t]..starts[t + 1]]) {
                 let b = x.partners[k] as usize;
-                *load = pair_load::<HERTZ, INCREMENTAL>(x, a as usize, b, history.history(k));
+                *load =
+                    pair_load::<HERTZ, INCREMENTAL>(x, a as usize, b, &mut hist[k - k0], &mut flags[k - k0]);
             }
         });
     }
-    // Pass 2: each block's walls, arriving crossing pairs and own rows. The first block lists
-    // its contacts in the output, the others in their own lists, appended after.
+    // Pass 2: each block's walls, arriving crossing pairs and own rows.
     let force = split_at_ends(&mut *out.force, slot_ends());
     let torque = split_at_ends(&mut *out.torque, slot_ends());
-    let found: Vec<&mut PairContacts> =
-        std::iter::once(&mut *out.contacts).chain(plan.contacts.iter_mut()).collect();
+    let hist = split_at_ends(&mut *out.pair_history, pair_ends());
+    let flags = split_at_ends(&mut *out.in_contact, pair_ends());
     let whist = split_at_ends(&mut *out.wall_history, wall_ends.iter().copied());
     let incoming =
         Incoming::Crossing { start: &plan.incoming_start, index: &plan.incoming, loads: &plan.loads };
@@ -265,10 +262,11 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
     let wall_seconds: f64 = force
         .into_par_iter()
         .zip(torque)
-        .zip(found)
+        .zip(hist)
+        .zip(flags)
         .zip(whist)
         .enumerate()
-        .map(|(t, (((force, torque), found), whist))| {
+        .map(|(t, ((((force, torque), hist), flags), whist))| {
             let rows = blocks[t].clone();
             let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
             block::<HERTZ, INCREMENTAL>(
@@ -277,7 +275,8 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
                 rows,
                 force,
                 torque,
-                found,
+                hist,
+                flags,
                 whist,
                 w0,
                 incoming,
@@ -285,9 +284,6 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
             )
         })
         .sum();
-    for c in &plan.contacts[..blocks.len() - 1] {
-        out.contacts.extend(c);
-    }
     wall_seconds / blocks.len().max(1) as f64
 }
 
@@ -312,7 +308,7 @@ enum Incoming<'a> {
 }
 
 /// The force stage of the rows `rows`: `force`/`torque` are those rows' accumulators,
-/// `found` receives their pairs in contact with the advanced histories, `whist` holds the
+/// `hist` and `in_contact` the histories and contact flags of their pairs, `whist` the
 /// histories of their wall pairs (starting at wall pair `w0`), `own_crossing` the loads of
 /// their crossing pairs in list order. With `clock`, returns the seconds spent on the walls.
 #[inline(always)]
@@ -322,7 +318,8 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     rows: Range<usize>,
     force: &mut [Vec3],
     torque: &mut [Vec3],
-    found_contacts: &mut PairContacts,
+    hist: &mut [Vec3],
+    in_contact: &mut [bool],
     whist: &mut [Vec3],
     w0: usize,
     incoming: Incoming,
@@ -349,7 +346,7 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     if let Incoming::Crossing { start, index, loads } = incoming {
         for b in rows.clone() {
             for &c in &index[start[b]..start[b + 1]] {
-                if let Some((l, _)) = loads[c as usize] {
+                if let Some(l) = loads[c as usize] {
                     force[b - r0] -= l.f;
                     torque[b - r0] += l.tb;
                 }
@@ -360,27 +357,16 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     // pairs, which lists the touching ones; then their loads, computed a batch at a time and
     // added in list order.
     let mut cursor = Cursor { a: r0, k: x.offsets[r0] };
-    let mut found = [(0u32, 0usize); FOUND];
+    let mut found = [Found::default(); FOUND];
     let mut crossing = own_crossing.iter();
-    let mut history = ContactCursor::new(x.contacts, x.offsets[r0]);
-    found_contacts.clear();
     let mut lanes = Lanes::new();
     if let Some(c) = x.coeffs.uniform_pair() {
         lanes.input.fill_coeffs(c);
     }
     while cursor.a < r1 {
-        let n = find_contacts(x, r0..r1, &mut cursor, &mut found);
+        let n = find_contacts(x, r0..r1, &mut cursor, in_contact, &mut found);
         for group in found[..n].chunks(LANES) {
-            lanes.add_loads::<HERTZ, INCREMENTAL>(
-                x,
-                r0..r1,
-                group,
-                &mut crossing,
-                &mut history,
-                force,
-                torque,
-                found_contacts,
-            );
+            lanes.add_loads::<HERTZ, INCREMENTAL>(x, r0..r1, group, &mut crossing, force, torque, hist);
         }
     }
     wall_seconds
@@ -389,24 +375,36 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
 /// Touching pairs listed per stretch of rows.
 const FOUND: usize = 256;
 
+/// A pair listed by the contact test: pair `k` of row `a`; `fresh` if it did not touch at
+/// the last evaluation (its stored history is then not its own).
+#[derive(Debug, Clone, Copy, Default)]
+struct Found {
+    a: u32,
+    fresh: bool,
+    k: usize,
+}
+
 /// Where the contact test of a block's rows has got to: pair k of row a.
 struct Cursor {
     a: usize,
     k: usize,
 }
 
-/// Lists, as (a, k), the pairs from `cursor` on that touch and the crossing pairs (whose loads
-/// were computed before), until the rows end or `found` is full, and returns how many it
-/// listed. The test does not branch on its outcome (which no predictor could guess): every
-/// pair is written into the next place, which only a touching pair keeps.
+/// Lists the pairs from `cursor` on that touch and the crossing pairs (whose loads were
+/// computed before), until the rows end or `found` is full, and returns how many it listed;
+/// sets the contact flags of the pairs tested (`in_contact` holds those of the rows' pairs).
+/// The test does not branch on its outcome (which no predictor could guess): every pair is
+/// written into the next place, which only a touching pair keeps.
 #[inline(never)]
 fn find_contacts(
     x: &ForceInputs,
     rows: Range<usize>,
     cursor: &mut Cursor,
-    found: &mut [(u32, usize); FOUND],
+    in_contact: &mut [bool],
+    found: &mut [Found; FOUND],
 ) -> usize {
-    let r1 = rows.end;
+    let (r0, r1) = (rows.start, rows.end);
+    let k0 = x.offsets[r0];
     let mut n = 0;
     let Cursor { mut a, mut k } = *cursor;
     while a < r1 {
@@ -418,13 +416,17 @@ fn find_contacts(
                 return n;
             }
             let b = x.partners[k] as usize;
-            let keep = if b < r1 {
+            let (keep, fresh) = if b < r1 {
                 let d = x.periodic.nearest(x.position[b] - xa);
-                pair_touching(d.length_squared(), ra, x.radius[b])
+                let touching = pair_touching(d.length_squared(), ra, x.radius[b]);
+                let flag = &mut in_contact[k - k0];
+                let fresh = !*flag;
+                *flag = touching;
+                (touching, fresh)
             } else {
-                true
+                (true, false)
             };
-            found[n] = (a as u32, k);
+            found[n] = Found { a: a as u32, fresh, k };
             n += keep as usize;
             k += 1;
         }
@@ -619,31 +621,30 @@ impl Lanes {
     }
 
     /// Computes the loads of the listed pairs `group` (at most [`LANES`]) of the block's
-    /// `rows` and adds them, in order, to the rows' accumulators, listing the pairs with their
-    /// advanced histories in `found`. The stored histories come from `history`; a crossing
-    /// pair takes its load and history from `crossing`.
+    /// `rows` and adds them, in order, to the rows' accumulators, storing the histories in
+    /// `hist` (those of the rows' pairs). A crossing pair takes its load from `crossing`.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn add_loads<const HERTZ: bool, const INCREMENTAL: bool>(
         &mut self,
         x: &ForceInputs,
         rows: Range<usize>,
-        group: &[(u32, usize)],
+        group: &[Found],
         crossing: &mut std::slice::Iter<CrossingLoad>,
-        history: &mut ContactCursor,
         force: &mut [Vec3],
         torque: &mut [Vec3],
-        found: &mut PairContacts,
+        hist: &mut [Vec3],
     ) {
         let (r0, r1) = (rows.start, rows.end);
+        let k0 = x.offsets[r0];
         let uniform = x.coeffs.uniform_pair().is_some();
-        for (i, &(a, k)) in group.iter().enumerate() {
-            let (a, b) = (a as usize, x.partners[k] as usize);
+        for (i, f) in group.iter().enumerate() {
+            let (a, b, k) = (f.a as usize, x.partners[f.k] as usize, f.k);
             if b < r1 {
                 // The separation again, rather than kept from the contact test: the listing
-                // stays (a, k) per pair, and these positions are in cache.
+                // stays small, and these positions are in cache.
                 let d = x.periodic.nearest(x.position[b] - x.position[a]);
-                let p = pair_input(x, a, b, d, history.history(k));
+                let p = pair_input(x, a, b, d, own_history(hist[k - k0], f.fresh));
                 if uniform {
                     // The coefficient lanes hold the one set of coefficients already.
                     self.input.set_motion(i, &p);
@@ -653,20 +654,18 @@ impl Lanes {
             }
         }
         contact_loads::<HERTZ, INCREMENTAL, false>(&x.law, x.dt, &self.input, &mut self.output);
-        for (i, &(a, k)) in group.iter().enumerate() {
-            let (a, b) = (a as usize, x.partners[k] as usize);
+        for (i, f) in group.iter().enumerate() {
+            let (a, b, k) = (f.a as usize, x.partners[f.k] as usize, f.k);
             let l = if b < r1 {
                 let (l, h) = self.output.get(i);
-                found.push(k, if x.advance { h } else { self.input.h.get(i) });
+                // Stored even when not advanced: a fresh contact's history becomes zero.
+                hist[k - k0] = if x.advance { h } else { self.input.h.get(i) };
                 force[b - r0] -= l.f;
                 torque[b - r0] += l.tb;
                 l
             } else {
                 match crossing.next() {
-                    Some(Some((l, h))) => {
-                        found.push(k, *h);
-                        *l
-                    }
+                    Some(Some(l)) => *l,
                     _ => continue,
                 }
             };
@@ -889,18 +888,33 @@ fn wall_law<const HERTZ: bool, const INCREMENTAL: bool>(
     (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
 }
 
-/// The load of pair (a, b), a < b, with stored tangential history `h`, and its history
-/// afterwards (advanced if the stage advances them); None when they do not touch.
+/// The stored history `h` of a listed pair, or zero if the pair is `fresh` (did not touch at
+/// the last evaluation). Picked by a bit mask, not a branch.
+#[inline(always)]
+fn own_history(h: Vec3, fresh: bool) -> Vec3 {
+    let mask = (!fresh as u64).wrapping_neg();
+    let keep = |v: f64| f64::from_bits(v.to_bits() & mask);
+    Vec3::new(keep(h.x), keep(h.y), keep(h.z))
+}
+
+/// The load of pair (a, b), a < b, with stored tangential history `h` (advanced if the
+/// stage advances them) and contact flag `in_contact`; None when they do not touch.
 #[inline(always)]
 fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
     x: &ForceInputs,
     a: usize,
     b: usize,
-    h: Vec3,
+    h: &mut Vec3,
+    in_contact: &mut bool,
 ) -> CrossingLoad {
-    let d = touching_pair(x, a, b)?;
-    let (load, advanced) = pair_law::<HERTZ, INCREMENTAL>(&x.law, x.dt, &pair_input(x, a, b, d, h));
-    Some((load, if x.advance { advanced } else { h }))
+    let touching = touching_pair(x, a, b);
+    let fresh = !*in_contact;
+    *in_contact = touching.is_some();
+    let d = touching?;
+    let stored = own_history(*h, fresh);
+    let (load, advanced) = pair_law::<HERTZ, INCREMENTAL>(&x.law, x.dt, &pair_input(x, a, b, d, stored));
+    *h = if x.advance { advanced } else { stored };
+    Some(load)
 }
 
 /// Effective mass of the particles in slots i and j: m_i m_j/(m_i + m_j), or the other one's

@@ -7,9 +7,10 @@
 //! the two particles, or the slot and the wall index — slots never change during a run), new
 //! entries start from zero.
 //!
-//! Only about one candidate pair in three or four touches, so the pairs' histories are kept
-//! apart from the list, for the pairs in contact only ([`PairContacts`]): the force stage
-//! streams through a third of the memory it would with one history per candidate pair.
+//! Each pair also carries a flag: whether it touched at the last force evaluation. A pair's
+//! stored history counts only while the flag is set (it is zero otherwise), so the contact test
+//! of each step writes one byte per pair instead of clearing the 24-byte history of every pair
+//! that does not touch — in a flowing bed most of them.
 
 use crate::boundary::Periodic;
 use crate::math::Vec3;
@@ -25,112 +26,21 @@ pub struct NeighborStats {
     pub distance_checks: u64,
 }
 
-/// A pair in contact and its tangential history, seen from its lower slot.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PairContact {
-    /// The pair's index (its place in the list order).
-    pub pair: usize,
-    /// Its tangential history.
-    pub history: Vec3,
-}
-
-/// The tangential histories of the pairs in contact at the last force evaluation, ascending
-/// by pair index. A pair not listed has zero history.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct PairContacts {
-    list: Vec<PairContact>,
-}
-
-impl PairContacts {
-    /// Number of listed contacts.
-    pub fn len(&self) -> usize {
-        self.list.len()
-    }
-
-    /// True when no contact is listed.
-    pub fn is_empty(&self) -> bool {
-        self.list.is_empty()
-    }
-
-    /// The contacts, ascending by pair.
-    pub fn as_slice(&self) -> &[PairContact] {
-        &self.list
-    }
-
-    /// Empties the list, keeping its memory.
-    pub fn clear(&mut self) {
-        self.list.clear();
-    }
-
-    /// Appends pair `k` (above every pair listed) with history `h`.
-    #[inline(always)]
-    pub fn push(&mut self, k: usize, h: Vec3) {
-        self.list.push(PairContact { pair: k, history: h });
-    }
-
-    /// Appends all of `other`'s contacts (which lie above this one's).
-    pub fn extend(&mut self, other: &PairContacts) {
-        self.list.extend_from_slice(&other.list);
-    }
-
-    /// The histories as one entry per pair of a list of `n_pairs` pairs (zero where not
-    /// listed).
-    pub fn expand(&self, n_pairs: usize) -> Vec<Vec3> {
-        let mut all = vec![Vec3::ZERO; n_pairs];
-        for c in &self.list {
-            all[c.pair] = c.history;
-        }
-        all
-    }
-
-    pub(crate) fn heap_bytes(&self) -> usize {
-        self.list.capacity() * std::mem::size_of::<PairContact>()
-    }
-}
-
-/// A cursor over [`PairContacts`] that finds the history of pairs asked for in ascending
-/// order.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct ContactCursor<'a> {
-    list: &'a [PairContact],
-    at: usize,
-}
-
-impl<'a> ContactCursor<'a> {
-    /// A cursor at the first contact of `c` with pair index ≥ `k0`.
-    pub fn new(c: &'a PairContacts, k0: usize) -> Self {
-        ContactCursor { list: &c.list, at: c.list.partition_point(|c| c.pair < k0) }
-    }
-
-    /// The history of pair `k` (zero if not listed); `k` must not be below the pair asked for
-    /// before.
-    #[inline(always)]
-    pub fn history(&mut self, k: usize) -> Vec3 {
-        while self.at < self.list.len() && self.list[self.at].pair < k {
-            self.at += 1;
-        }
-        match self.list.get(self.at) {
-            Some(c) if c.pair == k => c.history,
-            _ => Vec3::ZERO,
-        }
-    }
-}
-
 /// The Verlet list with its contact histories.
 ///
 /// Pairs are stored as a half list in compressed rows: the partners of slot `a` are the slots
-/// `b > a` in `partners[offsets[a]..offsets[a + 1]]`, ascending. Pair `k` is its place in
-/// that order; the pairs in contact carry their tangential history in [`PairContacts`],
-/// seen from the lower slot `a`. This is the order the force loop walks memory in and sums
-/// forces in.
+/// `b > a` in `partners[offsets[a]..offsets[a + 1]]`, ascending. Pair `k` (its place in that
+/// order) carries its tangential history in `pair_history[k]`, seen from the lower slot `a`,
+/// valid while `in_contact[k]` is set (zero otherwise). This is the order the force loop walks
+/// memory in and sums forces in.
 #[derive(Debug, Clone, Default)]
 pub struct NeighborList {
     skin: f64,
     offsets: Vec<usize>,
     partners: Vec<u32>,
-    contacts: PairContacts,
-    /// The next force evaluation's contacts (kept to reuse its memory).
-    next_contacts: PairContacts,
+    pair_history: Vec<Vec3>,
+    /// Whether each pair touched at the last force evaluation.
+    in_contact: Vec<bool>,
     /// Candidate particle–wall pairs (slot, wall index), ordered by slots.
     wall_pairs: Vec<[u32; 2]>,
     wall_history: Vec<Vec3>,
@@ -266,13 +176,9 @@ impl NeighborList {
         self.built = s.built;
         row_offsets(pairs.iter().map(|e| e.0), n, &mut self.offsets);
         self.partners = pairs.iter().map(|e| e.0 as u32).collect();
-        // A zero history is no contact (bit for bit: a negative zero is kept).
-        self.contacts.clear();
-        for (k, e) in pairs.iter().enumerate() {
-            if e.1.to_array().iter().any(|v| v.to_bits() != 0) {
-                self.contacts.push(k, e.1);
-            }
-        }
+        self.pair_history = pairs.iter().map(|e| e.1).collect();
+        // A zero history is the same as no contact (bit for bit: a negative zero is kept).
+        self.in_contact = pairs.iter().map(|e| nonzero(e.1)).collect();
         self.wall_pairs = walls.iter().map(|e| [(e.0 >> 32) as u32, e.0 as u32]).collect();
         self.wall_history = walls.iter().map(|e| e.1).collect();
         self.reference = s.reference;
@@ -316,29 +222,24 @@ impl NeighborList {
     /// Tangential history of each pair, seen from the lower slot, in list order (zero for the
     /// pairs not in contact at the last force evaluation).
     pub fn pair_history(&self) -> Vec<Vec3> {
-        self.contacts.expand(self.partners.len())
+        self.pair_histories().collect()
     }
 
-    /// The pairs in contact at the last force evaluation with their histories.
-    pub fn pair_contacts(&self) -> &PairContacts {
-        &self.contacts
+    /// [`pair_history`](Self::pair_history) without a copy.
+    pub fn pair_histories(&self) -> impl ExactSizeIterator<Item = Vec3> + '_ {
+        self.pair_history.iter().zip(&self.in_contact).map(|(&h, &c)| if c { h } else { Vec3::ZERO })
+    }
+
+    /// Number of pairs that touched at the last force evaluation (or carry a history).
+    pub fn pair_contact_count(&self) -> usize {
+        self.in_contact.iter().filter(|&&c| c).count()
     }
 
     /// Sets the tangential history of pair `k` (for tests and hooks that set a contact's
-    /// state); a zero history removes the pair from the contacts.
+    /// state).
     pub fn set_pair_history(&mut self, k: usize, h: Vec3) {
-        assert!(k < self.partners.len(), "pair {k} is not in the list");
-        let c = &mut self.contacts.list;
-        let at = c.partition_point(|c| c.pair < k);
-        let listed = at < c.len() && c[at].pair == k;
-        match (listed, h == Vec3::ZERO) {
-            (true, true) => {
-                c.remove(at);
-            }
-            (true, false) => c[at].history = h,
-            (false, false) => c.insert(at, PairContact { pair: k, history: h }),
-            (false, true) => {}
-        }
+        self.pair_history[k] = h;
+        self.in_contact[k] = nonzero(h);
     }
 
     /// Candidate particle–wall pairs (slot, wall index), ordered by slots.
@@ -356,27 +257,20 @@ impl NeighborList {
         &mut self.wall_history
     }
 
-    /// The parts the force loop needs at once: (offsets, partners, pair contacts, the next
-    /// evaluation's pair contacts to fill, wall pairs, wall histories). The filled contacts
-    /// take over with [`commit_contacts`](Self::commit_contacts).
+    /// The parts the force loop needs at once: (offsets, partners, pair histories, pairs'
+    /// contact flags, wall pairs, wall histories).
     #[allow(clippy::type_complexity)]
     pub(crate) fn split_mut(
         &mut self,
-    ) -> (&[usize], &[u32], &PairContacts, &mut PairContacts, &[[u32; 2]], &mut [Vec3]) {
+    ) -> (&[usize], &[u32], &mut [Vec3], &mut [bool], &[[u32; 2]], &mut [Vec3]) {
         (
             &self.offsets,
             &self.partners,
-            &self.contacts,
-            &mut self.next_contacts,
+            &mut self.pair_history,
+            &mut self.in_contact,
             &self.wall_pairs,
             &mut self.wall_history,
         )
-    }
-
-    /// Makes the contacts filled in by the force stage (see [`split_mut`](Self::split_mut))
-    /// the current ones.
-    pub(crate) fn commit_contacts(&mut self) {
-        std::mem::swap(&mut self.contacts, &mut self.next_contacts);
     }
 
     /// Heap bytes held by the list and its scratch space.
@@ -384,9 +278,9 @@ impl NeighborList {
         use std::mem::size_of;
         self.offsets.capacity() * size_of::<usize>()
             + self.partners.capacity() * 4
-            + self.contacts.heap_bytes()
-            + self.next_contacts.heap_bytes()
-            + (self.wall_history.capacity() + self.reference.capacity()) * size_of::<Vec3>()
+            + self.in_contact.capacity()
+            + (self.pair_history.capacity() + self.wall_history.capacity() + self.reference.capacity())
+                * size_of::<Vec3>()
             + self.wall_pairs.capacity() * 8
             + self.excluded.capacity()
             + (self.cell_count.capacity() + self.cell_of.capacity() + self.sorted.capacity()) * 4
@@ -580,18 +474,17 @@ impl NeighborList {
         self.renew_pairs(n);
     }
 
-    /// Replaces the pairs by the sorted `fresh` keys: each contact moves to the new place of
-    /// its pair, and is dropped if the pair left the list (both lists are in (a, b) order, so
-    /// one merge pass finds them). Done in place: a contact's new place in the contacts is never
-    /// behind its old one.
+    /// Replaces the pairs by the sorted `fresh` keys: each takes the history of the same pair
+    /// in the old list if that was in contact (both are in (a, b) order, so one merge pass
+    /// finds it), zero if new.
+    ///
+    /// Done in place, so that a rebuild needs no second copy of the histories: the histories
+    /// of persisting contacts are first packed to the front of the buffer (in order), then
+    /// spread backwards to their new places (a packed entry never lies behind its new place).
     fn renew_pairs(&mut self, n: usize) {
+        let mut persists = vec![0u64; self.fresh.len().div_ceil(64)];
         let (mut a_old, mut k, mut kept) = (0usize, 0usize, 0usize);
-        let c = &mut self.contacts.list;
-        let mut next = 0;
         for (f, &key) in self.fresh.iter().enumerate() {
-            if next == c.len() {
-                break;
-            }
             while k < self.partners.len() {
                 while self.offsets[a_old + 1] <= k {
                     a_old += 1;
@@ -601,22 +494,35 @@ impl NeighborList {
                     k += 1;
                     continue;
                 }
+                if old_key == key && self.in_contact[k] {
+                    self.pair_history[kept] = self.pair_history[k];
+                    kept += 1;
+                    persists[f / 64] |= 1 << (f % 64);
+                }
                 if old_key == key {
-                    while next < c.len() && c[next].pair < k {
-                        next += 1;
-                    }
-                    if next < c.len() && c[next].pair == k {
-                        c[kept] = PairContact { pair: f, history: c[next].history };
-                        kept += 1;
-                        next += 1;
-                    }
                     k += 1;
                 }
                 break;
             }
         }
-        c.truncate(kept);
         let len = self.fresh.len();
+        // Exact growth: an amortised doubling would leave up to twice the history allocated.
+        self.pair_history.reserve_exact(len.saturating_sub(self.pair_history.len()));
+        self.pair_history.resize(len, Vec3::ZERO);
+        self.in_contact.clear();
+        self.in_contact.reserve_exact(len);
+        self.in_contact.resize(len, false);
+        let mut src = kept;
+        for f in (0..len).rev() {
+            let persisting = persists[f / 64] >> (f % 64) & 1 == 1;
+            self.pair_history[f] = if persisting {
+                src -= 1;
+                self.pair_history[src]
+            } else {
+                Vec3::ZERO
+            };
+            self.in_contact[f] = persisting;
+        }
         row_offsets(self.fresh.iter().copied(), n, &mut self.offsets);
         self.partners.clear();
         self.partners.reserve_exact(len);
@@ -649,4 +555,9 @@ impl NeighborList {
         self.wall_pairs = fresh;
         self.wall_history = history;
     }
+}
+
+/// True unless every component of `h` is +0.0 (a negative zero counts as a value).
+fn nonzero(h: Vec3) -> bool {
+    h.to_array().iter().any(|v| v.to_bits() != 0)
 }

@@ -469,7 +469,7 @@ impl Simulation {
         let clock = self.timing.map(|_| std::time::Instant::now());
         let p = &mut self.particles;
         let build = self.neighbors.stats().builds;
-        let (offsets, partners, contacts, next_contacts, wall_pairs, wall_history) =
+        let (offsets, partners, pair_history, in_contact, wall_pairs, wall_history) =
             self.neighbors.split_mut();
         let x = forces::ForceInputs {
             position: &p.position,
@@ -487,13 +487,13 @@ impl Simulation {
             advance: advance_history,
             offsets,
             partners,
-            contacts,
             wall_pairs,
         };
         let out = forces::ForceOutputs {
             force: &mut p.force,
             torque: &mut p.torque,
-            contacts: next_contacts,
+            pair_history,
+            in_contact,
             wall_history,
         };
         let timed = clock.is_some();
@@ -511,7 +511,6 @@ impl Simulation {
             }
             None => forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
         };
-        self.neighbors.commit_contacts();
         if let (Some(c), Some(t)) = (clock, self.timing.as_mut()) {
             let total = c.elapsed().as_secs_f64();
             t.walls += wall_seconds.min(total);
@@ -553,7 +552,7 @@ impl Simulation {
                 record(i, ContactPartner::Wall(w as usize), g, &c, v_r, h);
             }
         }
-        for ([i, j], h) in nl.pairs().zip(nl.pair_history()) {
+        for ([i, j], h) in nl.pairs().zip(nl.pair_histories()) {
             let (i, j) = (i as usize, j as usize);
             if let Some(g) = pair_geometry_of(&p.position, &p.radius, i, j, lever, &per) {
                 let c = scaled_damping(
