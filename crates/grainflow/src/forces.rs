@@ -17,10 +17,11 @@
 //! ones (setting each pair's contact flag; a pair that starts touching starts from zero
 //! history); it then gathers their inputs into batches of 16 (one array per component),
 //! computes a batch's loads in one loop that compiles to vector instructions, and adds them to
-//! the particles in list order — the order above — storing the new histories. The contact law is the same function as for
-//! a single contact, written without data-dependent branches; the AVX2 and AVX-512 copies of
-//! the loop round exactly as scalar code does (no fused multiply–add), so results do not
-//! depend on the processor (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`).
+//! the particles in list order — the order above — storing the new histories. The contact
+//! law is the same function as for a single contact, written without data-dependent
+//! branches; the AVX2 and AVX-512 copies of the loop round exactly as scalar code does (no
+//! fused multiply–add), so results do not depend on the processor
+//! (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`).
 //!
 //! ## Threads
 //! The slots are cut into blocks of consecutive rows with about equal pair counts. A pair whose
@@ -534,8 +535,7 @@ impl InputLanes {
     #[inline(always)]
     fn set(&mut self, i: usize, p: &PairInput) {
         self.set_motion(i, p);
-        let c = &p.c;
-        for (lane, v) in self.coeffs.iter_mut().zip([c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll]) {
+        for (lane, v) in self.coeffs.iter_mut().zip(coeff_lanes(&p.c)) {
             lane[i] = v;
         }
     }
@@ -556,7 +556,7 @@ impl InputLanes {
 
     /// Sets the coefficients of every lane to `c`.
     fn fill_coeffs(&mut self, c: &ContactCoeffs) {
-        for (lane, v) in self.coeffs.iter_mut().zip([c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll]) {
+        for (lane, v) in self.coeffs.iter_mut().zip(coeff_lanes(c)) {
             *lane = [v; LANES];
         }
     }
@@ -580,6 +580,12 @@ impl InputLanes {
             m_eff,
         }
     }
+}
+
+/// The coefficients the law reads, in the order of [`InputLanes::coeffs`].
+#[inline(always)]
+fn coeff_lanes(c: &ContactCoeffs) -> [f64; 6] {
+    [c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll]
 }
 
 /// The loads and advanced histories of a batch, component by component.
