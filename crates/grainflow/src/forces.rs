@@ -475,10 +475,7 @@ fn find_wall_contacts(
         let [i, w] = wall_pairs[*at];
         let (i, wall) = (i as usize, &x.walls[w as usize]);
         let touching = wall_contact(x.position[i], x.radius[i], wall.point, wall.normal).is_some();
-        let mask = (touching as u64).wrapping_neg();
-        let keep = |v: f64| f64::from_bits(v.to_bits() & mask);
-        let h = &mut hist[*at];
-        *h = Vec3::new(keep(h.x), keep(h.y), keep(h.z));
+        hist[*at] = kept_or_zero(hist[*at], touching);
         found[n] = *at;
         n += touching as usize;
         *at += 1;
@@ -650,7 +647,7 @@ impl Lanes {
                 // The separation again, rather than kept from the contact test: the listing
                 // stays small, and these positions are in cache.
                 let d = x.periodic.nearest(x.position[b] - x.position[a]);
-                let p = pair_input(x, a, b, d, own_history(hist[k - k0], f.fresh));
+                let p = pair_input(x, a, b, d, kept_or_zero(hist[k - k0], !f.fresh));
                 if uniform {
                     // The coefficient lanes hold the one set of coefficients already.
                     self.input.set_motion(i, &p);
@@ -894,13 +891,13 @@ fn wall_law<const HERTZ: bool, const INCREMENTAL: bool>(
     (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
 }
 
-/// The stored history `h` of a listed pair, or zero if the pair is `fresh` (did not touch at
-/// the last evaluation). Picked by a bit mask, not a branch.
+/// `h` if `keep`, else zero: a history kept or cleared by a bit mask (a select here compiles
+/// to a branch, which would mispredict as often as the contact test it follows).
 #[inline(always)]
-fn own_history(h: Vec3, fresh: bool) -> Vec3 {
-    let mask = (!fresh as u64).wrapping_neg();
-    let keep = |v: f64| f64::from_bits(v.to_bits() & mask);
-    Vec3::new(keep(h.x), keep(h.y), keep(h.z))
+fn kept_or_zero(h: Vec3, keep: bool) -> Vec3 {
+    let mask = (keep as u64).wrapping_neg();
+    let masked = |v: f64| f64::from_bits(v.to_bits() & mask);
+    Vec3::new(masked(h.x), masked(h.y), masked(h.z))
 }
 
 /// The load of pair (a, b), a < b, with stored tangential history `h` (advanced if the
@@ -917,7 +914,7 @@ fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
     let fresh = !*in_contact;
     *in_contact = touching.is_some();
     let d = touching?;
-    let stored = own_history(*h, fresh);
+    let stored = kept_or_zero(*h, !fresh);
     let (load, advanced) = pair_law::<HERTZ, INCREMENTAL>(&x.law, x.dt, &pair_input(x, a, b, d, stored));
     *h = if x.advance { advanced } else { stored };
     Some(load)

@@ -149,22 +149,20 @@ fn for_slots(p: &mut Particles, runs: &[Range<usize>], parallel: bool, kernel: i
             let (a, b) = s.split_at(cut - base);
             rayon::join(|| many(a, base, &runs[..mid], kernel), || many(b, cut, &runs[mid..], kernel));
         } else {
-            for r in runs {
-                kernel(s.sub(r.start - base..r.end - base));
-            }
+            in_turn(&mut s, base, runs, kernel);
+        }
+    }
+    /// The runs `runs` within `s`, whose first slot is `base`, one after the other.
+    fn in_turn(s: &mut Slots, base: usize, runs: &[Range<usize>], kernel: &impl Fn(Slots)) {
+        for r in runs {
+            kernel(s.sub(r.start - base..r.end - base));
         }
     }
     let (Some(first), Some(last)) = (runs.first(), runs.last()) else {
         return;
     };
     let mut s = Slots::of(p, first.start..last.end);
-    if parallel {
-        many(s, first.start, runs, &kernel);
-    } else {
-        for r in runs {
-            kernel(s.sub(r.start - first.start..r.end - first.start));
-        }
-    }
+    if parallel { many(s, first.start, runs, &kernel) } else { in_turn(&mut s, first.start, runs, &kernel) }
 }
 
 /// MFIX's `EULER` step.

@@ -2,10 +2,10 @@
 //! more than half the skin since the last build.
 //!
 //! The list holds every particle pair closer than R_i + R_j + skin and every particle–wall pair
-//! closer than R + skin, so between rebuilds no contact can be missed. The contacts carry
-//! their tangential history; on a rebuild, those that persist keep it (matched by the slots of
-//! the two particles, or the slot and the wall index — slots never change during a run), new
-//! entries start from zero.
+//! closer than R + skin, so between rebuilds no contact can be missed. Each entry carries the
+//! contact's tangential history; on a rebuild, entries in contact that persist keep it
+//! (matched by the slots of the two particles, or the slot and the wall index — slots never
+//! change during a run), new entries start from zero.
 //!
 //! Each pair also carries a flag: whether it touched at the last force evaluation. A pair's
 //! stored history counts only while the flag is set (it is zero otherwise), so the contact test
@@ -494,12 +494,12 @@ impl NeighborList {
                     k += 1;
                     continue;
                 }
-                if old_key == key && self.in_contact[k] {
-                    self.pair_history[kept] = self.pair_history[k];
-                    kept += 1;
-                    persists[f / 64] |= 1 << (f % 64);
-                }
                 if old_key == key {
+                    if self.in_contact[k] {
+                        self.pair_history[kept] = self.pair_history[k];
+                        kept += 1;
+                        persists[f / 64] |= 1 << (f % 64);
+                    }
                     k += 1;
                 }
                 break;
