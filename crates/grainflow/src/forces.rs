@@ -27,10 +27,12 @@
 //! The slots are cut into blocks of consecutive rows with about equal pair counts. A pair whose
 //! two particles lie in one block is computed by that block's thread, which adds it to both
 //! particles directly. A pair (a, b) with b in a later block (a *crossing* pair) is computed
-//! first, in a parallel pass, and kept; its block then adds it to a in a's row, and b's block
-//! adds it to b before any of its own rows — where the order above puts it, since its row lies
-//! below b's block. One block is the serial loop itself. With particles in a spatial order
-//! (`[particles] order = "spatial"`) few pairs cross.
+//! first, in a pass shared evenly over all threads (the crossing pairs all lie in the lower
+//! blocks), and kept; its block then adds it to a in a's row, and b's block adds it to b before
+//! any of its own rows — where the order above puts it, since its row lies below b's block. One
+//! block is the serial loop itself. With particles in a spatial order (`[particles] order =
+//! "spatial"`) few pairs cross. Block t always runs on thread t ([`crate::threads`]), so its
+//! histories and accumulators stay in one core's cache from step to step.
 
 use std::ops::Range;
 
@@ -220,30 +222,36 @@ pub(crate) fn serial<const HERTZ: bool, const INCREMENTAL: bool>(
 }
 
 /// Evaluates every contact into `out` on the blocks of `plan`, in parallel on the current
-/// rayon pool. Bit-identical to [`serial`]. With `clock`, returns the seconds the blocks spent
-/// on wall contacts, averaged over the blocks (0 otherwise).
+/// rayon pool, block t on thread t (see [`crate::threads`]). Bit-identical to [`serial`]. With
+/// `clock`, returns the seconds the blocks spent on wall contacts, averaged over the blocks (0
+/// otherwise).
 pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
     x: &ForceInputs,
     plan: &mut ForcePlan,
     out: ForceOutputs,
     clock: bool,
 ) -> f64 {
-    use rayon::prelude::*;
     let blocks = &plan.blocks;
     let pair_ends = || blocks.iter().map(|r| x.offsets[r.end]);
     let slot_ends = || blocks.iter().map(|r| r.end);
     let wall_ends = &plan.wall_ends;
 
-    // Pass 1: the crossing pairs, each block's on its thread.
+    // Pass 1: the crossing pairs, shared out evenly over the threads (they all lie in the rows
+    // of the lower blocks). The list is in pair order, so each share's pairs lie in one stretch
+    // of the histories, from the end of the previous share's stretch.
     {
-        let hist = split_at_ends(&mut *out.pair_history, pair_ends());
-        let flags = split_at_ends(&mut *out.in_contact, pair_ends());
-        let loads = split_at_ends(&mut plan.loads[..], plan.crossing_start[1..].iter().copied());
         let crossing = &plan.crossing;
-        let starts = &plan.crossing_start;
-        hist.into_par_iter().zip(flags).zip(loads).enumerate().for_each(|(t, ((hist, flags), loads))| {
-            let k0 = x.offsets[blocks[t].start];
-            for (load, &(a, k)) in loads.iter_mut().zip(&crossing[starts[t]..starts[t + 1]]) {
+        let shares = rayon::current_num_threads().max(1);
+        let cuts: Vec<usize> = (1..=shares).map(|t| crossing.len() * t / shares).collect();
+        let stretch_end = |c: usize| crossing.get(c).map_or(x.partners.len(), |&(_, k)| k);
+        let hist = split_at_ends(&mut *out.pair_history, cuts.iter().map(|&c| stretch_end(c)));
+        let flags = split_at_ends(&mut *out.in_contact, cuts.iter().map(|&c| stretch_end(c)));
+        let loads = split_at_ends(&mut plan.loads[..], cuts.iter().copied());
+        let parts: Vec<_> = hist.into_iter().zip(flags).zip(loads).collect();
+        crate::threads::pinned(parts, |t, ((hist, flags), loads)| {
+            let c0 = if t == 0 { 0 } else { cuts[t - 1] };
+            let k0 = if t == 0 { 0 } else { stretch_end(c0) };
+            for (load, &(a, k)) in loads.iter_mut().zip(&crossing[c0..cuts[t]]) {
                 let b = x.partners[k] as usize;
                 *load =
                     pair_load::<HERTZ, INCREMENTAL>(x, a as usize, b, &mut hist[k - k0], &mut flags[k - k0]);
@@ -260,31 +268,26 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
         Incoming::Crossing { start: &plan.incoming_start, index: &plan.incoming, loads: &plan.loads };
     let crossing_start = &plan.crossing_start;
     let loads = &plan.loads;
-    let wall_seconds: f64 = force
-        .into_par_iter()
-        .zip(torque)
-        .zip(hist)
-        .zip(flags)
-        .zip(whist)
-        .enumerate()
-        .map(|(t, ((((force, torque), hist), flags), whist))| {
-            let rows = blocks[t].clone();
-            let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
-            block::<HERTZ, INCREMENTAL>(
-                clock,
-                x,
-                rows,
-                force,
-                torque,
-                hist,
-                flags,
-                whist,
-                w0,
-                incoming,
-                &loads[crossing_start[t]..crossing_start[t + 1]],
-            )
-        })
-        .sum();
+    let parts: Vec<_> = force.into_iter().zip(torque).zip(hist).zip(flags).zip(whist).collect();
+    let wall_seconds: f64 = crate::threads::pinned(parts, |t, ((((force, torque), hist), flags), whist)| {
+        let rows = blocks[t].clone();
+        let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
+        block::<HERTZ, INCREMENTAL>(
+            clock,
+            x,
+            rows,
+            force,
+            torque,
+            hist,
+            flags,
+            whist,
+            w0,
+            incoming,
+            &loads[crossing_start[t]..crossing_start[t + 1]],
+        )
+    })
+    .into_iter()
+    .sum();
     wall_seconds / blocks.len().max(1) as f64
 }
 

@@ -37,6 +37,7 @@ pub mod neighbor;
 pub mod observe;
 pub mod simulation;
 pub mod state;
+mod threads;
 pub mod timestep;
 pub mod wall;
 

@@ -1,0 +1,43 @@
+//! Work shared out over the threads of the current rayon pool with every part pinned to one
+//! thread: part i runs on thread i (modulo the thread count) at every stage of every step. The
+//! particles a thread computes the forces of are then the ones it integrates, and their data
+//! stays in that core's cache instead of moving between cores from stage to stage (work
+//! stealing would hand the parts to whichever thread is free).
+
+use std::sync::Mutex;
+
+/// Runs `work(i, part)` for each of `parts`, part i on thread i mod T of the current rayon pool
+/// of T threads (outside a pool, on the global one), and returns the results in part order.
+pub(crate) fn pinned<T: Send, R: Send>(parts: Vec<T>, work: impl Fn(usize, T) -> R + Sync) -> Vec<R> {
+    let n = parts.len();
+    let cells: Vec<Mutex<Option<T>>> = parts.into_iter().map(|p| Mutex::new(Some(p))).collect();
+    let take = |i: usize| {
+        let mut cell = cells[i].lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        cell.take().expect("every part is taken by one thread only")
+    };
+    let per_thread: Vec<Vec<R>> = rayon::broadcast(|ctx| {
+        (ctx.index()..n).step_by(ctx.num_threads()).map(|i| work(i, take(i))).collect()
+    });
+    // Part i is the (i / T)-th result of thread i mod T.
+    let t = per_thread.len();
+    let mut results: Vec<_> = per_thread.into_iter().map(Vec::into_iter).collect();
+    (0..n).map(|i| results[i % t].next().expect("one result per part")).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every part is worked on exactly once, on thread i mod T, and the results come back in
+    /// part order — for more, as many and fewer parts than threads.
+    #[test]
+    fn parts_run_once_each_on_their_thread_in_order() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        for n in [0, 2, 3, 7] {
+            let parts: Vec<usize> = (0..n).map(|i| 10 * i).collect();
+            let out = pool.install(|| pinned(parts, |i, p| (i, p, rayon::current_thread_index())));
+            let expected: Vec<_> = (0..n).map(|i| (i, 10 * i, Some(i % 3))).collect();
+            assert_eq!(out, expected);
+        }
+    }
+}
