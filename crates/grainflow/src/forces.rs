@@ -24,7 +24,8 @@
 //! (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`).
 //!
 //! ## Threads
-//! The slots are cut into blocks of consecutive rows with about equal pair counts. A pair whose
+//! The slots are cut into blocks of consecutive rows with about equal work (pairs to test,
+//! touching pairs weighted by their larger cost: [`ForcePlan::prepare`]). A pair whose
 //! two particles lie in one block is computed by that block's thread, which adds it to both
 //! particles directly. A pair (a, b) with b in a later block (a *crossing* pair) is computed
 //! first, in a pass shared evenly over all threads (the crossing pairs all lie in the lower
@@ -119,7 +120,16 @@ pub(crate) struct ForcePlan {
     incoming: Vec<u32>,
     /// The crossing pairs' loads (None: not in contact).
     loads: Vec<CrossingLoad>,
+    /// Made before any contact was known: to be made again.
+    provisional: bool,
+    /// Estimated work before each row (scratch of `prepare`).
+    work: Vec<usize>,
 }
+
+/// The work of a touching pair (gathering its inputs, the law, adding its load) in units of a
+/// pair that is only tested for contact: about 7 on the box bed and the chute (profiles of the
+/// force stage: time in the contact test per listed pair, time in the rest per contact).
+const CONTACT_COST: usize = 7;
 
 impl ForcePlan {
     /// Heap bytes held by the plan.
@@ -131,33 +141,61 @@ impl ForcePlan {
                 * size_of::<usize>()
             + self.incoming.capacity() * 4
             + self.loads.capacity() * size_of::<CrossingLoad>()
+            + self.work.capacity() * size_of::<usize>()
     }
 
-    /// Cuts `n` slots into `n_blocks` blocks with about equal pair counts, unless it was done
-    /// for this neighbour-list build already.
+    /// Cuts `n` slots into `n_blocks` blocks of about equal work, unless it was done for this
+    /// neighbour-list build already. The work of a row is estimated from its pairs and wall
+    /// pairs and how many of them touched at the last evaluation (`in_contact`, and a wall
+    /// history that is not zero): the blocks must take equally long, and a touching pair costs
+    /// several times a pair that is only tested. A plan made before any contact was known (the
+    /// first build of a run) is made again at the next evaluation.
+    #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
         build: u64,
         n_blocks: usize,
         offsets: &[usize],
         partners: &[u32],
+        in_contact: &[bool],
         wall_pairs: &[[u32; 2]],
+        wall_history: &[Vec3],
     ) {
-        if self.made_for == Some((build, n_blocks)) {
+        let same_build = self.made_for == Some((build, n_blocks));
+        if same_build && !self.provisional {
             return;
         }
         self.made_for = Some((build, n_blocks));
         let n = offsets.len().saturating_sub(1);
-        let total = partners.len();
+        // Work before each row: prefix sums of the rows' costs (n + 1 entries).
+        self.work.clear();
+        self.work.reserve(n + 1);
+        let mut total = 0usize;
+        let mut walls = wall_pairs.iter().zip(wall_history).peekable();
+        let mut touching = 0usize;
+        for a in 0..n {
+            self.work.push(total);
+            let row = offsets[a]..offsets[a + 1];
+            let contacts = in_contact[row.clone()].iter().filter(|&&c| c).count();
+            total += row.len() + CONTACT_COST * contacts;
+            touching += contacts;
+            while let Some((_, h)) = walls.next_if(|&(&[i, _], _)| i as usize == a) {
+                let contact = *h != Vec3::ZERO;
+                total += 1 + CONTACT_COST * contact as usize;
+                touching += contact as usize;
+            }
+        }
+        self.work.push(total);
+        self.provisional = !same_build && touching == 0;
         self.blocks.clear();
         let mut start = 0;
         for t in 1..=n_blocks {
-            // The first row whose pairs start at or beyond the block's share of the pairs.
+            // The first row at or beyond the block's share of the work.
             let end = if t == n_blocks {
                 n
             } else {
                 let target = total * t / n_blocks;
-                offsets.partition_point(|&o| o < target).clamp(start, n)
+                self.work[..n].partition_point(|&w| w < target).clamp(start, n)
             };
             self.blocks.push(start..end);
             start = end;
@@ -1133,6 +1171,35 @@ mod tests {
             }
         }
         assert_eq!(cases, 3 * 3 * 4 * 3 * 8);
+    }
+
+    /// Blocks share the estimated work, not the pairs: with every pair of the first half of the
+    /// rows touching, the first block ends where the work (a pair tested: 1; touching: 1 +
+    /// CONTACT_COST) is halved. A plan made with no contact known is made again once the
+    /// flags are set, and then kept.
+    #[test]
+    fn blocks_share_the_work_of_touching_pairs() {
+        let n = 100;
+        // Two pairs per row (the last two rows have fewer partners).
+        let mut offsets = vec![0];
+        let mut partners = Vec::new();
+        for a in 0..n {
+            partners.extend(((a + 1)..n.min(a + 3)).map(|b| b as u32));
+            offsets.push(partners.len());
+        }
+        let mut touching = vec![false; partners.len()];
+        let mut plan = ForcePlan::default();
+        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
+        // 197 pairs: the first block ends at the first row with 98 pairs before it.
+        assert_eq!(plan.blocks, [0..49, 49..n], "by pairs while no contact is known");
+        touching[..offsets[n / 2]].fill(true);
+        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
+        // Work of the first 50 rows: 100 pairs × 8 = 800; of the last 50: 97 pairs × 1. Half
+        // of 897: 448, reached after 28 rows of 16.
+        assert_eq!(plan.blocks, [0..28, 28..n]);
+        touching.fill(false);
+        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
+        assert_eq!(plan.blocks, [0..28, 28..n], "kept until the next build");
     }
 
     #[test]

@@ -489,6 +489,19 @@ impl Simulation {
             partners,
             wall_pairs,
         };
+        let blocks = self.pool.as_ref().filter(|_| par).map(|pool| {
+            let plan = &mut self.plan;
+            plan.prepare(
+                build,
+                forces::BLOCKS_PER_THREAD * pool.current_num_threads(),
+                offsets,
+                partners,
+                in_contact,
+                wall_pairs,
+                wall_history,
+            );
+            (pool, plan)
+        });
         let out = forces::ForceOutputs {
             force: &mut p.force,
             torque: &mut p.torque,
@@ -497,16 +510,8 @@ impl Simulation {
             wall_history,
         };
         let timed = clock.is_some();
-        let wall_seconds = match self.pool.as_ref().filter(|_| par) {
-            Some(pool) => {
-                let plan = &mut self.plan;
-                plan.prepare(
-                    build,
-                    forces::BLOCKS_PER_THREAD * pool.current_num_threads(),
-                    offsets,
-                    partners,
-                    wall_pairs,
-                );
+        let wall_seconds = match blocks {
+            Some((pool, plan)) => {
                 pool.install(|| forces::parallel::<HERTZ, INCREMENTAL>(&x, plan, out, timed))
             }
             None => forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
