@@ -299,40 +299,59 @@ impl NeighborList {
             return true;
         }
         let lim = 0.25 * self.skin * self.skin;
-        let per = self.periodic;
-        let periodic = per.any();
-        let moved = |(x, r): (&Vec3, &Vec3)| {
-            let d = *x - *r;
-            let d2 = if periodic { per.min_image(d) } else { d }.length_squared();
-            d2 > lim || d2.is_nan()
+        // Per axis, the distance to the nearest image: min(|d|, L − |d|) on a periodic axis
+        // (positions lie in the box, so |d| < L), |d| on the others (L = ∞).
+        let l = self.periodic.lengths().to_array();
+        let axes = self.periodic.axes;
+        let period = Vec3::from_array(std::array::from_fn(|k| if axes[k] { l[k] } else { f64::INFINITY }));
+        // The particles that moved too far (or whose position is not a number) are counted,
+        // not searched for: without an early exit the loop has no branch and runs as vector
+        // code.
+        let moved = |xs: &[Vec3], refs: &[Vec3]| {
+            xs.iter()
+                .zip(refs)
+                .map(|(x, r)| {
+                    let a = (*x - *r).abs();
+                    let d2 = a.min(period - a).length_squared();
+                    (d2 > lim) as usize | d2.is_nan() as usize
+                })
+                .sum::<usize>()
+                > 0
         };
         if parallel {
             use rayon::prelude::*;
-            positions.par_iter().zip(&self.reference).with_min_len(4096).any(moved)
+            const PIECE: usize = 8192;
+            positions.par_chunks(PIECE).zip(self.reference.par_chunks(PIECE)).any(|(xs, rs)| moved(xs, rs))
         } else {
-            positions.iter().zip(&self.reference).any(moved)
+            moved(positions, &self.reference)
         }
     }
 
     /// Rebuilds the list if [`needs_rebuild`](Self::needs_rebuild) says so.
     pub fn update(&mut self, particles: &Particles, walls: &[Wall], parallel: bool) {
         if self.needs_rebuild(&particles.position, parallel) {
-            self.build(particles, walls);
+            self.build_on(particles, walls, parallel);
         }
     }
 
     /// Rebuilds the list now, keeping the history of persisting entries.
     pub fn build(&mut self, p: &Particles, walls: &[Wall]) {
+        self.build_on(p, walls, false);
+    }
+
+    /// [`build`](Self::build); with `parallel`, the pairs are found and sorted on the current
+    /// rayon pool (the list is the same).
+    fn build_on(&mut self, p: &Particles, walls: &[Wall], parallel: bool) {
         self.stats.builds += 1;
         self.stats.distance_checks = 0;
         self.reference.clear();
         self.reference.extend_from_slice(&p.position);
         self.built = true;
-        self.build_pairs(p);
+        self.build_pairs(p, parallel);
         self.build_walls(p, walls);
     }
 
-    fn build_pairs(&mut self, p: &Particles) {
+    fn build_pairs(&mut self, p: &Particles, parallel: bool) {
         let n = p.len();
         self.fresh.clear();
         self.fresh.reserve(self.partners.len() + self.partners.len() / 8);
@@ -418,9 +437,7 @@ impl NeighborList {
             let start = &self.cell_count;
             let sorted = &self.sorted;
             let excluded = &self.excluded;
-            let mut checks = 0u64;
-            let mut consider = |i: usize, j: usize, out: &mut Vec<u64>| {
-                checks += 1;
+            let consider = |i: usize, j: usize, out: &mut Vec<u64>| {
                 if !excluded.is_empty() && excluded[i] && excluded[j] {
                     return;
                 }
@@ -439,15 +456,19 @@ impl NeighborList {
                     None
                 }
             };
-            for cz in 0..nz {
+            // The pairs of the cells of layer cz with their half shells, into `out`; returns
+            // the distance tests made.
+            let layer = |cz: usize, out: &mut Vec<u64>| -> u64 {
+                let mut checks = 0u64;
                 for cy in 0..ny {
                     for cx in 0..nx {
                         let c = cx + nx * (cy + ny * cz);
                         let own = &sorted[start[c] as usize..start[c + 1] as usize];
                         for (k, &i) in own.iter().enumerate() {
                             for &j in &own[k + 1..] {
-                                consider(i as usize, j as usize, &mut self.fresh);
+                                consider(i as usize, j as usize, out);
                             }
+                            checks += (own.len() - k - 1) as u64;
                         }
                         for (dx, dy, dz) in HALF_SHELL {
                             let (Some(ox), Some(oy), Some(oz)) = (
@@ -461,16 +482,42 @@ impl NeighborList {
                             let other = &sorted[start[o] as usize..start[o + 1] as usize];
                             for &i in own {
                                 for &j in other {
-                                    consider(i as usize, j as usize, &mut self.fresh);
+                                    consider(i as usize, j as usize, out);
                                 }
                             }
+                            checks += (own.len() * other.len()) as u64;
                         }
                     }
                 }
+                checks
+            };
+            if parallel {
+                use rayon::prelude::*;
+                let layers: Vec<(Vec<u64>, u64)> = (0..nz)
+                    .into_par_iter()
+                    .map(|cz| {
+                        let mut out = Vec::new();
+                        let checks = layer(cz, &mut out);
+                        (out, checks)
+                    })
+                    .collect();
+                for (pairs, checks) in layers {
+                    self.fresh.extend_from_slice(&pairs);
+                    self.stats.distance_checks += checks;
+                }
+            } else {
+                for cz in 0..nz {
+                    self.stats.distance_checks += layer(cz, &mut self.fresh);
+                }
             }
-            self.stats.distance_checks += checks;
         }
-        self.fresh.sort_unstable();
+        if parallel {
+            use rayon::prelude::*;
+            // The keys are distinct: any sort gives the same list.
+            self.fresh.par_sort_unstable();
+        } else {
+            self.fresh.sort_unstable();
+        }
         self.renew_pairs(n);
     }
 
