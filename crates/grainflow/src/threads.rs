@@ -1,8 +1,9 @@
 //! Work shared out over the threads of the current rayon pool with every part pinned to one
-//! thread: part i runs on thread i (modulo the thread count) at every stage of every step. The
-//! particles a thread computes the forces of are then the ones it integrates, and their data
-//! stays in that core's cache instead of moving between cores from stage to stage (work
-//! stealing would hand the parts to whichever thread is free).
+//! thread: part i runs on thread i (modulo the thread count) every time. The force stage uses it
+//! for its blocks, so that a block's histories and accumulators stay in one core's cache from
+//! step to step (work stealing would hand the blocks to whichever thread is free). The
+//! integrators do not: pinned, they waited for both threads each time and measured slower than
+//! work stealing.
 
 use std::sync::Mutex;
 
