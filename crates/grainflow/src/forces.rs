@@ -44,6 +44,7 @@ use crate::contact::geometry::{
 use crate::contact::law::{ContactForce, contact_force, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
 use crate::math::Vec3;
+use crate::threads::split_at_ends;
 use crate::wall::Wall;
 
 /// Below this many particles the force stage runs on one thread (the threads' start-up would
@@ -132,6 +133,12 @@ pub(crate) struct ForcePlan {
 const CONTACT_COST: usize = 7;
 
 impl ForcePlan {
+    /// The blocks of slots, if the plan is for `n` slots (empty otherwise): the per-particle
+    /// stages share the slots out over the threads the same way.
+    pub fn blocks_for(&self, n: usize) -> &[Range<usize>] {
+        if self.blocks.last().is_some_and(|b| b.end == n) { &self.blocks } else { &[] }
+    }
+
     /// Heap bytes held by the plan.
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
@@ -327,19 +334,6 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
     .into_iter()
     .sum();
     wall_seconds / blocks.len().max(1) as f64
-}
-
-/// Splits `s` at the given ends of consecutive parts (the last end must be `s.len()`).
-fn split_at_ends<T>(mut s: &mut [T], ends: impl ExactSizeIterator<Item = usize>) -> Vec<&mut [T]> {
-    let mut parts = Vec::with_capacity(ends.len());
-    let mut at = 0;
-    for end in ends {
-        let (head, tail) = s.split_at_mut(end - at);
-        parts.push(head);
-        s = tail;
-        at = end;
-    }
-    parts
 }
 
 /// Crossing pairs that arrive at a block from rows below it.

@@ -4,8 +4,9 @@
 //! (as products with 1/m and 1/I). Each function integrates the particle slots of the given
 //! runs (ascending, not overlapping); the simulation passes the runs of slots that are not
 //! prescribed (prescribed particles are overwritten after the step, so integrating them would
-//! be wasted work). On threads the runs are shared out in pieces of about equal size: with
-//! particles in a spatial order, held particles cut the slots into hundreds of short runs.
+//! be wasted work). On threads, each thread integrates the slots of one block — the blocks of
+//! the force stage, pinned to the same threads ([`crate::threads`]) — so a particle's state
+//! and accumulators stay in the cache of the core that computes its contacts.
 
 use crate::math::Vec3;
 use crate::state::Particles;
@@ -35,9 +36,6 @@ impl Integrator {
         }
     }
 }
-
-/// Particles per piece of work when integrating on several threads.
-const CHUNK: usize = 4096;
 
 /// The arrays of a run of particle slots that the integrators read and write. The
 /// Adams–Bashforth history is empty unless that integrator runs.
@@ -123,51 +121,45 @@ impl<'a> Slots<'a> {
     }
 }
 
-/// Applies `kernel` to the slots of `runs`, one run (or piece of a run) at a time; with
-/// `parallel`, in pieces of about [`CHUNK`] slots on the current rayon pool (the result is the
-/// same: every particle is updated on its own).
-fn for_slots(p: &mut Particles, runs: &[Range<usize>], parallel: bool, kernel: impl Fn(Slots) + Sync) {
-    /// One run, cut in halves down to `CHUNK`.
-    fn one(s: Slots, kernel: &(impl Fn(Slots) + Sync)) {
-        let n = s.x.len();
-        if n > CHUNK {
-            let (a, b) = s.split_at(n / 2);
-            rayon::join(|| one(a, kernel), || one(b, kernel));
-        } else {
-            kernel(s);
+/// Applies `kernel` to the slots of `runs`, one run at a time. With more than one block in
+/// `blocks` (consecutive ranges of slots from slot 0 to the last particle), the slots of block
+/// i are integrated on thread i of the current rayon pool; the result is the same, every
+/// particle being updated on its own.
+fn for_slots(
+    p: &mut Particles,
+    runs: &[Range<usize>],
+    blocks: &[Range<usize>],
+    kernel: impl Fn(Slots) + Sync,
+) {
+    /// The parts of `runs` within `block`, in `s` whose first slot is `block.start`.
+    fn in_block(s: &mut Slots, block: &Range<usize>, runs: &[Range<usize>], kernel: &impl Fn(Slots)) {
+        let first = runs.partition_point(|r| r.end <= block.start);
+        for r in runs[first..].iter().take_while(|r| r.start < block.end) {
+            let (a, b) = (r.start.max(block.start), r.end.min(block.end));
+            kernel(s.sub(a - block.start..b - block.start));
         }
     }
-    /// The runs `runs` within `s`, whose first slot is `base`: halves of the runs while they
-    /// hold more than `CHUNK` slots.
-    fn many(mut s: Slots, base: usize, runs: &[Range<usize>], kernel: &(impl Fn(Slots) + Sync)) {
-        let slots: usize = runs.iter().map(|r| r.len()).sum();
-        if let [r] = runs {
-            one(s.sub(r.start - base..r.end - base), kernel);
-        } else if slots > CHUNK {
-            let mid = runs.len() / 2;
-            let cut = runs[mid].start;
-            let (a, b) = s.split_at(cut - base);
-            rayon::join(|| many(a, base, &runs[..mid], kernel), || many(b, cut, &runs[mid..], kernel));
-        } else {
-            in_turn(&mut s, base, runs, kernel);
-        }
-    }
-    /// The runs `runs` within `s`, whose first slot is `base`, one after the other.
-    fn in_turn(s: &mut Slots, base: usize, runs: &[Range<usize>], kernel: &impl Fn(Slots)) {
-        for r in runs {
-            kernel(s.sub(r.start - base..r.end - base));
-        }
-    }
-    let (Some(first), Some(last)) = (runs.first(), runs.last()) else {
+    if runs.is_empty() {
         return;
-    };
-    let mut s = Slots::of(p, first.start..last.end);
-    if parallel { many(s, first.start, runs, &kernel) } else { in_turn(&mut s, first.start, runs, &kernel) }
+    }
+    let n = p.len();
+    if blocks.len() < 2 {
+        in_block(&mut Slots::of(p, 0..n), &(0..n), runs, &kernel);
+        return;
+    }
+    let mut parts = Vec::with_capacity(blocks.len());
+    let mut rest = Slots::of(p, 0..n);
+    for block in blocks {
+        let (head, tail) = rest.split_at(block.len());
+        parts.push((head, block));
+        rest = tail;
+    }
+    crate::threads::pinned(parts, |_, (mut s, block)| in_block(&mut s, block, runs, &kernel));
 }
 
 /// MFIX's `EULER` step.
-pub fn euler(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3, dt: f64, parallel: bool) {
-    for_slots(p, runs, parallel, |s| {
+pub fn euler(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3, dt: f64, blocks: &[Range<usize>]) {
+    for_slots(p, runs, blocks, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += dt * a;
@@ -185,10 +177,10 @@ pub fn adams_bashforth(
     gravity: Vec3,
     dt: f64,
     first: bool,
-    parallel: bool,
+    blocks: &[Range<usize>],
 ) {
     let h = 0.5 * dt;
-    for_slots(p, runs, parallel, |s| {
+    for_slots(p, runs, blocks, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             let (a_prev, alpha_prev) = if first { (a, alpha) } else { (s.a_prev[i], s.alpha_prev[i]) };
@@ -204,9 +196,15 @@ pub fn adams_bashforth(
 }
 
 /// Velocity Verlet, first half: kick by Δt/2 with the current accelerations, then drift by Δt.
-pub fn verlet_kick_drift(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3, dt: f64, parallel: bool) {
+pub fn verlet_kick_drift(
+    p: &mut Particles,
+    runs: &[Range<usize>],
+    gravity: Vec3,
+    dt: f64,
+    blocks: &[Range<usize>],
+) {
     let h = 0.5 * dt;
-    for_slots(p, runs, parallel, |s| {
+    for_slots(p, runs, blocks, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += h * a;
@@ -217,9 +215,15 @@ pub fn verlet_kick_drift(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3
 }
 
 /// Velocity Verlet, second half: kick by Δt/2 with the new accelerations.
-pub fn verlet_kick(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3, dt: f64, parallel: bool) {
+pub fn verlet_kick(
+    p: &mut Particles,
+    runs: &[Range<usize>],
+    gravity: Vec3,
+    dt: f64,
+    blocks: &[Range<usize>],
+) {
     let h = 0.5 * dt;
-    for_slots(p, runs, parallel, |s| {
+    for_slots(p, runs, blocks, |s| {
         for i in 0..s.v.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += h * a;

@@ -16,6 +16,7 @@ use crate::boundary::Periodic;
 use crate::math::Vec3;
 use crate::state::Particles;
 use crate::wall::Wall;
+use std::ops::Range;
 
 /// Counters of the neighbour search.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -292,9 +293,10 @@ impl NeighborList {
         self.stats
     }
 
-    /// True when the list was never built or a particle moved more than half the skin. With
-    /// `parallel`, checked on the current rayon pool.
-    pub fn needs_rebuild(&self, positions: &[Vec3], parallel: bool) -> bool {
+    /// True when the list was never built or a particle moved more than half the skin. With two
+    /// or more `blocks` (consecutive ranges of slots from slot 0 to the last particle), the
+    /// slots of block i are checked on thread i of the current rayon pool.
+    pub fn needs_rebuild(&self, positions: &[Vec3], blocks: &[Range<usize>]) -> bool {
         if !self.built || positions.len() != self.reference.len() {
             return true;
         }
@@ -318,19 +320,21 @@ impl NeighborList {
                 .sum::<usize>()
                 > 0
         };
-        if parallel {
-            use rayon::prelude::*;
-            const PIECE: usize = 8192;
-            positions.par_chunks(PIECE).zip(self.reference.par_chunks(PIECE)).any(|(xs, rs)| moved(xs, rs))
-        } else {
+        if blocks.len() < 2 {
             moved(positions, &self.reference)
+        } else {
+            let parts: Vec<_> = blocks.iter().collect();
+            let refs = &self.reference;
+            crate::threads::pinned(parts, |_, b| moved(&positions[b.clone()], &refs[b.clone()]))
+                .contains(&true)
         }
     }
 
-    /// Rebuilds the list if [`needs_rebuild`](Self::needs_rebuild) says so.
-    pub fn update(&mut self, particles: &Particles, walls: &[Wall], parallel: bool) {
-        if self.needs_rebuild(&particles.position, parallel) {
-            self.build_on(particles, walls, parallel);
+    /// Rebuilds the list if [`needs_rebuild`](Self::needs_rebuild) says so; with two or more
+    /// `blocks`, checks and rebuilds on the current rayon pool.
+    pub fn update(&mut self, particles: &Particles, walls: &[Wall], blocks: &[Range<usize>]) {
+        if self.needs_rebuild(&particles.position, blocks) {
+            self.build_on(particles, walls, blocks.len() > 1);
         }
     }
 

@@ -13,6 +13,7 @@ use crate::motion::{self, PrescribedMotion, ResolvedMotion};
 use crate::neighbor::NeighborList;
 use crate::observe::Diagnostics;
 use crate::state::Particles;
+use crate::threads::split_at_ends;
 use crate::timestep::{self, TimeStepChoice, TimeStepRule};
 use crate::wall::Wall;
 
@@ -361,6 +362,16 @@ impl Simulation {
         }
     }
 
+    /// Runs `f` with the simulation on its thread pool (directly when it has none). Steps
+    /// taken inside run on the pool's threads without each being handed over to them, which
+    /// costs several microseconds a step: a caller that takes many steps in a row saves that.
+    pub fn on_pool<R: Send>(&mut self, f: impl FnOnce(&mut Simulation) -> R + Send) -> R {
+        match self.pool.clone() {
+            Some(pool) => pool.install(|| f(self)),
+            None => f(self),
+        }
+    }
+
     /// True when the stages run on the thread pool.
     fn parallel(&self) -> bool {
         self.pool.is_some() && self.particles.len() >= forces::MIN_PARALLEL_PARTICLES
@@ -371,15 +382,17 @@ impl Simulation {
         let start = self.timing.map(|t| (std::time::Instant::now(), t));
         let dt = self.time_step.dt;
         let g = self.gravity;
+        let n = self.particles.len();
         match self.integrator {
             Integrator::Euler => {
                 self.compute_forces();
-                integrate::euler(&mut self.particles, &self.free, g, dt, par);
+                integrate::euler(&mut self.particles, &self.free, g, dt, blocks(&self.plan, par, n));
             }
             Integrator::AdamsBashforth => {
                 self.compute_forces();
                 let first = !self.history_started;
-                integrate::adams_bashforth(&mut self.particles, &self.free, g, dt, first, par);
+                let blocks = blocks(&self.plan, par, n);
+                integrate::adams_bashforth(&mut self.particles, &self.free, g, dt, first, blocks);
             }
             Integrator::VelocityVerlet => {
                 if !self.forces_current {
@@ -387,9 +400,15 @@ impl Simulation {
                     // springs advance once per step, in the evaluation after the drift.
                     self.evaluate_forces(false);
                 }
-                integrate::verlet_kick_drift(&mut self.particles, &self.free, g, dt, par);
+                integrate::verlet_kick_drift(
+                    &mut self.particles,
+                    &self.free,
+                    g,
+                    dt,
+                    blocks(&self.plan, par, n),
+                );
                 self.compute_forces();
-                integrate::verlet_kick(&mut self.particles, &self.free, g, dt, par);
+                integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks(&self.plan, par, n));
             }
         }
         self.history_started = true;
@@ -400,12 +419,12 @@ impl Simulation {
         self.forces_current = !moved;
         if self.periodic.any() {
             let per = self.periodic;
-            if par {
-                use rayon::prelude::*;
-                self.particles.position.par_iter_mut().with_min_len(4096).for_each(|x| *x = per.wrap(*x));
-            } else {
-                for x in &mut self.particles.position {
-                    *x = per.wrap(*x);
+            let wrap = |xs: &mut [Vec3]| xs.iter_mut().for_each(|x| *x = per.wrap(*x));
+            match blocks(&self.plan, par, n) {
+                [] | [_] => wrap(&mut self.particles.position),
+                b => {
+                    let parts = split_at_ends(&mut self.particles.position, b.iter().map(|r| r.end));
+                    crate::threads::pinned(parts, |_, xs| wrap(xs));
                 }
             }
         }
@@ -450,7 +469,8 @@ impl Simulation {
     fn evaluate_forces(&mut self, advance_history: bool) {
         let t0 = self.timing.map(|_| std::time::Instant::now());
         let par = self.parallel();
-        self.neighbors.update(&self.particles, &self.walls, par);
+        let blocks = blocks(&self.plan, par, self.particles.len());
+        self.neighbors.update(&self.particles, &self.walls, blocks);
         if let (Some(t0), Some(t)) = (t0, self.timing.as_mut()) {
             t.neighbor += t0.elapsed().as_secs_f64();
         }
@@ -662,6 +682,13 @@ pub struct ContactInfo {
     pub normal_force: f64,
     /// Magnitude of the tangential force, N.
     pub tangential_force: f64,
+}
+
+/// The blocks by which the per-particle stages share the `n` slots out over the threads: the
+/// force stage's ([`ForcePlan::blocks_for`]), so that each particle is integrated on the thread
+/// that computes its contacts; none (one thread) without `par` or before the first plan.
+fn blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usize>] {
+    if par { plan.blocks_for(n) } else { &[] }
 }
 
 fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {

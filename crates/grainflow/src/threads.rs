@@ -1,9 +1,9 @@
 //! Work shared out over the threads of the current rayon pool with every part pinned to one
 //! thread: part i runs on thread i (modulo the thread count) every time. The force stage uses it
 //! for its blocks, so that a block's histories and accumulators stay in one core's cache from
-//! step to step (work stealing would hand the blocks to whichever thread is free). The
-//! integrators do not: pinned, they waited for both threads each time and measured slower than
-//! work stealing.
+//! step to step (work stealing would hand the blocks to whichever thread is free); the
+//! integrators, the neighbour list's displacement check and the periodic wrap share the slots
+//! out by the same blocks, so each particle's state is read and written on one core.
 
 use std::sync::Mutex;
 
@@ -23,6 +23,19 @@ pub(crate) fn pinned<T: Send, R: Send>(parts: Vec<T>, work: impl Fn(usize, T) ->
     let t = per_thread.len();
     let mut results: Vec<_> = per_thread.into_iter().map(Vec::into_iter).collect();
     (0..n).map(|i| results[i % t].next().expect("one result per part")).collect()
+}
+
+/// Splits `s` at the given ends of consecutive parts (the last end must be `s.len()`).
+pub(crate) fn split_at_ends<T>(mut s: &mut [T], ends: impl ExactSizeIterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut parts = Vec::with_capacity(ends.len());
+    let mut at = 0;
+    for end in ends {
+        let (head, tail) = s.split_at_mut(end - at);
+        parts.push(head);
+        s = tail;
+        at = end;
+    }
+    parts
 }
 
 #[cfg(test)]
