@@ -154,7 +154,7 @@ pub fn run_case(
     case: Case,
     out: &Path,
     options: &RunOptions,
-    mut on_progress: impl FnMut(&Simulation),
+    mut on_progress: impl FnMut(&Simulation) + Send,
 ) -> Result<RunSummary, RunError> {
     let (output, domain, hash) = (case.output, case.domain, case.hash.clone());
     let sim = match &options.restart {
@@ -308,13 +308,28 @@ fn run_simulation(
     hash: &str,
     out: &Path,
     options: &RunOptions,
-    on_progress: &mut dyn FnMut(&Simulation),
+    on_progress: &mut (dyn FnMut(&Simulation) + Send),
 ) -> Result<RunSummary, RunError> {
-    let OutputSettings { interval, snapshots, vtk_interval } = output;
     sim.enable_stage_timing();
     if let Some(t) = options.threads {
         sim.set_threads(t)?;
     }
+    // The whole run on the simulation's threads: handing each step over to them on its own
+    // costs several microseconds a step.
+    sim.on_pool(|sim| run_steps(sim, output, domain, hash, out, options, on_progress))
+}
+
+/// The run loop of [`run_simulation`].
+fn run_steps(
+    sim: &mut Simulation,
+    output: OutputSettings,
+    domain: (Vec3, Vec3),
+    hash: &str,
+    out: &Path,
+    options: &RunOptions,
+    on_progress: &mut (dyn FnMut(&Simulation) + Send),
+) -> Result<RunSummary, RunError> {
+    let OutputSettings { interval, snapshots, vtk_interval } = output;
     let mut output_seconds = 0.0;
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let snap_dir = out.join("snapshots");
@@ -367,21 +382,21 @@ fn run_simulation(
         Ok(())
     };
 
-    if let Some(problem) = health_problem(&sim, domain) {
+    if let Some(problem) = health_problem(sim, domain) {
         return Err(RunError::Engine(grainflow::EngineError::BadReference(problem)));
     }
     let mut last_good =
-        LastGood::new(&sim, hash, out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
+        LastGood::new(sim, hash, out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
     let (first, mut outputs) = if start_step == 0 || start_step.is_multiple_of(every) {
-        (emit(&sim, &mut ts, &mut files)?, 1)
+        (emit(sim, &mut ts, &mut files)?, 1)
     } else {
         (sim.diagnostics(), 0)
     };
-    write_vtk(&sim, start_step == 0 || start_step.is_multiple_of(every))?;
-    on_progress(&sim);
+    write_vtk(sim, start_step == 0 || start_step.is_multiple_of(every))?;
+    on_progress(sim);
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
     let mut checkpoint = None;
@@ -393,7 +408,7 @@ fn run_simulation(
         let end = sim.finished();
         let output_now = step.is_multiple_of(every) || end;
         if step.is_multiple_of(HEALTH_EVERY) || output_now {
-            if let Some(message) = health_problem(&sim, domain) {
+            if let Some(message) = health_problem(sim, domain) {
                 let (good_step, saved) = last_good.save()?;
                 ts.finish().map_err(io_err(&ts_path))?;
                 return Err(RunError::Unhealthy { message, good_step, saved });
@@ -401,18 +416,18 @@ fn run_simulation(
             // Keeping a copy of the state costs a pass over it: refresh it at outputs and
             // every tenth check, not at every check.
             if output_now || step.is_multiple_of(10 * HEALTH_EVERY) {
-                last_good.keep(&sim)?;
+                last_good.keep(sim)?;
             }
         }
         let t_out = Instant::now();
         if output_now {
-            last = emit(&sim, &mut ts, &mut files)?;
+            last = emit(sim, &mut ts, &mut files)?;
             outputs += 1;
         }
-        write_vtk(&sim, end)?;
+        write_vtk(sim, end)?;
         output_seconds += t_out.elapsed().as_secs_f64();
         if step.is_multiple_of(progress_every) || end {
-            on_progress(&sim);
+            on_progress(sim);
         }
         let due = match options.checkpoint_every {
             Some(CheckpointEvery::Steps(n)) => n > 0 && step.is_multiple_of(n),
@@ -421,17 +436,17 @@ fn run_simulation(
         };
         let stop = options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
         if (due || stop) && !end {
-            write_checkpoint(&sim)?;
+            write_checkpoint(sim)?;
             checkpoint = Some(checkpoint_path.clone());
             last_checkpoint = Instant::now();
         }
         if stop && !end {
             if !output_now {
-                last = emit(&sim, &mut ts, &mut files)?;
+                last = emit(sim, &mut ts, &mut files)?;
                 outputs += 1;
             }
             interrupted = true;
-            on_progress(&sim);
+            on_progress(sim);
             break;
         }
     }
