@@ -21,7 +21,9 @@
 //! law is the same function as for a single contact, written without data-dependent
 //! branches; the AVX2 and AVX-512 copies of the loop round exactly as scalar code does (no
 //! fused multiply–add), so results do not depend on the processor
-//! (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`).
+//! (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`). On beds too large
+//! for the processor's caches, the contact test asks a few rows ahead for the data of the
+//! particles about to come within the pairs' reach ([`prefetch_ahead`]).
 //!
 //! ## Threads
 //! The slots are cut into blocks of consecutive rows with about equal work (pairs to test,
@@ -400,12 +402,61 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
         lanes.input.fill_coeffs(c);
     }
     while cursor.a < r1 {
-        let n = find_contacts(x, r0..r1, &mut cursor, in_contact, &mut found);
+        let n = find_contacts(x, r0..r1, [&*force, &*torque], &mut cursor, in_contact, &mut found);
         for group in found[..n].chunks(LANES) {
             lanes.add_loads::<HERTZ, INCREMENTAL>(x, r0..r1, group, &mut crossing, force, torque, hist);
         }
     }
     wall_seconds
+}
+
+/// From this many particles on, the contact test asks for the data ahead of it
+/// ([`prefetch_ahead`]): their arrays no longer fit the processor's last-level cache, and the
+/// data entering the stretch the pairs reach comes from memory. With fewer, the requests only
+/// cost time: the 10 000-particle beds ran 6-10 % slower with them, the 1 000 000-particle bed
+/// 5-18 % faster.
+const PREFETCH_MIN_PARTICLES: usize = 200_000;
+
+/// Rows ahead of the contact test whose farthest partner's data [`prefetch_ahead`] asks for.
+const AHEAD: usize = 8;
+
+/// Asks the processor to bring into its caches the data of the farthest partner of row
+/// a + [`AHEAD`]: the particle about to enter the stretch of slots the rows' pairs reach (the
+/// slots behind it are in cache already). `acc` are the rows' accumulators (from slot
+/// `rows.start`). A hint only; nothing is read.
+#[inline(always)]
+fn prefetch_ahead(x: &ForceInputs, a: usize, rows: Range<usize>, acc: [&[Vec3]; 2]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T1, _mm_prefetch};
+        let row = (a + AHEAD).min(rows.end - 1);
+        let (start, end) = (x.offsets[row], x.offsets[row + 1]);
+        if end == start {
+            return;
+        }
+        let b = x.partners[end - 1] as usize;
+        let at = |s: &[Vec3], i: usize| s.get(i).map(|v| (v as *const Vec3).cast::<i8>());
+        let local = b.checked_sub(rows.start).unwrap_or(usize::MAX);
+        let wanted = [
+            at(x.position, b),
+            at(x.velocity, b),
+            at(x.omega, b),
+            at(acc[0], local),
+            at(acc[1], local),
+            x.radius.get(b).map(|r| (r as *const f64).cast::<i8>()),
+            x.mass.get(b).map(|m| (m as *const f64).cast::<i8>()),
+        ];
+        for p in wanted.into_iter().flatten() {
+            // SAFETY: a prefetch reads nothing and cannot fault; the address is of a live
+            // element besides.
+            #[allow(unsafe_code)]
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T1>(p)
+            };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (x, a, rows, acc);
 }
 
 /// Touching pairs listed per stretch of rows.
@@ -430,11 +481,13 @@ struct Cursor {
 /// computed before), until the rows end or `found` is full, and returns how many it listed;
 /// sets the contact flags of the pairs tested (`in_contact` holds those of the rows' pairs).
 /// The test does not branch on its outcome (which no predictor could guess): every pair is
-/// written into the next place, which only a touching pair keeps.
+/// written into the next place, which only a touching pair keeps. `acc` are the rows'
+/// accumulators, for [`prefetch_ahead`].
 #[inline(never)]
 fn find_contacts(
     x: &ForceInputs,
     rows: Range<usize>,
+    acc: [&[Vec3]; 2],
     cursor: &mut Cursor,
     in_contact: &mut [bool],
     found: &mut [Found; FOUND],
@@ -443,9 +496,13 @@ fn find_contacts(
     let k0 = x.offsets[r0];
     let mut n = 0;
     let Cursor { mut a, mut k } = *cursor;
+    let far = x.position.len() >= PREFETCH_MIN_PARTICLES;
     while a < r1 {
         let (xa, ra) = (x.position[a], x.radius[a]);
         let end = x.offsets[a + 1];
+        if far {
+            prefetch_ahead(x, a, r0..r1, acc);
+        }
         while k < end {
             if n == FOUND {
                 *cursor = Cursor { a, k };
