@@ -2,9 +2,9 @@
 # grainflow against LAMMPS and LIGGGHTS on the three yardstick cases of ../shared/peers/, in
 # the same session: (1) physics — from the same LAMMPS state, the kinetic energy after 1 000
 # steps in both codes; (2) speed — particle-steps per second, median of RUNS runs each: LAMMPS
-# and LIGGGHTS on one core, grainflow on 1 and 2 threads, and the ratios. Results go to
-# bench/results/<date>-<host>.md with a machine description. Installs the peers from Debian's
-# packages if they are missing.
+# and LIGGGHTS on one core, grainflow on 1 and 2 threads, and the ratios. Results go on top of
+# bench/results/<date>-<host>.md (the day's earlier runs stay below) with a machine
+# description. Installs the peers from Debian's packages if they are missing.
 #
 #   bench/compare-peers.sh              (RUNS=3 NRUN=2000 by default)
 set -euo pipefail
@@ -42,6 +42,8 @@ declare -A LMP_IN=( [box_hm]="$PEERS/lammps/in.box_walls_run.lmp -var model hm -
                     [box_lsd]="$PEERS/lammps/in.box_walls_run.lmp -var model lsd -var data $DATA/box_lsd_settled.data"
                     [chute]="$PEERS/lammps/in.chute_like_run.lmp -var data $DATA/chute_eq.data" )
 out="$ROOT/bench/results/$(date +%Y-%m-%d)-$(hostname).md"
+# This run's section, put on top of the day's file at the end (written whole, then renamed).
+new=$(mktemp)
 {
   echo "# grainflow vs LAMMPS and LIGGGHTS, $(date -u +%Y-%m-%dT%H:%MZ)"
   echo
@@ -51,7 +53,7 @@ out="$ROOT/bench/results/$(date +%Y-%m-%d)-$(hostname).md"
   echo
   echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS | LIGGGHTS | grainflow 1 thread | ÷ LAMMPS | ÷ LIGGGHTS | grainflow 2 threads | 2 threads ÷ 1 |"
   echo "|---|---|---|---|---|---|---|---|---|---|---|"
-} > "$out"
+} > "$new"
 for c in box_hm box_lsd chute; do
   # Physics: 1 000 steps from the same state.
   lmp -in ${LMP_IN[$c]} -var nrun 1000 -log lmp.$c.1000 -screen none
@@ -77,13 +79,20 @@ for c in box_hm box_lsd chute; do
       $GF run $c.speed.toml -j $j --out gf.$c.t$i -q | awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'
     done | median > gf.$c.speed.$j
   done
-  python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat lig.$c.speed)" "$(cat gf.$c.speed.1)" "$(cat gf.$c.speed.2)" >> "$out" <<'PY'
+  python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat lig.$c.speed)" "$(cat gf.$c.speed.1)" "$(cat gf.$c.speed.2)" >> "$new" <<'PY'
 import sys
 c = sys.argv[1]
 kl, kg, sl, sli, g1, g2 = map(float, sys.argv[2:])
 print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sli:.2f} | {g1:.2f} | {g1/sl:.2f} | {g1/sli:.2f} | {g2:.2f} | {g2/g1:.2f} |")
 PY
 done
-echo >> "$out"
-echo "Speeds are medians of $RUNS runs of $NRUN steps, in millions of particle-steps per second." >> "$out"
-cat "$out"
+echo >> "$new"
+echo "Speeds are medians of $RUNS runs of $NRUN steps, in millions of particle-steps per second." >> "$new"
+if [ -f "$out" ]; then
+  { cat "$new"; echo; cat "$out"; } > "$out.tmp"
+else
+  cp "$new" "$out.tmp"
+fi
+mv "$out.tmp" "$out"
+cat "$new"
+rm -f "$new"
