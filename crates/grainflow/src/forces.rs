@@ -23,18 +23,18 @@
 //! fused multiply–add), so results do not depend on the processor
 //! (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`). On beds too large
 //! for the processor's caches, the contact test asks a few rows ahead for the data of the
-//! particles about to come within the pairs' reach ([`prefetch_ahead`]).
+//! particles about to come within the pairs' reach (`prefetch_ahead`).
 //!
 //! ## Threads
 //! The slots are cut into blocks of consecutive rows with about equal work (pairs to test,
-//! touching pairs weighted by their larger cost: [`ForcePlan::prepare`]). A pair whose
+//! touching pairs weighted by their larger cost: `ForcePlan::prepare`). A pair whose
 //! two particles lie in one block is computed by that block's thread, which adds it to both
 //! particles directly. A pair (a, b) with b in a later block (a *crossing* pair) is computed
 //! first, in a pass shared evenly over all threads (the crossing pairs all lie in the lower
 //! blocks), and kept; its block then adds it to a in a's row, and b's block adds it to b before
 //! any of its own rows — where the order above puts it, since its row lies below b's block. One
 //! block is the serial loop itself. With particles in a spatial order (`[particles] order =
-//! "spatial"`) few pairs cross. Block t always runs on thread t ([`crate::threads`]), so its
+//! "spatial"`) few pairs cross. Block t always runs on thread t (the `threads` module), so its
 //! histories and accumulators stay in one core's cache from step to step.
 
 use std::ops::Range;

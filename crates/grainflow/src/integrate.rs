@@ -5,7 +5,7 @@
 //! runs (ascending, not overlapping); the simulation passes the runs of slots that are not
 //! prescribed (prescribed particles are overwritten after the step, so integrating them would
 //! be wasted work). On threads, each thread integrates the slots of one block — the blocks of
-//! the force stage, pinned to the same threads ([`crate::threads`]) — so a particle's state
+//! the force stage, pinned to the same threads (the `threads` module) — so a particle's state
 //! and accumulators stay in the cache of the core that computes its contacts.
 
 use crate::math::Vec3;
