@@ -157,7 +157,7 @@ pub fn run_case(
     mut on_progress: impl FnMut(&Simulation) + Send,
 ) -> Result<RunSummary, RunError> {
     let (output, domain, hash) = (case.output, case.domain, case.hash.clone());
-    let sim = match &options.restart {
+    let mut sim = match &options.restart {
         None => Simulation::new(case.config, case.particles)?,
         Some(path) => {
             let restart_err = |message: String| RunError::Restart { path: path.clone(), message };
@@ -178,7 +178,13 @@ pub fn run_case(
             })?
         }
     };
-    run_simulation(sim, output, domain, &hash, out, options, &mut on_progress)
+    sim.enable_stage_timing();
+    if let Some(t) = options.threads {
+        sim.set_threads(t)?;
+    }
+    // The whole run on the simulation's threads: handing each step over to them on its own
+    // costs several microseconds a step.
+    sim.on_pool(|sim| run_simulation(sim, output, domain, &hash, out, options, &mut on_progress))
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
@@ -302,25 +308,6 @@ pub fn health_problem(sim: &Simulation, domain: (Vec3, Vec3)) -> Option<String> 
 }
 
 fn run_simulation(
-    mut sim: Simulation,
-    output: OutputSettings,
-    domain: (Vec3, Vec3),
-    hash: &str,
-    out: &Path,
-    options: &RunOptions,
-    on_progress: &mut (dyn FnMut(&Simulation) + Send),
-) -> Result<RunSummary, RunError> {
-    sim.enable_stage_timing();
-    if let Some(t) = options.threads {
-        sim.set_threads(t)?;
-    }
-    // The whole run on the simulation's threads: handing each step over to them on its own
-    // costs several microseconds a step.
-    sim.on_pool(|sim| run_steps(sim, output, domain, hash, out, options, on_progress))
-}
-
-/// The run loop of [`run_simulation`].
-fn run_steps(
     sim: &mut Simulation,
     output: OutputSettings,
     domain: (Vec3, Vec3),
