@@ -434,8 +434,10 @@ fn prefetch_ahead(x: &ForceInputs, a: usize, rows: Range<usize>, acc: [&[Vec3]; 
         if end == start {
             return;
         }
+        fn at<T>(s: &[T], i: usize) -> Option<*const i8> {
+            s.get(i).map(|v| (v as *const T).cast())
+        }
         let b = x.partners[end - 1] as usize;
-        let at = |s: &[Vec3], i: usize| s.get(i).map(|v| (v as *const Vec3).cast::<i8>());
         let local = b.checked_sub(rows.start).unwrap_or(usize::MAX);
         let wanted = [
             at(x.position, b),
@@ -443,8 +445,8 @@ fn prefetch_ahead(x: &ForceInputs, a: usize, rows: Range<usize>, acc: [&[Vec3]; 
             at(x.omega, b),
             at(acc[0], local),
             at(acc[1], local),
-            x.radius.get(b).map(|r| (r as *const f64).cast::<i8>()),
-            x.mass.get(b).map(|m| (m as *const f64).cast::<i8>()),
+            at(x.radius, b),
+            at(x.mass, b),
         ];
         for p in wanted.into_iter().flatten() {
             // SAFETY: a prefetch reads nothing and cannot fault; the address is of a live

@@ -386,12 +386,12 @@ impl Simulation {
         match self.integrator {
             Integrator::Euler => {
                 self.compute_forces();
-                integrate::euler(&mut self.particles, &self.free, g, dt, blocks(&self.plan, par, n));
+                integrate::euler(&mut self.particles, &self.free, g, dt, thread_blocks(&self.plan, par, n));
             }
             Integrator::AdamsBashforth => {
                 self.compute_forces();
                 let first = !self.history_started;
-                let blocks = blocks(&self.plan, par, n);
+                let blocks = thread_blocks(&self.plan, par, n);
                 integrate::adams_bashforth(&mut self.particles, &self.free, g, dt, first, blocks);
             }
             Integrator::VelocityVerlet => {
@@ -405,10 +405,16 @@ impl Simulation {
                     &self.free,
                     g,
                     dt,
-                    blocks(&self.plan, par, n),
+                    thread_blocks(&self.plan, par, n),
                 );
                 self.compute_forces();
-                integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks(&self.plan, par, n));
+                integrate::verlet_kick(
+                    &mut self.particles,
+                    &self.free,
+                    g,
+                    dt,
+                    thread_blocks(&self.plan, par, n),
+                );
             }
         }
         self.history_started = true;
@@ -420,7 +426,7 @@ impl Simulation {
         if self.periodic.any() {
             let per = self.periodic;
             let wrap = |xs: &mut [Vec3]| xs.iter_mut().for_each(|x| *x = per.wrap(*x));
-            match blocks(&self.plan, par, n) {
+            match thread_blocks(&self.plan, par, n) {
                 [] | [_] => wrap(&mut self.particles.position),
                 b => {
                     let parts = split_at_ends(&mut self.particles.position, b.iter().map(|r| r.end));
@@ -469,7 +475,7 @@ impl Simulation {
     fn evaluate_forces(&mut self, advance_history: bool) {
         let t0 = self.timing.map(|_| std::time::Instant::now());
         let par = self.parallel();
-        let blocks = blocks(&self.plan, par, self.particles.len());
+        let blocks = thread_blocks(&self.plan, par, self.particles.len());
         self.neighbors.update(&self.particles, &self.walls, blocks);
         if let (Some(t0), Some(t)) = (t0, self.timing.as_mut()) {
             t.neighbor += t0.elapsed().as_secs_f64();
@@ -687,7 +693,7 @@ pub struct ContactInfo {
 /// The blocks by which the per-particle stages share the `n` slots out over the threads: the
 /// force stage's ([`ForcePlan::blocks_for`]), so that each particle is integrated on the thread
 /// that computes its contacts; none (one thread) without `par` or before the first plan.
-fn blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usize>] {
+fn thread_blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usize>] {
     if par { plan.blocks_for(n) } else { &[] }
 }
 
