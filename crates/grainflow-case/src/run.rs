@@ -96,6 +96,10 @@ pub struct RunSummary {
     pub output_seconds: f64,
     /// Files written.
     pub files: Vec<PathBuf>,
+    /// Pairs in the neighbour list at the end (each pair once).
+    pub neighbor_pairs: usize,
+    /// Neighbour-list builds in this invocation.
+    pub neighbor_builds: u64,
 }
 
 /// A file that could not be written.
@@ -384,6 +388,7 @@ fn run_simulation(
     };
     write_vtk(sim, start_step == 0 || start_step.is_multiple_of(every))?;
     on_progress(sim);
+    let builds_before = sim.neighbors().stats().builds;
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
     let mut checkpoint = None;
@@ -470,5 +475,7 @@ fn run_simulation(
         stages: sim.stage_times().unwrap_or_default(),
         output_seconds,
         files,
+        neighbor_pairs: sim.neighbors().pair_count(),
+        neighbor_builds: sim.neighbors().stats().builds - builds_before,
     })
 }

@@ -261,6 +261,13 @@ pub fn main(args: RunArgs) -> ExitCode {
                 s.threads,
                 if s.threads == 1 { "" } else { "s" }
             );
+            println!(
+                "neighbour list: {} pairs ({:.2} per particle) at the end, rebuilt {} times in {} steps",
+                s.neighbor_pairs,
+                s.neighbor_pairs as f64 / n.max(1) as f64,
+                s.neighbor_builds,
+                s.steps
+            );
             let m = s.memory;
             let per = |b: usize| b as f64 / n.max(1) as f64;
             println!(
