@@ -98,6 +98,17 @@ impl Periodic {
         if self.any() { self.min_image(d) } else { d }
     }
 
+    /// The nearest-image rule in the form the contact loops use ([`Images`]).
+    pub(crate) fn images(&self) -> Images {
+        let l = self.lengths().to_array();
+        let pick = |k: usize, v: f64| if self.axes[k] { v } else { 0.0 };
+        Images {
+            any: self.any(),
+            length: Vec3::new(pick(0, l[0]), pick(1, l[1]), pick(2, l[2])),
+            inverse: Vec3::new(pick(0, 1.0 / l[0]), pick(1, 1.0 / l[1]), pick(2, 1.0 / l[2])),
+        }
+    }
+
     /// A position brought back into [lo, hi) on the periodic axes. A coordinate already inside
     /// is left exactly as it is (the common case, checked first: a step moves few particles
     /// across a face).
@@ -114,6 +125,39 @@ impl Periodic {
     }
 }
 
+/// [`Periodic::nearest`] without a branch on the separation, for the contact loops, where
+/// the branches of [`Periodic::min_image`] cost more than the arithmetic: the shift along each
+/// axis is n·L with n = round(d/L), and n and L are zero on the axes that are not periodic.
+///
+/// For every separation shorter than half the box, and so for every pair that can touch or
+/// come within a neighbour cut-off (the box is at least three cut-offs long), the result is
+/// [`Periodic::min_image`]'s to the bit: d − 1·L, d − 0·L and d − (−1)·L round exactly as
+/// d − L, d and d + L.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Images {
+    any: bool,
+    /// L on the periodic axes, 0 on the others.
+    length: Vec3,
+    /// 1/L on the periodic axes, 0 on the others.
+    inverse: Vec3,
+}
+
+impl Images {
+    /// Adding and subtracting 1.5·2^52 rounds a number of magnitude below 2^51 to an integer
+    /// (to nearest, ties to even), with the instructions every x86-64 processor has.
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+
+    /// `d` itself if no axis is periodic, else its nearest image.
+    #[inline(always)]
+    pub fn nearest(&self, d: Vec3) -> Vec3 {
+        if !self.any {
+            return d;
+        }
+        let n = (d * self.inverse + Vec3::splat(Self::ROUND)) - Vec3::splat(Self::ROUND);
+        d - n * self.length
+    }
+}
+
 /// `x` brought into [lo, hi).
 #[cold]
 fn wrap_coordinate(x: f64, lo: f64, hi: f64) -> f64 {
@@ -125,6 +169,36 @@ fn wrap_coordinate(x: f64, lo: f64, hi: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The branch-free nearest image is `min_image` to the bit wherever the two rules can
+        /// matter (|d| below half the box on each periodic axis, so for any pair within a
+        /// neighbour cut-off), and otherwise still lands within half a box (+ rounding).
+        #[test]
+        fn images_are_min_image_to_the_bit(
+            lengths in prop::array::uniform3(0.05f64..50.0),
+            axes in prop::array::uniform3(any::<bool>()),
+            // Separations between two points of the box: (−L, L) on each axis.
+            fractions in prop::array::uniform3(-0.999f64..0.999),
+        ) {
+            let lo = Vec3::new(-0.3, 1.7, 0.0);
+            let per = Periodic { lo, hi: lo + Vec3::from_array(lengths), axes };
+            let l = per.lengths().to_array();
+            let d = Vec3::new(fractions[0] * l[0], fractions[1] * l[1], fractions[2] * l[2]);
+            let (fast, reference) = (per.images().nearest(d).to_array(), per.nearest(d).to_array());
+            for k in 0..3 {
+                if (d.to_array()[k].abs() - 0.5 * l[k]).abs() > 1e-9 * l[k] {
+                    prop_assert_eq!(fast[k].to_bits(), reference[k].to_bits(), "axis {}", k);
+                }
+                if axes[k] {
+                    prop_assert!(fast[k].abs() <= 0.5 * l[k] * (1.0 + 1e-12));
+                } else {
+                    prop_assert_eq!(fast[k].to_bits(), d.to_array()[k].to_bits());
+                }
+            }
+        }
+    }
 
     #[test]
     fn wrapping_keeps_inside_coordinates_and_brings_the_others_into_the_box() {

@@ -39,7 +39,7 @@
 
 use std::ops::Range;
 
-use crate::boundary::Periodic;
+use crate::boundary::{Images, Periodic};
 use crate::contact::geometry::{
     ContactGeometry, pair_contact_separation, pair_geometry, pair_touching, relative_velocity, wall_contact,
 };
@@ -80,7 +80,8 @@ pub(crate) struct ForceInputs<'a> {
     pub walls: &'a [Wall],
     pub coeffs: &'a CoeffTable,
     pub law: ContactLaw,
-    pub periodic: Periodic,
+    /// The nearest-image rule of the periodic axes.
+    pub images: Images,
     /// Δt for the tangential springs (0 when the history is not advanced).
     pub dt: f64,
     /// Store the advanced tangential springs.
@@ -512,7 +513,7 @@ fn find_contacts(
             }
             let b = x.partners[k] as usize;
             let (keep, fresh) = if b < r1 {
-                let d = x.periodic.nearest(x.position[b] - xa);
+                let d = x.images.nearest(x.position[b] - xa);
                 let touching = pair_touching(d.length_squared(), ra, x.radius[b]);
                 let flag = &mut in_contact[k - k0];
                 let fresh = !*flag;
@@ -740,7 +741,7 @@ impl Lanes {
             if b < r1 {
                 // The separation again, rather than kept from the contact test: the listing
                 // stays small, and these positions are in cache.
-                let d = x.periodic.nearest(x.position[b] - x.position[a]);
+                let d = x.images.nearest(x.position[b] - x.position[a]);
                 let p = pair_input(x, a, b, d, kept_or_zero(hist[k - k0], !f.fresh));
                 if uniform {
                     // The coefficient lanes hold the one set of coefficients already.
@@ -891,7 +892,7 @@ mod simd {
 /// x_b − x_a (nearest image) if pair (a, b) touches.
 #[inline(always)]
 fn touching_pair(x: &ForceInputs, a: usize, b: usize) -> Option<Vec3> {
-    let d = x.periodic.nearest(x.position[b] - x.position[a]);
+    let d = x.images.nearest(x.position[b] - x.position[a]);
     pair_touching(d.length_squared(), x.radius[a], x.radius[b]).then_some(d)
 }
 

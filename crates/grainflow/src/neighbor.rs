@@ -441,12 +441,13 @@ impl NeighborList {
             let start = &self.cell_count;
             let sorted = &self.sorted;
             let excluded = &self.excluded;
+            let images = per.images();
             let consider = |i: usize, j: usize, out: &mut Vec<u64>| {
                 if !excluded.is_empty() && excluded[i] && excluded[j] {
                     return;
                 }
                 let cut = p.radius[i] + p.radius[j] + skin;
-                if per.min_image(p.position[j] - p.position[i]).length_squared() < cut * cut {
+                if images.nearest(p.position[j] - p.position[i]).length_squared() < cut * cut {
                     let (a, b) = if i < j { (i, j) } else { (j, i) };
                     out.push(pair_key(a as u32, b as u32));
                 }

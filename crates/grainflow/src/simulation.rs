@@ -508,7 +508,7 @@ impl Simulation {
             walls: &self.walls,
             coeffs: &self.coeffs,
             law: self.law,
-            periodic: self.periodic,
+            images: self.periodic.images(),
             dt: if advance_history { self.time_step.dt } else { 0.0 },
             advance: advance_history,
             offsets,
