@@ -19,8 +19,12 @@
 //! computes a batch's loads in one loop that compiles to vector instructions, and adds them to
 //! the particles in list order — the order above — storing the new histories. The contact
 //! law is the same function as for a single contact, written without data-dependent
-//! branches; the AVX2 and AVX-512 copies of the loop round exactly as scalar code does (no
-//! fused multiply–add), so results do not depend on the processor
+//! branches: it forms the value of every setting and picks one. So the batch loop is also
+//! compiled for the common settings (LAMMPS's two laws, MFIX's) with only the parts of the law
+//! they pick (`contact::law::parts`), which spares several square roots and divisions per
+//! contact. Where the build does not assume them, AVX2 and AVX-512 copies of the loop are
+//! used on processors that have them; they round exactly as scalar code does (no fused
+//! multiply–add), so results do not depend on the processor
 //! (`tests::batched_loads_equal_the_scalar_law_on_every_instruction_set`). On beds too large
 //! for the processor's caches, the contact test asks a few rows ahead for the data of the
 //! particles about to come within the pairs' reach (`prefetch_ahead`).
@@ -43,7 +47,7 @@ use crate::boundary::{Images, Periodic};
 use crate::contact::geometry::{
     ContactGeometry, pair_contact_separation, pair_geometry, pair_touching, relative_velocity, wall_contact,
 };
-use crate::contact::law::{ContactForce, contact_force, rolling_torque};
+use crate::contact::law::{ContactForce, contact_force_for, parts, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
 use crate::math::Vec3;
 use crate::threads::split_at_ends;
@@ -751,7 +755,13 @@ impl Lanes {
                 }
             }
         }
-        contact_loads::<HERTZ, INCREMENTAL, false>(&x.law, x.dt, &self.input, &mut self.output);
+        contact_loads::<HERTZ, INCREMENTAL, false>(
+            &x.law,
+            x.coeffs.rolling(),
+            x.dt,
+            &self.input,
+            &mut self.output,
+        );
         for (i, f) in group.iter().enumerate() {
             let (a, b, k) = (f.a as usize, x.partners[f.k] as usize, f.k);
             let l = if b < r1 {
@@ -804,7 +814,13 @@ impl Lanes {
                 self.input.set(lane, &input);
             }
         }
-        contact_loads::<HERTZ, INCREMENTAL, true>(&x.law, x.dt, &self.input, &mut self.output);
+        contact_loads::<HERTZ, INCREMENTAL, true>(
+            &x.law,
+            x.coeffs.rolling(),
+            x.dt,
+            &self.input,
+            &mut self.output,
+        );
         for (lane, &j) in group.iter().enumerate() {
             let i = wall_pairs[j][0] as usize;
             let (l, h) = self.output.get(lane);
@@ -817,35 +833,64 @@ impl Lanes {
     }
 }
 
+/// LAMMPS's `granular hertz/material … tangential mindlin … damping tsuji` (the rotated
+/// history, its Coulomb cap, Tsuji damping): the Hertz–Mindlin yardstick case.
+const LAMMPS_MINDLIN: u8 = parts::LAMMPS_CAP | parts::ROTATE | parts::TSUJI;
+
 /// The loads of a batch of touching pairs ([`pair_law`] on every lane) or, with `WALL`, of
-/// particles touching walls ([`wall_law`]). The loop has no branches, so it compiles to vector
-/// instructions; where the processor has wider ones than the build assumes (AVX2, AVX-512), a
-/// copy compiled for them is used. Vector and scalar instructions round alike (IEEE 754, no
-/// fused multiply–add), so every copy gives the same bits.
+/// particles touching walls ([`wall_law`]); `rolling` if some contact has rolling friction.
+///
+/// The loop has no branches, so it compiles to vector instructions. It is compiled for the
+/// settings most runs use — LAMMPS's `gran/hooke/history` and `granular … mindlin … tsuji`,
+/// MFIX's law — with only the parts of the law they pick ([`parts`]), and once for any
+/// settings; the values are the same.
 #[inline(always)]
 fn contact_loads<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+    law: &ContactLaw,
+    rolling: bool,
+    dt: f64,
+    input: &InputLanes,
+    output: &mut OutputLanes,
+) {
+    match parts::needed(law, rolling) {
+        parts::LAMMPS_CAP => {
+            loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::LAMMPS_CAP }>(law, dt, input, output)
+        }
+        LAMMPS_MINDLIN => loads_widest::<HERTZ, INCREMENTAL, WALL, LAMMPS_MINDLIN>(law, dt, input, output),
+        parts::MFIX_CAP => {
+            loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::MFIX_CAP }>(law, dt, input, output)
+        }
+        _ => loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::ALL }>(law, dt, input, output),
+    }
+}
+
+/// [`loads_lanes`], in a copy compiled for AVX-512 or AVX2 where the processor has them and
+/// the build does not assume them. Vector and scalar instructions round alike (IEEE 754, no
+/// fused multiply–add), so every copy gives the same bits.
+#[inline(always)]
+fn loads_widest<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     input: &InputLanes,
     output: &mut OutputLanes,
 ) {
-    #[cfg(target_arch = "x86_64")]
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
     #[allow(unsafe_code)]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the processor has AVX-512F (checked just above).
-            return unsafe { simd::loads_avx512::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked just above).
-            return unsafe { simd::loads_avx2::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output) };
-        }
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the processor has AVX-512F (checked just above).
+        return unsafe { simd::loads_avx512::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output) };
     }
-    loads_lanes::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output)
+    #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+    #[allow(unsafe_code)]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2 (checked just above).
+        return unsafe { simd::loads_avx2::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output) };
+    }
+    loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output)
 }
 
 #[inline(always)]
-fn loads_lanes<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+fn loads_lanes<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     input: &InputLanes,
@@ -855,37 +900,48 @@ fn loads_lanes<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
     for i in 0..LANES {
         let p = input.get(i);
         let load = if WALL {
-            wall_law::<HERTZ, INCREMENTAL>(&law, dt, &p)
+            wall_law::<HERTZ, INCREMENTAL, PARTS>(&law, dt, &p)
         } else {
-            pair_law::<HERTZ, INCREMENTAL>(&law, dt, &p)
+            pair_law::<HERTZ, INCREMENTAL, PARTS>(&law, dt, &p)
         };
         output.set(i, load);
     }
 }
 
-/// [`contact_loads`] compiled for wider vector units.
-#[cfg(target_arch = "x86_64")]
+/// [`loads_lanes`] compiled for wider vector units than the build assumes.
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
 mod simd {
     use super::*;
 
     #[target_feature(enable = "avx512f")]
-    pub(super) fn loads_avx512<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+    pub(super) fn loads_avx512<
+        const HERTZ: bool,
+        const INCREMENTAL: bool,
+        const WALL: bool,
+        const PARTS: u8,
+    >(
         law: &ContactLaw,
         dt: f64,
         input: &InputLanes,
         output: &mut OutputLanes,
     ) {
-        loads_lanes::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output)
+        loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output)
     }
 
+    #[cfg(not(target_feature = "avx2"))]
     #[target_feature(enable = "avx2")]
-    pub(super) fn loads_avx2<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+    pub(super) fn loads_avx2<
+        const HERTZ: bool,
+        const INCREMENTAL: bool,
+        const WALL: bool,
+        const PARTS: u8,
+    >(
         law: &ContactLaw,
         dt: f64,
         input: &InputLanes,
         output: &mut OutputLanes,
     ) {
-        loads_lanes::<HERTZ, INCREMENTAL, WALL>(law, dt, input, output)
+        loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output)
     }
 }
 
@@ -921,7 +977,7 @@ fn pair_input(x: &ForceInputs, a: usize, b: usize, d: Vec3, h: Vec3) -> PairInpu
 /// The load of a touching pair and its advanced tangential history. Branch-free (see
 /// [`contact_force`]).
 #[inline(always)]
-fn pair_law<const HERTZ: bool, const INCREMENTAL: bool>(
+fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     p: &PairInput,
@@ -931,32 +987,39 @@ fn pair_law<const HERTZ: bool, const INCREMENTAL: bool>(
     g.lever_i = if radical { g.lever_i } else { p.ra };
     g.lever_j = if radical { g.lever_j } else { p.rb };
     let v_r = relative_velocity(&g, p.va, p.vb, p.wa, p.wb);
-    let (f, h) = law_force::<HERTZ, INCREMENTAL>(law, dt, p, &g, v_r);
-    let mu_roll = p.c.mu_roll;
+    let (f, h) = law_force::<HERTZ, INCREMENTAL, PARTS>(law, dt, p, &g, v_r);
     let load = PairLoad {
         f: f.total(),
         ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
-            + rolling_torque(mu_roll, f.elastic_normal, p.wa),
+            + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wa),
         tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
-            + rolling_torque(mu_roll, f.elastic_normal, p.wb),
+            + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wb),
     };
     (load, h)
+}
+
+/// The rolling torque, or zero where no contact has rolling friction (`PARTS` without
+/// [`parts::ROLLING`]): [`rolling_torque`] is zero then, and adding a zero keeps the bits of
+/// the sum as they are with it.
+#[inline(always)]
+fn rolling<const PARTS: u8>(mu_roll: f64, elastic_normal: f64, omega: Vec3) -> Vec3 {
+    if PARTS & parts::ROLLING != 0 { rolling_torque(mu_roll, elastic_normal, omega) } else { Vec3::ZERO }
 }
 
 /// The law's force for a contact of geometry `g` and relative velocity `v_r`, with the
 /// input's coefficients and its damping scaled by the effective mass as the law asks; and the
 /// advanced history.
 #[inline(always)]
-fn law_force<const HERTZ: bool, const INCREMENTAL: bool>(
+fn law_force<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     p: &PairInput,
     g: &ContactGeometry,
     v_r: Vec3,
 ) -> (ContactForce, Vec3) {
-    let c = scaled_damping(&p.c, law.damping, p.m_eff);
+    let c = scaled_damping_for::<PARTS>(&p.c, law.damping, p.m_eff);
     let mut h = p.h;
-    let f = contact_force::<HERTZ, INCREMENTAL>(
+    let f = contact_force_for::<HERTZ, INCREMENTAL, PARTS>(
         law.history,
         law.clip_attraction,
         law.coulomb,
@@ -974,15 +1037,15 @@ fn law_force<const HERTZ: bool, const INCREMENTAL: bool>(
 /// overlap in `ra`, the lever arm in `rb`, the particle's velocity and spin in `va`, `wa`, its
 /// mass in `m_eff`. Branch-free.
 #[inline(always)]
-fn wall_law<const HERTZ: bool, const INCREMENTAL: bool>(
+fn wall_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     p: &PairInput,
 ) -> (PairLoad, Vec3) {
     let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb, lever_j: 0.0 };
     let v_r = relative_velocity(&g, p.va, Vec3::ZERO, p.wa, Vec3::ZERO);
-    let (f, h) = law_force::<HERTZ, INCREMENTAL>(law, dt, p, &g, v_r);
-    let torque = f.torque(g.lever_i, g.normal) + rolling_torque(p.c.mu_roll, f.elastic_normal, p.wa);
+    let (f, h) = law_force::<HERTZ, INCREMENTAL, PARTS>(law, dt, p, &g, v_r);
+    let torque = f.torque(g.lever_i, g.normal) + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wa);
     (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
 }
 
@@ -1010,7 +1073,8 @@ fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
     *in_contact = touching.is_some();
     let d = touching?;
     let stored = kept_or_zero(*h, !fresh);
-    let (load, advanced) = pair_law::<HERTZ, INCREMENTAL>(&x.law, x.dt, &pair_input(x, a, b, d, stored));
+    let (load, advanced) =
+        pair_law::<HERTZ, INCREMENTAL, { parts::ALL }>(&x.law, x.dt, &pair_input(x, a, b, d, stored));
     *h = if x.advance { advanced } else { stored };
     Some(load)
 }
@@ -1035,8 +1099,19 @@ pub(crate) fn pair_mass(mass: &[f64], held: &[bool], i: usize, j: usize) -> f64 
 /// (`MassVelocity`), ×√m_eff (`Tsuji`); unchanged otherwise.
 #[inline(always)]
 pub(crate) fn scaled_damping(c: &ContactCoeffs, damping: NormalDamping, m_eff: f64) -> ContactCoeffs {
+    scaled_damping_for::<{ parts::ALL }>(c, damping, m_eff)
+}
+
+/// [`scaled_damping`] with the square root formed only if `PARTS` has [`parts::TSUJI`].
+#[inline(always)]
+fn scaled_damping_for<const PARTS: u8>(
+    c: &ContactCoeffs,
+    damping: NormalDamping,
+    m_eff: f64,
+) -> ContactCoeffs {
+    debug_assert!(PARTS & parts::TSUJI != 0 || damping != NormalDamping::Tsuji);
     // Both scales are formed and one picked (×1 is exact): no branch in a contact loop.
-    let root = m_eff.sqrt();
+    let root = if PARTS & parts::TSUJI != 0 { m_eff.sqrt() } else { 1.0 };
     let s = if damping == NormalDamping::MassVelocity {
         m_eff
     } else if damping == NormalDamping::Tsuji {
@@ -1148,6 +1223,64 @@ mod tests {
         [o.f, o.ta, o.tb, o.h].iter().flat_map(|v| v.0.iter().flatten().map(|x| x.to_bits())).collect()
     }
 
+    /// The bits of the pair and wall loads of `input` by every copy of the loop for `PARTS`
+    /// that is built and that this processor runs: the build's own, AVX2, AVX-512.
+    #[allow(unsafe_code)]
+    fn every_copy<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
+        law: &ContactLaw,
+        dt: f64,
+        input: &InputLanes,
+    ) -> Vec<(&'static str, [Vec<u64>; 2])> {
+        let mut batch = OutputLanes::ZERO;
+        let mut run = |f: &dyn Fn(&mut OutputLanes, bool)| {
+            f(&mut batch, false);
+            let pair = bits(&batch);
+            f(&mut batch, true);
+            [pair, bits(&batch)]
+        };
+        // Pushed to below only where the build does not assume AVX2 or AVX-512.
+        #[allow(unused_mut)]
+        let mut copies = vec![(
+            "the build's instruction set",
+            run(&|out, wall| {
+                if wall {
+                    loads_lanes::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, input, out)
+                } else {
+                    loads_lanes::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, input, out)
+                }
+            }),
+        )];
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY (both calls): the processor has AVX2.
+            copies.push((
+                "AVX2",
+                run(&|out, wall| unsafe {
+                    if wall {
+                        simd::loads_avx2::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, input, out)
+                    } else {
+                        simd::loads_avx2::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, input, out)
+                    }
+                }),
+            ));
+        }
+        #[cfg(all(target_arch = "x86_64", not(target_feature = "avx512f")))]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY (both calls): the processor has AVX-512F.
+            copies.push((
+                "AVX-512",
+                run(&|out, wall| unsafe {
+                    if wall {
+                        simd::loads_avx512::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, input, out)
+                    } else {
+                        simd::loads_avx512::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, input, out)
+                    }
+                }),
+            ));
+        }
+        copies
+    }
+
     /// Every law variant: each lane of the batched loads is, to the bit, the scalar law of that
     /// lane, whichever instruction set computes the batch (scalar, AVX2, AVX-512 where the
     /// processor has them). This is what makes results independent of the machine's vector
@@ -1178,44 +1311,54 @@ mod tests {
                             coulomb,
                         };
                         let dt = 1e-6;
-                        for _ in 0..8 {
-                            let input = random_inputs(&mut rng);
+                        for k in 0..8 {
+                            let mut input = random_inputs(&mut rng);
+                            // Every other batch without rolling friction, so that the loops
+                            // compiled for fewer parts of the law are checked too.
+                            let rolling = k % 2 == 0;
+                            if !rolling {
+                                input.coeffs[5] = [0.0; LANES];
+                            }
                             let mut scalar = OutputLanes::ZERO;
                             let mut wall_scalar = OutputLanes::ZERO;
                             for i in 0..LANES {
                                 // One lane at a time (`black_box` keeps the compiler from
-                                // turning this loop into vector code as well).
+                                // turning this loop into vector code as well), every part of
+                                // the law compiled.
                                 let p = std::hint::black_box(input.get(i));
-                                scalar.set(i, pair_law::<HERTZ, INCREMENTAL>(&law, dt, &p));
-                                wall_scalar.set(i, wall_law::<HERTZ, INCREMENTAL>(&law, dt, &p));
+                                scalar.set(i, pair_law::<HERTZ, INCREMENTAL, { parts::ALL }>(&law, dt, &p));
+                                wall_scalar
+                                    .set(i, wall_law::<HERTZ, INCREMENTAL, { parts::ALL }>(&law, dt, &p));
                             }
+                            let expected = [bits(&scalar), bits(&wall_scalar)];
                             let mut batch = OutputLanes::ZERO;
-                            contact_loads::<HERTZ, INCREMENTAL, false>(&law, dt, &input, &mut batch);
-                            assert_eq!(bits(&batch), bits(&scalar), "{law:?}");
-                            contact_loads::<HERTZ, INCREMENTAL, true>(&law, dt, &input, &mut batch);
-                            assert_eq!(bits(&batch), bits(&wall_scalar), "{law:?} (walls)");
-                            loads_lanes::<HERTZ, INCREMENTAL, false>(&law, dt, &input, &mut batch);
-                            assert_eq!(bits(&batch), bits(&scalar), "{law:?} (baseline)");
-                            #[cfg(target_arch = "x86_64")]
-                            #[allow(unsafe_code)]
-                            {
-                                if std::arch::is_x86_feature_detected!("avx2") {
-                                    // SAFETY: the processor has AVX2.
-                                    unsafe {
-                                        simd::loads_avx2::<HERTZ, INCREMENTAL, false>(
-                                            &law, dt, &input, &mut batch,
-                                        )
-                                    };
-                                    assert_eq!(bits(&batch), bits(&scalar), "{law:?} (AVX2)");
+                            contact_loads::<HERTZ, INCREMENTAL, false>(&law, rolling, dt, &input, &mut batch);
+                            assert_eq!(bits(&batch), expected[0], "{law:?}");
+                            contact_loads::<HERTZ, INCREMENTAL, true>(&law, rolling, dt, &input, &mut batch);
+                            assert_eq!(bits(&batch), expected[1], "{law:?} (walls)");
+                            // Every loop compiled for parts that include the law's, on every
+                            // instruction set.
+                            let needed = parts::needed(&law, rolling);
+                            for p in [parts::LAMMPS_CAP, LAMMPS_MINDLIN, parts::MFIX_CAP, parts::ALL] {
+                                if needed & !p != 0 {
+                                    continue;
                                 }
-                                if std::arch::is_x86_feature_detected!("avx512f") {
-                                    // SAFETY: the processor has AVX-512F.
-                                    unsafe {
-                                        simd::loads_avx512::<HERTZ, INCREMENTAL, false>(
-                                            &law, dt, &input, &mut batch,
+                                let copies = match p {
+                                    parts::LAMMPS_CAP => {
+                                        every_copy::<HERTZ, INCREMENTAL, { parts::LAMMPS_CAP }>(
+                                            &law, dt, &input,
                                         )
-                                    };
-                                    assert_eq!(bits(&batch), bits(&scalar), "{law:?} (AVX-512)");
+                                    }
+                                    LAMMPS_MINDLIN => {
+                                        every_copy::<HERTZ, INCREMENTAL, LAMMPS_MINDLIN>(&law, dt, &input)
+                                    }
+                                    parts::MFIX_CAP => every_copy::<HERTZ, INCREMENTAL, { parts::MFIX_CAP }>(
+                                        &law, dt, &input,
+                                    ),
+                                    _ => every_copy::<HERTZ, INCREMENTAL, { parts::ALL }>(&law, dt, &input),
+                                };
+                                for (copy, got) in copies {
+                                    assert_eq!(got, expected, "{law:?}, parts {p:#b}, {copy}");
                                 }
                             }
                             cases += 1;

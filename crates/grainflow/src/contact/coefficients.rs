@@ -128,6 +128,8 @@ pub struct CoeffTable {
     walls: Vec<ContactCoeffs>,
     /// The coefficients of every phase pair, when they are all the same.
     uniform_pair: Option<ContactCoeffs>,
+    /// Some pair or wall contact has rolling friction (μ_r ≠ 0).
+    rolling: bool,
 }
 
 /// Index of phase pair (m, l), m ≤ l, in MFIX's upper-triangle order 1-1, 1-2, …, 1-M, 2-2, …
@@ -219,7 +221,8 @@ impl CoeffTable {
             }
         }
         let uniform_pair = pairs.first().filter(|c0| pairs.iter().all(|c| c == *c0)).copied();
-        Ok(CoeffTable { n_phases: n, n_wall_materials: nw, pairs, walls, uniform_pair })
+        let rolling = pairs.iter().chain(&walls).any(|c| c.mu_roll != 0.0);
+        Ok(CoeffTable { n_phases: n, n_wall_materials: nw, pairs, walls, uniform_pair, rolling })
     }
 
     /// Coefficients of the phase pair (a, b).
@@ -233,6 +236,13 @@ impl CoeffTable {
     #[inline(always)]
     pub fn uniform_pair(&self) -> Option<&ContactCoeffs> {
         self.uniform_pair.as_ref()
+    }
+
+    /// True if some pair or wall contact has rolling friction (μ_r ≠ 0): a force loop without
+    /// it need not compute the rolling torques.
+    #[inline(always)]
+    pub fn rolling(&self) -> bool {
+        self.rolling
     }
 
     /// Coefficients of phase `a` against wall material `w`.

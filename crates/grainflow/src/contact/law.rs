@@ -34,6 +34,37 @@ impl ContactForce {
     }
 }
 
+/// The optional parts of a contact law, as bits of the `PARTS` parameter of
+/// [`contact_force_for`]. A loop that runs one law compiles only the parts that law can pick
+/// (a branch-free law otherwise computes every variant's value — several square roots and
+/// divisions each — and picks one); the values it picks are the same either way.
+pub mod parts {
+    use crate::contact::{ContactLaw, CoulombCap, HistoryFrame, NormalDamping};
+
+    /// The history rescaled to its stored length ([`HistoryFrame::Rotate`]).
+    pub const ROTATE: u8 = 1;
+    /// MFIX's Coulomb cap ([`CoulombCap::Mfix`]).
+    pub const MFIX_CAP: u8 = 2;
+    /// LAMMPS's Coulomb cap ([`CoulombCap::Lammps`]).
+    pub const LAMMPS_CAP: u8 = 4;
+    /// Rolling friction (some μ_r ≠ 0).
+    pub const ROLLING: u8 = 8;
+    /// Damping ∝ √m_eff ([`NormalDamping::Tsuji`]).
+    pub const TSUJI: u8 = 16;
+    /// Every part: the law for any settings.
+    pub const ALL: u8 = ROTATE | MFIX_CAP | LAMMPS_CAP | ROLLING | TSUJI;
+
+    /// The parts `law` needs; `rolling` if some contact has rolling friction.
+    pub fn needed(law: &ContactLaw, rolling: bool) -> u8 {
+        let bit = |on: bool, b: u8| if on { b } else { 0 };
+        bit(law.history == HistoryFrame::Rotate, ROTATE)
+            | bit(law.coulomb == CoulombCap::Mfix, MFIX_CAP)
+            | bit(law.coulomb == CoulombCap::Lammps, LAMMPS_CAP)
+            | bit(rolling, ROLLING)
+            | bit(law.damping == NormalDamping::Tsuji, TSUJI)
+    }
+}
+
 /// Normal and tangential force of one contact, updating the stored tangential `history`.
 ///
 /// `clip` floors the normal force at zero (no attraction at the end of a contact); `cap`
@@ -60,6 +91,26 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     history: &mut Vec3,
     dt: f64,
 ) -> ContactForce {
+    contact_force_for::<HERTZ, INCREMENTAL, { parts::ALL }>(frame, clip, cap, c, g, v_r, history, dt)
+}
+
+/// [`contact_force`] with only the optional [`parts`] in `PARTS` compiled: `frame` and `cap`
+/// must be among them (the others' values are never formed). The same result, to the bit.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn contact_force_for<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
+    frame: HistoryFrame,
+    clip: bool,
+    cap: CoulombCap,
+    c: &ContactCoeffs,
+    g: &ContactGeometry,
+    v_r: Vec3,
+    history: &mut Vec3,
+    dt: f64,
+) -> ContactForce {
+    debug_assert!(PARTS & parts::ROTATE != 0 || frame != HistoryFrame::Rotate);
+    debug_assert!(PARTS & parts::MFIX_CAP != 0 || cap != CoulombCap::Mfix);
+    debug_assert!(PARTS & parts::LAMMPS_CAP != 0 || cap != CoulombCap::Lammps);
     let n = g.normal;
     let delta = g.overlap;
     let v_n = v_r.dot(n);
@@ -82,12 +133,23 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     // and rescaled to its stored length (rotated).
     let h = *history;
     let projected = h - h.dot(n) * n;
-    let (len, plen) = (h.length(), projected.length());
-    let rotated = pick(plen > 0.0, projected * (len / plen), projected);
+    let rotated = if PARTS & parts::ROTATE != 0 {
+        let (len, plen) = (h.length(), projected.length());
+        pick(plen > 0.0, projected * (len / plen), projected)
+    } else {
+        projected // never picked
+    };
     let h = pick(frame == HistoryFrame::Mfix, h, pick(frame == HistoryFrame::Project, projected, rotated));
 
     let limit = c.mu * fn_mag;
-    let lammps = cap == CoulombCap::Lammps;
+    // A constant where only one cap is compiled, so that the other is never formed.
+    let lammps = if PARTS & parts::MFIX_CAP == 0 {
+        true
+    } else if PARTS & parts::LAMMPS_CAP == 0 {
+        false
+    } else {
+        cap == CoulombCap::Lammps
+    };
     let (f_t, stored) = if INCREMENTAL {
         // History holds the elastic tangential force.
         let f_el = h - k * dt * v_t;
@@ -99,7 +161,8 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
         let capped = pick(lammps, lammps_capped, mfix_capped);
         let capped_stored = pick(lammps, lammps_capped + damp_t * v_t, mfix_capped);
         let sliding = trial.length_squared() > limit * limit;
-        let stuck = len == 0.0;
+        // |f_el| = 0 exactly when |f_el|² = 0: no square root where only LAMMPS's cap is used.
+        let stuck = f_el.length_squared() == 0.0;
         (
             pick(sliding, pick(stuck, Vec3::ZERO, capped), trial),
             pick(sliding, pick(stuck, Vec3::ZERO, capped_stored), f_el),
@@ -116,7 +179,7 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
         let capped_stored = pick(lammps, -(lammps_capped + damp_t * v_t) / k, (limit / k) * dir);
         let capped_stored = pick(k > 0.0, capped_stored, Vec3::ZERO);
         let sliding = trial.length_squared() > limit * limit;
-        let stuck = len == 0.0;
+        let stuck = s.length_squared() == 0.0;
         (
             pick(sliding, pick(stuck, Vec3::ZERO, capped), trial),
             pick(sliding, pick(stuck, Vec3::ZERO, capped_stored), s),
