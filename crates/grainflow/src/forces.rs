@@ -45,7 +45,8 @@ use std::ops::Range;
 
 use crate::boundary::{Images, Periodic};
 use crate::contact::geometry::{
-    ContactGeometry, pair_contact_separation, pair_geometry, pair_touching, relative_velocity, wall_contact,
+    ContactGeometry, pair_contact_separation, pair_geometry, pair_geometry_without_levers, pair_touching,
+    relative_velocity, wall_contact,
 };
 use crate::contact::law::{ContactForce, contact_force_for, parts, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
@@ -837,6 +838,9 @@ impl Lanes {
 /// history, its Coulomb cap, Tsuji damping): the Hertz–Mindlin yardstick case.
 const LAMMPS_MINDLIN: u8 = parts::LAMMPS_CAP | parts::ROTATE | parts::TSUJI;
 
+/// MFIX's law: its Coulomb cap and lever arms to the radical plane.
+const MFIX: u8 = parts::MFIX_CAP | parts::RADICAL;
+
 /// The loads of a batch of touching pairs ([`pair_law`] on every lane) or, with `WALL`, of
 /// particles touching walls ([`wall_law`]); `rolling` if some contact has rolling friction.
 ///
@@ -857,9 +861,7 @@ fn contact_loads<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
             loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::LAMMPS_CAP }>(law, dt, input, output)
         }
         LAMMPS_MINDLIN => loads_widest::<HERTZ, INCREMENTAL, WALL, LAMMPS_MINDLIN>(law, dt, input, output),
-        parts::MFIX_CAP => {
-            loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::MFIX_CAP }>(law, dt, input, output)
-        }
+        MFIX => loads_widest::<HERTZ, INCREMENTAL, WALL, MFIX>(law, dt, input, output),
         _ => loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::ALL }>(law, dt, input, output),
     }
 }
@@ -982,7 +984,12 @@ fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
     dt: f64,
     p: &PairInput,
 ) -> (PairLoad, Vec3) {
-    let mut g = pair_geometry(p.d, p.ra, p.rb);
+    let mut g = if PARTS & parts::RADICAL != 0 {
+        pair_geometry(p.d, p.ra, p.rb)
+    } else {
+        // The radical plane's lever arms (a division) are never picked.
+        pair_geometry_without_levers(p.d, p.ra, p.rb)
+    };
     let radical = law.lever == LeverArm::RadicalPlane;
     g.lever_i = if radical { g.lever_i } else { p.ra };
     g.lever_j = if radical { g.lever_j } else { p.rb };
@@ -1339,7 +1346,7 @@ mod tests {
                             // Every loop compiled for parts that include the law's, on every
                             // instruction set.
                             let needed = parts::needed(&law, rolling);
-                            for p in [parts::LAMMPS_CAP, LAMMPS_MINDLIN, parts::MFIX_CAP, parts::ALL] {
+                            for p in [parts::LAMMPS_CAP, LAMMPS_MINDLIN, MFIX, parts::ALL] {
                                 if needed & !p != 0 {
                                     continue;
                                 }
@@ -1352,9 +1359,7 @@ mod tests {
                                     LAMMPS_MINDLIN => {
                                         every_copy::<HERTZ, INCREMENTAL, LAMMPS_MINDLIN>(&law, dt, &input)
                                     }
-                                    parts::MFIX_CAP => every_copy::<HERTZ, INCREMENTAL, { parts::MFIX_CAP }>(
-                                        &law, dt, &input,
-                                    ),
+                                    MFIX => every_copy::<HERTZ, INCREMENTAL, MFIX>(&law, dt, &input),
                                     _ => every_copy::<HERTZ, INCREMENTAL, { parts::ALL }>(&law, dt, &input),
                                 };
                                 for (copy, got) in copies {

@@ -39,7 +39,7 @@ impl ContactForce {
 /// (a branch-free law otherwise computes every variant's value — several square roots and
 /// divisions each — and picks one); the values it picks are the same either way.
 pub mod parts {
-    use crate::contact::{ContactLaw, CoulombCap, HistoryFrame, NormalDamping};
+    use crate::contact::{ContactLaw, CoulombCap, HistoryFrame, LeverArm, NormalDamping};
 
     /// The history rescaled to its stored length ([`HistoryFrame::Rotate`]).
     pub const ROTATE: u8 = 1;
@@ -51,8 +51,10 @@ pub mod parts {
     pub const ROLLING: u8 = 8;
     /// Damping ∝ √m_eff ([`NormalDamping::Tsuji`]).
     pub const TSUJI: u8 = 16;
+    /// Lever arms to the radical plane ([`LeverArm::RadicalPlane`]).
+    pub const RADICAL: u8 = 32;
     /// Every part: the law for any settings.
-    pub const ALL: u8 = ROTATE | MFIX_CAP | LAMMPS_CAP | ROLLING | TSUJI;
+    pub const ALL: u8 = ROTATE | MFIX_CAP | LAMMPS_CAP | ROLLING | TSUJI | RADICAL;
 
     /// The parts `law` needs; `rolling` if some contact has rolling friction.
     pub fn needed(law: &ContactLaw, rolling: bool) -> u8 {
@@ -62,6 +64,7 @@ pub mod parts {
             | bit(law.coulomb == CoulombCap::Lammps, LAMMPS_CAP)
             | bit(rolling, ROLLING)
             | bit(law.damping == NormalDamping::Tsuji, TSUJI)
+            | bit(law.lever == LeverArm::RadicalPlane, RADICAL)
     }
 }
 
