@@ -984,6 +984,7 @@ fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
     dt: f64,
     p: &PairInput,
 ) -> (PairLoad, Vec3) {
+    debug_assert!(PARTS & parts::RADICAL != 0 || law.lever != LeverArm::RadicalPlane);
     let mut g = if PARTS & parts::RADICAL != 0 {
         pair_geometry(p.d, p.ra, p.rb)
     } else {
@@ -1010,6 +1011,7 @@ fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
 /// the sum as they are with it.
 #[inline(always)]
 fn rolling<const PARTS: u8>(mu_roll: f64, elastic_normal: f64, omega: Vec3) -> Vec3 {
+    debug_assert!(PARTS & parts::ROLLING != 0 || mu_roll == 0.0);
     if PARTS & parts::ROLLING != 0 { rolling_torque(mu_roll, elastic_normal, omega) } else { Vec3::ZERO }
 }
 
