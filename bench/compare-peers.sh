@@ -42,8 +42,9 @@ declare -A LMP_IN=( [box_hm]="$PEERS/lammps/in.box_walls_run.lmp -var model hm -
                     [box_lsd]="$PEERS/lammps/in.box_walls_run.lmp -var model lsd -var data $DATA/box_lsd_settled.data"
                     [chute]="$PEERS/lammps/in.chute_like_run.lmp -var data $DATA/chute_eq.data" )
 out="$ROOT/bench/results/$(date +%Y-%m-%d)-$(hostname).md"
-# This run's section, put on top of the day's file at the end (written whole, then renamed).
-new=$(mktemp)
+# This run's section, put on top of the day's file at the end (written whole, then renamed);
+# in the work folder, which goes when the script ends, however it ends.
+new="$W/section.md"
 {
   echo "# grainflow vs LAMMPS and LIGGGHTS, $(date -u +%Y-%m-%dT%H:%MZ)"
   echo
@@ -95,4 +96,3 @@ else
 fi
 mv "$out.tmp" "$out"
 cat "$new"
-rm -f "$new"
