@@ -6,6 +6,12 @@
 //! out by the same blocks, so each particle's state is read and written on one core.
 
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Spins of a thread that finished its parts, waiting for the others, before it yields its core
+/// at each further look (so that more threads than cores still make progress). About a
+/// millisecond: longer than the threads' times for their parts of a stage usually differ by.
+const SPINS_BEFORE_YIELDING: u32 = 1 << 16;
 
 /// Runs `work(i, part)` for each of `parts`, part i on thread i mod T of the current rayon pool
 /// of T threads (outside a pool, on the global one), and returns the results in part order.
@@ -16,8 +22,23 @@ pub(crate) fn pinned<T: Send, R: Send>(parts: Vec<T>, work: impl Fn(usize, T) ->
         let mut cell = cells[i].lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         cell.take().expect("every part is taken by one thread only")
     };
+    let finished = AtomicUsize::new(0);
     let per_thread: Vec<Vec<R>> = rayon::broadcast(|ctx| {
-        (ctx.index()..n).step_by(ctx.num_threads()).map(|i| work(i, take(i))).collect()
+        let results = (ctx.index()..n).step_by(ctx.num_threads()).map(|i| work(i, take(i))).collect();
+        // Wait for the other threads here rather than in rayon's idle loop, which puts a thread
+        // to sleep after a few tens of microseconds: the next stage, usually a few
+        // microseconds away, would wait as long again for it to wake.
+        finished.fetch_add(1, Ordering::AcqRel);
+        let mut spins = 0u32;
+        while finished.load(Ordering::Acquire) < ctx.num_threads() {
+            if spins < SPINS_BEFORE_YIELDING {
+                spins += 1;
+                std::hint::spin_loop();
+            } else {
+                std::thread::yield_now();
+            }
+        }
+        results
     });
     // Part i is the (i / T)-th result of thread i mod T.
     let t = per_thread.len();
