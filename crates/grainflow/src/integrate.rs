@@ -8,6 +8,7 @@
 //! the force stage, pinned to the same threads (the `threads` module) — so a particle's state
 //! and accumulators stay in the cache of the core that computes its contacts.
 
+use crate::boundary::Periodic;
 use crate::math::Vec3;
 use crate::state::Particles;
 use std::ops::Range;
@@ -121,30 +122,42 @@ impl<'a> Slots<'a> {
     }
 }
 
-/// Applies `kernel` to the slots of `runs`, one run at a time. With more than one block in
-/// `blocks` (consecutive ranges of slots from slot 0 to the last particle), the slots of block
-/// i are integrated on thread i of the current rayon pool; the result is the same, every
-/// particle being updated on its own.
+/// Applies `kernel` to the slots of `runs`, one run at a time, after bringing every slot's
+/// position into the periodic box if `wrap` is given (prescribed slots included). With more
+/// than one block in `blocks` (consecutive ranges of slots from slot 0 to the last particle),
+/// the slots of block i are handled on thread i of the current rayon pool; the result is the
+/// same, every particle being updated on its own.
 fn for_slots(
     p: &mut Particles,
     runs: &[Range<usize>],
     blocks: &[Range<usize>],
+    wrap: Option<Periodic>,
     kernel: impl Fn(Slots) + Sync,
 ) {
-    /// The parts of `runs` within `block`, in `s` whose first slot is `block.start`.
-    fn in_block(s: &mut Slots, block: &Range<usize>, runs: &[Range<usize>], kernel: &impl Fn(Slots)) {
+    /// Wraps the positions of `s` (the slots of `block`), then applies the kernel to the parts
+    /// of `runs` within `block`.
+    fn in_block(
+        s: &mut Slots,
+        block: &Range<usize>,
+        runs: &[Range<usize>],
+        wrap: Option<Periodic>,
+        kernel: &impl Fn(Slots),
+    ) {
+        if let Some(per) = wrap {
+            s.x.iter_mut().for_each(|x| *x = per.wrap(*x));
+        }
         let first = runs.partition_point(|r| r.end <= block.start);
         for r in runs[first..].iter().take_while(|r| r.start < block.end) {
             let (a, b) = (r.start.max(block.start), r.end.min(block.end));
             kernel(s.sub(a - block.start..b - block.start));
         }
     }
-    if runs.is_empty() {
+    let n = p.len();
+    if runs.is_empty() && wrap.is_none() {
         return;
     }
-    let n = p.len();
     if blocks.len() < 2 {
-        in_block(&mut Slots::of(p, 0..n), &(0..n), runs, &kernel);
+        in_block(&mut Slots::of(p, 0..n), &(0..n), runs, wrap, &kernel);
         return;
     }
     let mut parts = Vec::with_capacity(blocks.len());
@@ -154,12 +167,17 @@ fn for_slots(
         parts.push((head, block));
         rest = tail;
     }
-    crate::threads::pinned(parts, |_, (mut s, block)| in_block(&mut s, block, runs, &kernel));
+    crate::threads::pinned(parts, |_, (mut s, block)| in_block(&mut s, block, runs, wrap, &kernel));
+}
+
+/// Brings every position into the periodic box (`blocks` as for the integrators).
+pub fn wrap(p: &mut Particles, periodic: Periodic, blocks: &[Range<usize>]) {
+    for_slots(p, &[], blocks, Some(periodic), |_| {});
 }
 
 /// MFIX's `EULER` step.
 pub fn euler(p: &mut Particles, runs: &[Range<usize>], gravity: Vec3, dt: f64, blocks: &[Range<usize>]) {
-    for_slots(p, runs, blocks, |s| {
+    for_slots(p, runs, blocks, None, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += dt * a;
@@ -180,7 +198,7 @@ pub fn adams_bashforth(
     blocks: &[Range<usize>],
 ) {
     let h = 0.5 * dt;
-    for_slots(p, runs, blocks, |s| {
+    for_slots(p, runs, blocks, None, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             let (a_prev, alpha_prev) = if first { (a, alpha) } else { (s.a_prev[i], s.alpha_prev[i]) };
@@ -204,7 +222,7 @@ pub fn verlet_kick_drift(
     blocks: &[Range<usize>],
 ) {
     let h = 0.5 * dt;
-    for_slots(p, runs, blocks, |s| {
+    for_slots(p, runs, blocks, None, |s| {
         for i in 0..s.x.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += h * a;
@@ -214,20 +232,48 @@ pub fn verlet_kick_drift(
     });
 }
 
-/// Velocity Verlet, second half: kick by Δt/2 with the new accelerations.
+/// Velocity Verlet, second half: kick by Δt/2 with the new accelerations; then, with `wrap`,
+/// every position brought into the periodic box.
 pub fn verlet_kick(
     p: &mut Particles,
     runs: &[Range<usize>],
     gravity: Vec3,
     dt: f64,
     blocks: &[Range<usize>],
+    wrap: Option<Periodic>,
 ) {
     let h = 0.5 * dt;
-    for_slots(p, runs, blocks, |s| {
+    for_slots(p, runs, blocks, wrap, |s| {
         for i in 0..s.v.len() {
             let (a, alpha) = s.accelerations(i, gravity);
             s.v[i] += h * a;
             s.w[i] += h * alpha;
+        }
+    });
+}
+
+/// The second half kick of one velocity-Verlet step and the first half kick and drift of the
+/// next, in one pass, both kicks with the accelerations of the forces in the accumulators:
+/// v += (Δt/2)·a twice (the same two roundings as [`verlet_kick`] then
+/// [`verlet_kick_drift`]), then x += Δt·v; with `wrap`, every position is brought into the
+/// periodic box before the drift, as the step between the two does.
+pub fn verlet_kick_kick_drift(
+    p: &mut Particles,
+    runs: &[Range<usize>],
+    gravity: Vec3,
+    dt: f64,
+    blocks: &[Range<usize>],
+    wrap: Option<Periodic>,
+) {
+    let h = 0.5 * dt;
+    for_slots(p, runs, blocks, wrap, |s| {
+        for i in 0..s.x.len() {
+            let (a, alpha) = s.accelerations(i, gravity);
+            s.v[i] += h * a;
+            s.w[i] += h * alpha;
+            s.v[i] += h * a;
+            s.w[i] += h * alpha;
+            s.x[i] += dt * s.v[i];
         }
     });
 }

@@ -13,7 +13,6 @@ use crate::motion::{self, PrescribedMotion, ResolvedMotion};
 use crate::neighbor::NeighborList;
 use crate::observe::Diagnostics;
 use crate::state::Particles;
-use crate::threads::split_at_ends;
 use crate::timestep::{self, TimeStepChoice, TimeStepRule};
 use crate::wall::Wall;
 
@@ -84,6 +83,10 @@ pub struct Simulation {
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
     forces_current: bool,
+    /// Velocity Verlet within [`advance`](Simulation::advance): the last step's second half
+    /// kick (and periodic wrap) is left for the next step's first pass. Never true between
+    /// calls of the public methods.
+    kick_pending: bool,
     /// Per-stage wall-clock times, when enabled.
     timing: Option<StageTimes>,
     /// Threads of the force stage (None: the calling thread only).
@@ -191,6 +194,7 @@ impl Simulation {
             free,
             history_started: false,
             forces_current: false,
+            kick_pending: false,
             timing: None,
             pool: None,
             plan: ForcePlan::default(),
@@ -357,9 +361,32 @@ impl Simulation {
     /// Advances one step: contact forces, integration, prescribed motion.
     pub fn step(&mut self) {
         match self.pool.clone() {
-            Some(pool) if self.parallel() => pool.install(|| self.step_on(true)),
-            _ => self.step_on(false),
+            Some(pool) if self.parallel() => pool.install(|| self.step_on(true, false)),
+            _ => self.step_on(false, false),
         }
+    }
+
+    /// Takes up to `steps` steps (stopping at the end of the run). Between the steps of one
+    /// call, velocity Verlet does the second half kick of a step and the first of the next in
+    /// one pass (the same arithmetic in the same order as [`step`](Self::step) after
+    /// `step`): the state after the call is the same to the bit, with fewer passes over the
+    /// particles.
+    pub fn advance(&mut self, steps: u64) {
+        let steps = steps.min(self.total_steps().saturating_sub(self.step));
+        if steps == 0 {
+            return;
+        }
+        match self.pool.clone() {
+            Some(pool) if self.parallel() => pool.install(|| self.advance_on(steps, true)),
+            _ => self.advance_on(steps, false),
+        }
+    }
+
+    fn advance_on(&mut self, steps: u64, par: bool) {
+        for i in 0..steps {
+            self.step_on(par, i + 1 < steps);
+        }
+        debug_assert!(!self.kick_pending);
     }
 
     /// Runs `f` with the simulation on its thread pool (directly when it has none). Steps
@@ -377,8 +404,15 @@ impl Simulation {
         self.pool.is_some() && self.particles.len() >= forces::MIN_PARALLEL_PARTICLES
     }
 
-    /// One step; with `par`, the per-particle stages use the current rayon pool.
-    fn step_on(&mut self, par: bool) {
+    /// The periodic wrap, if any axis is periodic.
+    fn wrap(&self) -> Option<Periodic> {
+        self.periodic.any().then_some(self.periodic)
+    }
+
+    /// One step; with `par`, the per-particle stages use the current rayon pool. With `defer`
+    /// (velocity Verlet only), the second half kick and the periodic wrap are left pending for
+    /// the next step.
+    fn step_on(&mut self, par: bool, defer: bool) {
         let start = self.timing.map(|t| (std::time::Instant::now(), t));
         let dt = self.time_step.dt;
         let g = self.gravity;
@@ -395,44 +429,45 @@ impl Simulation {
                 integrate::adams_bashforth(&mut self.particles, &self.free, g, dt, first, blocks);
             }
             Integrator::VelocityVerlet => {
+                if self.kick_pending && !self.forces_current {
+                    // Prescribed motion moved particles: the pending kick takes the forces
+                    // of the last evaluation, before they are evaluated again.
+                    self.finish_kick(par);
+                }
                 if !self.forces_current {
                     // Forces of the current state for the first half kick; the tangential
                     // springs advance once per step, in the evaluation after the drift.
                     self.evaluate_forces(false);
                 }
-                integrate::verlet_kick_drift(
-                    &mut self.particles,
-                    &self.free,
-                    g,
-                    dt,
-                    thread_blocks(&self.plan, par, n),
-                );
+                let blocks = thread_blocks(&self.plan, par, n);
+                if self.kick_pending {
+                    let wrap = self.wrap();
+                    integrate::verlet_kick_kick_drift(&mut self.particles, &self.free, g, dt, blocks, wrap);
+                    self.kick_pending = false;
+                } else {
+                    integrate::verlet_kick_drift(&mut self.particles, &self.free, g, dt, blocks);
+                }
                 self.compute_forces();
-                integrate::verlet_kick(
-                    &mut self.particles,
-                    &self.free,
-                    g,
-                    dt,
-                    thread_blocks(&self.plan, par, n),
-                );
+                if defer {
+                    self.kick_pending = true;
+                } else {
+                    let blocks = thread_blocks(&self.plan, par, n);
+                    integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks, None);
+                }
             }
         }
         self.history_started = true;
         // Prescribed motion that moves a particle after this evaluation makes the forces stale:
         // they are evaluated again before the next half kick. Particles held at rest where they
-        // are change nothing, and the forces of this step stay those of the state.
+        // are change nothing, and the forces of this step stay those of the state. (It moves
+        // prescribed slots only, which the pending kick and the wrap after it leave alone or
+        // wrap as they would have here.)
         let moved = motion::apply(&self.motion, &mut self.particles);
         self.forces_current = !moved;
-        if self.periodic.any() {
-            let per = self.periodic;
-            let wrap = |xs: &mut [Vec3]| xs.iter_mut().for_each(|x| *x = per.wrap(*x));
-            match thread_blocks(&self.plan, par, n) {
-                [] | [_] => wrap(&mut self.particles.position),
-                b => {
-                    let parts = split_at_ends(&mut self.particles.position, b.iter().map(|r| r.end));
-                    crate::threads::pinned(parts, |_, xs| wrap(xs));
-                }
-            }
+        if !self.kick_pending
+            && let Some(per) = self.wrap()
+        {
+            integrate::wrap(&mut self.particles, per, thread_blocks(&self.plan, par, n));
         }
         self.step += 1;
         if let (Some((t0, before)), Some(now)) = (start, self.timing.as_mut()) {
@@ -441,6 +476,15 @@ impl Simulation {
                 (now.neighbor - before.neighbor) + (now.walls - before.walls) + (now.pairs - before.pairs);
             now.integrate += (t0.elapsed().as_secs_f64() - forces).max(0.0);
         }
+    }
+
+    /// The pending second half kick and periodic wrap, on their own.
+    fn finish_kick(&mut self, par: bool) {
+        let n = self.particles.len();
+        let blocks = thread_blocks(&self.plan, par, n);
+        let (g, dt, wrap) = (self.gravity, self.time_step.dt, self.wrap());
+        integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks, wrap);
+        self.kick_pending = false;
     }
 
     /// Takes up to `steps` steps (stopping at the end of the run), calling `hook` after each
@@ -457,9 +501,7 @@ impl Simulation {
 
     /// Runs to the end without hooks.
     pub fn run_to_end(&mut self) {
-        while !self.finished() {
-            self.step();
-        }
+        self.advance(self.total_steps().saturating_sub(self.step));
     }
 
     /// Contact forces and torques from the current state into the accumulators, advancing the

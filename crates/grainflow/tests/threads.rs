@@ -7,6 +7,10 @@
 //! Equality is exact (no tolerance): the force stage sums every particle's contacts in one
 //! fixed order whatever the thread count. That the comparison has teeth is shown on the way:
 //! one ulp of difference in a single particle's initial velocity changes the final state.
+//!
+//! Steps taken together ([`Simulation::advance`]), where velocity Verlet does one step's
+//! second half kick and the next one's first in one pass, give the same bits as steps taken one
+//! at a time.
 
 mod common;
 
@@ -132,6 +136,13 @@ fn walled_bed(nudged: bool) -> Simulation {
 }
 
 fn periodic_chute(nudged: bool) -> Simulation {
+    periodic_chute_with(nudged, Integrator::AdamsBashforth, false)
+}
+
+/// The periodic chute with `integrator`; with `follower`, one particle above the base follows
+/// another along x: prescribed motion that moves at every step, so that the forces must be
+/// evaluated again before each first half kick.
+fn periodic_chute_with(nudged: bool, integrator: Integrator, follower: bool) -> Simulation {
     let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
     let law = ContactLaw {
         damping: NormalDamping::MassVelocity,
@@ -156,7 +167,7 @@ fn periodic_chute(nudged: bool) -> Simulation {
         vec![lid],
         vec![params],
         vec![params],
-        Integrator::AdamsBashforth,
+        integrator,
         2.0e-5,
     );
     cfg.periodic = Some(Periodic { lo, hi, axes: [true, true, false] });
@@ -173,6 +184,23 @@ fn periodic_chute(nudged: bool) -> Simulation {
         .map(|q| PrescribedMotion { particle: q.id, rule: MotionRule::Hold })
         .collect();
     assert!(cfg.motion.len() > 300, "a base of {} particles", cfg.motion.len());
+    if follower {
+        // The leader is nearly above or below the follower, so that the follower moves little.
+        let f = init.iter().find(|q| q.position.z > base_top).expect("a free particle");
+        let leader = init
+            .iter()
+            .filter(|q| q.position.z > base_top && (q.position.z - f.position.z).abs() > 0.004)
+            .min_by(|a, b| {
+                (a.position.x - f.position.x).abs().total_cmp(&(b.position.x - f.position.x).abs())
+            })
+            .expect("a leader")
+            .id;
+        let follower = f.id;
+        cfg.motion.push(PrescribedMotion {
+            particle: follower,
+            rule: MotionRule::Follow { leader, axes: [true, false, false] },
+        });
+    }
     simulation(cfg, &init)
 }
 
@@ -184,4 +212,24 @@ fn walled_hertz_bed_is_bit_identical_on_any_thread_count() {
 #[test]
 fn periodic_chute_on_a_held_base_is_bit_identical_on_any_thread_count() {
     check_thread_counts("periodic chute", &|| periodic_chute(false), 300, &|| periodic_chute(true));
+}
+
+#[test]
+fn verlet_steps_taken_together_equal_steps_taken_one_at_a_time() {
+    for follower in [false, true] {
+        let make = || periodic_chute_with(false, Integrator::VelocityVerlet, follower);
+        for threads in [1, 2] {
+            let one_by_one = run(&make, threads, 120);
+            let mut together = make();
+            together.set_threads(threads).expect("thread pool");
+            // Calls of several lengths, one of a single step among them.
+            for steps in [50, 1, 69] {
+                together.advance(steps);
+            }
+            assert_eq!(together.step_index(), 120);
+            let (want, got) = (fingerprint(&one_by_one), fingerprint(&together));
+            let differing = want.iter().zip(&got).filter(|(a, b)| a != b).count();
+            assert_eq!(differing, 0, "follower {follower}, {threads} thread(s): {differing} values differ");
+        }
+    }
 }
