@@ -174,6 +174,17 @@ fn force_scale(law: &ContactLaw, c: &ContactCoeffs, delta: f64, v_r: Vec3, h: Ve
     c.kn * p + c.eta_n * q * v + tangential_spring + c.eta_t * q * v + f64::MIN_POSITIVE
 }
 
+/// The scale of the rounding errors of a new tangential history: for MFIX's total spring the
+/// terms it is made of, the stored history and the step's increment Δt·|v_r|, and the history
+/// itself, which the Coulomb cap rescales to μ|F_n|/k_t (far larger than both when k_t is
+/// small); for the incremental spring, which stores a force, the force scale.
+fn history_scale(model: TangentialModel, force_scale: f64, h0: Vec3, h: Vec3, increment: f64) -> f64 {
+    match model {
+        TangentialModel::MfixTotal => h0.length() + increment + h.length() + f64::MIN_POSITIVE,
+        TangentialModel::IncrementalMindlin => force_scale,
+    }
+}
+
 fn assert_close(what: &str, a: Vec3, b: Vec3, scale: f64) -> Result<(), TestCaseError> {
     let diff = (a - b).length();
     prop_assert!(
@@ -218,10 +229,7 @@ proptest! {
         let scale = force_scale(&law, &c, g.overlap, v_r, h0, dt);
         assert_close("normal force", f2.normal, -f.normal, scale)?;
         assert_close("tangential force", f2.tangential, -f.tangential, scale)?;
-        let h_scale = match law.tangential {
-            TangentialModel::MfixTotal => h0.length() + dt * v_r.length() + f64::MIN_POSITIVE,
-            TangentialModel::IncrementalMindlin => scale,
-        };
+        let h_scale = history_scale(law.tangential, scale, h0, h, dt * v_r.length());
         assert_close("new history", h2, -h, h_scale)?;
         let arm = s.ri + s.rj;
         assert_close(
@@ -267,10 +275,7 @@ proptest! {
         let scale = force_scale(&law, &c, g.overlap, v_r, h0, dt);
         assert_close("rotated normal force", fr.normal, q * f.normal, scale)?;
         assert_close("rotated tangential force", fr.tangential, q * f.tangential, scale)?;
-        let h_scale = match law.tangential {
-            TangentialModel::MfixTotal => h0.length() + dt * v_r.length() + f64::MIN_POSITIVE,
-            TangentialModel::IncrementalMindlin => scale,
-        };
+        let h_scale = history_scale(law.tangential, scale, h0, h, dt * v_r.length());
         assert_close("rotated history", hr, q * h, h_scale)?;
         prop_assert!((fr.elastic_normal - f.elastic_normal).abs() <= REL_TOL * scale);
     }
