@@ -136,9 +136,15 @@ pub(crate) struct ForcePlan {
 }
 
 /// The work of a touching pair (gathering its inputs, the law, adding its load) in units of a
-/// pair that is only tested for contact: about 7 on the box bed and the chute (profiles of the
-/// force stage: time in the contact test per listed pair, time in the rest per contact).
-const CONTACT_COST: usize = 7;
+/// pair that is only tested for contact, and the work of a row (a particle: its accumulators,
+/// its walk through the list, its arriving crossing pairs). Fitted to the time each block of
+/// the force stage took on one core: with 7 and 0 (the share of a contact in profiles, rows
+/// not counted), the chute's upper block, which holds more particles and fewer contacts per
+/// particle, took 16-19 % longer than the lower one (4 runs); with 4 and 5, 1.4 % longer. The
+/// box beds' blocks took within 3 % of each other with either.
+const CONTACT_COST: usize = 4;
+/// The work of a row, in the same units (see [`CONTACT_COST`]).
+const ROW_COST: usize = 5;
 
 impl ForcePlan {
     /// The blocks of slots, if the plan is for `n` slots (empty otherwise): the per-particle
@@ -192,7 +198,7 @@ impl ForcePlan {
             self.work.push(total);
             let row = offsets[a]..offsets[a + 1];
             let contacts = in_contact[row.clone()].iter().filter(|&&c| c).count();
-            total += row.len() + CONTACT_COST * contacts;
+            total += ROW_COST + row.len() + CONTACT_COST * contacts;
             touching += contacts;
             while let Some((_, h)) = walls.next_if(|&(&[i, _], _)| i as usize == a) {
                 let contact = *h != Vec3::ZERO;
@@ -1378,9 +1384,9 @@ mod tests {
     }
 
     /// Blocks share the estimated work, not the pairs: with every pair of the first half of the
-    /// rows touching, the first block ends where the work (a pair tested: 1; touching: 1 +
-    /// CONTACT_COST) is halved. A plan made with no contact known is made again once the
-    /// flags are set, and then kept.
+    /// rows touching, the first block ends where the work (a row: ROW_COST; a pair tested: 1;
+    /// touching: 1 + CONTACT_COST) is halved. A plan made with no contact known is made again
+    /// once the flags are set, and then kept.
     #[test]
     fn blocks_share_the_work_of_touching_pairs() {
         let n = 100;
@@ -1394,16 +1400,17 @@ mod tests {
         let mut touching = vec![false; partners.len()];
         let mut plan = ForcePlan::default();
         plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
-        // 197 pairs: the first block ends at the first row with 98 pairs before it.
-        assert_eq!(plan.blocks, [0..49, 49..n], "by pairs while no contact is known");
+        // 100 rows and 197 pairs: work 5 + 2 = 7 per row but for the last two, 697 in all; the
+        // first block ends at the first row with 348 before it.
+        assert_eq!(plan.blocks, [0..50, 50..n], "by rows and pairs while no contact is known");
         touching[..offsets[n / 2]].fill(true);
         plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
-        // Work of the first 50 rows: 100 pairs × 8 = 800; of the last 50: 97 pairs × 1. Half
-        // of 897: 448, reached after 28 rows of 16.
-        assert_eq!(plan.blocks, [0..28, 28..n]);
+        // Work of the first 50 rows: 50 × (5 + 2 × 5) = 750; of the last 50: 50 × 5 + 97 pairs
+        // = 347. Half of 1097: 548, reached after 37 rows of 15.
+        assert_eq!(plan.blocks, [0..37, 37..n]);
         touching.fill(false);
         plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
-        assert_eq!(plan.blocks, [0..28, 28..n], "kept until the next build");
+        assert_eq!(plan.blocks, [0..37, 37..n], "kept until the next build");
     }
 
     #[test]
