@@ -124,15 +124,14 @@ pub(crate) struct ForcePlan {
     /// Start of each block's crossing pairs in `crossing` (blocks + 1 entries).
     crossing_start: Vec<usize>,
     /// Crossing pairs arriving at each slot, as indices into `crossing`, in list order:
-    /// `incoming[incoming_start[b]..incoming_start[b + 1]]`.
-    incoming_start: Vec<usize>,
+    /// `incoming[incoming_start[b]..incoming_start[b + 1]]` (32 bits: fewer than 2^32 crossing
+    /// pairs, which would take hundreds of GB of memory).
+    incoming_start: Vec<u32>,
     incoming: Vec<u32>,
     /// The crossing pairs' loads (None: not in contact).
     loads: Vec<CrossingLoad>,
     /// Made before any contact was known: to be made again.
     provisional: bool,
-    /// Estimated work before each row (scratch of `prepare`).
-    work: Vec<usize>,
 }
 
 /// The work of a touching pair (gathering its inputs, the law, adding its load) in units of a
@@ -158,11 +157,9 @@ impl ForcePlan {
         use std::mem::size_of;
         self.blocks.capacity() * size_of::<Range<usize>>()
             + self.crossing.capacity() * size_of::<(u32, usize)>()
-            + (self.wall_ends.capacity() + self.crossing_start.capacity() + self.incoming_start.capacity())
-                * size_of::<usize>()
-            + self.incoming.capacity() * 4
+            + (self.wall_ends.capacity() + self.crossing_start.capacity()) * size_of::<usize>()
+            + (self.incoming_start.capacity() + self.incoming.capacity()) * 4
             + self.loads.capacity() * size_of::<CrossingLoad>()
-            + self.work.capacity() * size_of::<usize>()
     }
 
     /// Cuts `n` slots into `n_blocks` blocks of about equal work, unless it was done for this
@@ -188,39 +185,41 @@ impl ForcePlan {
         }
         self.made_for = Some((build, n_blocks));
         let n = offsets.len().saturating_sub(1);
-        // Work before each row: prefix sums of the rows' costs (n + 1 entries).
-        self.work.clear();
-        self.work.reserve(n + 1);
-        let mut total = 0usize;
-        let mut walls = wall_pairs.iter().zip(wall_history).peekable();
-        let mut touching = 0usize;
-        for a in 0..n {
-            self.work.push(total);
-            let row = offsets[a]..offsets[a + 1];
-            let contacts = in_contact[row.clone()].iter().filter(|&&c| c).count();
-            total += ROW_COST + row.len() + CONTACT_COST * contacts;
-            touching += contacts;
-            while let Some((_, h)) = walls.next_if(|&(&[i, _], _)| i as usize == a) {
-                let contact = *h != Vec3::ZERO;
-                total += 1 + CONTACT_COST * contact as usize;
-                touching += contact as usize;
-            }
-        }
-        self.work.push(total);
-        self.provisional = !same_build && touching == 0;
+        // Each row's estimated work and whether it has contacts, row by row. The list is
+        // walked twice (for the total, then for the cuts) rather than the prefix sums kept: on
+        // a million particles they would take 8 MB.
+        let row_costs = || {
+            let mut walls = wall_pairs.iter().zip(wall_history).peekable();
+            (0..n).map(move |a| {
+                let row = offsets[a]..offsets[a + 1];
+                let mut contacts = in_contact[row.clone()].iter().filter(|&&c| c).count();
+                let mut cost = ROW_COST + row.len() + CONTACT_COST * contacts;
+                while let Some((_, h)) = walls.next_if(|&(&[i, _], _)| i as usize == a) {
+                    let contact = *h != Vec3::ZERO;
+                    cost += 1 + CONTACT_COST * contact as usize;
+                    contacts += contact as usize;
+                }
+                (cost, contacts > 0)
+            })
+        };
+        let (total, touching) = row_costs().fold((0, false), |(w, t), (c, touches)| (w + c, t | touches));
+        self.provisional = !same_build && !touching;
+        // Block t ends at the first row with at least t/n_blocks of the work before it.
         self.blocks.clear();
-        let mut start = 0;
-        for t in 1..=n_blocks {
-            // The first row at or beyond the block's share of the work.
-            let end = if t == n_blocks {
-                n
-            } else {
-                let target = total * t / n_blocks;
-                self.work[..n].partition_point(|&w| w < target).clamp(start, n)
-            };
-            self.blocks.push(start..end);
-            start = end;
+        let (mut start, mut before) = (0, 0);
+        let mut targets = (1..n_blocks).map(|t| total * t / n_blocks).peekable();
+        for (a, (cost, _)) in row_costs().enumerate() {
+            while targets.next_if(|&target| before >= target).is_some() {
+                self.blocks.push(start..a);
+                start = a;
+            }
+            before += cost;
         }
+        while self.blocks.len() + 1 < n_blocks {
+            self.blocks.push(start..n);
+            start = n;
+        }
+        self.blocks.push(start..n);
         self.wall_ends.clear();
         self.wall_ends
             .extend(self.blocks.iter().map(|r| wall_pairs.partition_point(|&[i, _]| (i as usize) < r.end)));
@@ -246,11 +245,16 @@ impl ForcePlan {
         }
         self.incoming.clear();
         self.incoming.resize(self.crossing.len(), 0);
-        let mut fill = self.incoming_start.clone();
+        // Each slot's start serves as its next free place, then the starts are shifted back
+        // into place (each has become the next slot's start).
         for (c, &(_, k)) in self.crossing.iter().enumerate() {
-            let b = partners[k] as usize;
-            self.incoming[fill[b]] = c as u32;
-            fill[b] += 1;
+            let at = &mut self.incoming_start[partners[k] as usize];
+            self.incoming[*at as usize] = c as u32;
+            *at += 1;
+        }
+        self.incoming_start.copy_within(0..n, 1);
+        if let Some(first) = self.incoming_start.first_mut() {
+            *first = 0;
         }
         self.loads.clear();
         self.loads.resize(self.crossing.len(), None);
@@ -354,7 +358,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
 #[derive(Clone, Copy)]
 enum Incoming<'a> {
     None,
-    Crossing { start: &'a [usize], index: &'a [u32], loads: &'a [CrossingLoad] },
+    Crossing { start: &'a [u32], index: &'a [u32], loads: &'a [CrossingLoad] },
 }
 
 /// The force stage of the rows `rows`: `force`/`torque` are those rows' accumulators,
@@ -395,7 +399,7 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     // Then the crossing pairs from the rows below this block, in list order.
     if let Incoming::Crossing { start, index, loads } = incoming {
         for b in rows.clone() {
-            for &c in &index[start[b]..start[b + 1]] {
+            for &c in &index[start[b] as usize..start[b + 1] as usize] {
                 if let Some(l) = loads[c as usize] {
                     force[b - r0] -= l.f;
                     torque[b - r0] += l.tb;
