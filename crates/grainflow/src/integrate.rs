@@ -221,15 +221,7 @@ pub fn verlet_kick_drift(
     dt: f64,
     blocks: &[Range<usize>],
 ) {
-    let h = 0.5 * dt;
-    for_slots(p, runs, blocks, None, |s| {
-        for i in 0..s.x.len() {
-            let (a, alpha) = s.accelerations(i, gravity);
-            s.v[i] += h * a;
-            s.w[i] += h * alpha;
-            s.x[i] += dt * s.v[i];
-        }
-    });
+    verlet_pass::<1, true>(p, runs, gravity, dt, blocks, None);
 }
 
 /// Velocity Verlet, second half: kick by Δt/2 with the new accelerations; then, with `wrap`,
@@ -242,14 +234,7 @@ pub fn verlet_kick(
     blocks: &[Range<usize>],
     wrap: Option<Periodic>,
 ) {
-    let h = 0.5 * dt;
-    for_slots(p, runs, blocks, wrap, |s| {
-        for i in 0..s.v.len() {
-            let (a, alpha) = s.accelerations(i, gravity);
-            s.v[i] += h * a;
-            s.w[i] += h * alpha;
-        }
-    });
+    verlet_pass::<1, false>(p, runs, gravity, dt, blocks, wrap);
 }
 
 /// The second half kick of one velocity-Verlet step and the first half kick and drift of the
@@ -265,15 +250,30 @@ pub fn verlet_kick_kick_drift(
     blocks: &[Range<usize>],
     wrap: Option<Periodic>,
 ) {
+    verlet_pass::<2, true>(p, runs, gravity, dt, blocks, wrap);
+}
+
+/// `KICKS` half kicks by Δt/2 with the accelerations of the forces in the accumulators, each
+/// added on its own, then, with `DRIFT`, x += Δt·v (after the wrap, if any).
+fn verlet_pass<const KICKS: usize, const DRIFT: bool>(
+    p: &mut Particles,
+    runs: &[Range<usize>],
+    gravity: Vec3,
+    dt: f64,
+    blocks: &[Range<usize>],
+    wrap: Option<Periodic>,
+) {
     let h = 0.5 * dt;
     for_slots(p, runs, blocks, wrap, |s| {
-        for i in 0..s.x.len() {
+        for i in 0..s.v.len() {
             let (a, alpha) = s.accelerations(i, gravity);
-            s.v[i] += h * a;
-            s.w[i] += h * alpha;
-            s.v[i] += h * a;
-            s.w[i] += h * alpha;
-            s.x[i] += dt * s.v[i];
+            for _ in 0..KICKS {
+                s.v[i] += h * a;
+                s.w[i] += h * alpha;
+            }
+            if DRIFT {
+                s.x[i] += dt * s.v[i];
+            }
         }
     });
 }
