@@ -23,17 +23,8 @@ use std::time::{Duration, Instant};
 
 /// Steps between health checks (also made at every output).
 pub const HEALTH_EVERY: u64 = 100;
-
 /// Most steps taken between two checks for a stop request.
 const MAX_STEPS_UNSEEN: u64 = 20;
-
-/// The step interval of periodic checkpoints, if they are counted in steps.
-fn checkpoint_steps(options: &RunOptions) -> Option<u64> {
-    match options.checkpoint_every {
-        Some(CheckpointEvery::Steps(n)) => Some(n),
-        _ => None,
-    }
-}
 /// Largest overlap, as a fraction of the smaller radius, before a run is stopped as unhealthy.
 pub const HEALTH_MAX_OVERLAP: f64 = 0.5;
 /// File name of the running checkpoint in the output folder.
@@ -320,6 +311,14 @@ pub fn health_problem(sim: &Simulation, domain: (Vec3, Vec3)) -> Option<String> 
         ));
     }
     None
+}
+
+/// The step interval of periodic checkpoints, if they are counted in steps.
+fn checkpoint_steps(options: &RunOptions) -> Option<u64> {
+    match options.checkpoint_every {
+        Some(CheckpointEvery::Steps(n)) => Some(n),
+        _ => None,
+    }
 }
 
 fn run_simulation(

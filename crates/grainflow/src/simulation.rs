@@ -360,10 +360,7 @@ impl Simulation {
 
     /// Advances one step: contact forces, integration, prescribed motion.
     pub fn step(&mut self) {
-        match self.pool.clone() {
-            Some(pool) if self.parallel() => pool.install(|| self.step_on(true, false)),
-            _ => self.step_on(false, false),
-        }
+        self.on_stages(|sim, par| sim.step_on(par, false));
     }
 
     /// Takes up to `steps` steps (stopping at the end of the run). Between the steps of one
@@ -376,12 +373,18 @@ impl Simulation {
         if steps == 0 {
             return;
         }
+        self.on_stages(|sim, par| sim.advance_on(steps, par));
+    }
+
+    /// Runs `f` on the thread pool if the stages run in parallel (telling it so), else here.
+    fn on_stages(&mut self, f: impl FnOnce(&mut Simulation, bool) + Send) {
         match self.pool.clone() {
-            Some(pool) if self.parallel() => pool.install(|| self.advance_on(steps, true)),
-            _ => self.advance_on(steps, false),
+            Some(pool) if self.parallel() => pool.install(|| f(self, true)),
+            _ => f(self, false),
         }
     }
 
+    /// `steps` steps (not beyond the end of the run); with `par`, on the current rayon pool.
     fn advance_on(&mut self, steps: u64, par: bool) {
         for i in 0..steps {
             self.step_on(par, i + 1 < steps);
