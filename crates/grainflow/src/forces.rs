@@ -314,10 +314,12 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
         crate::threads::pinned(parts, |t, ((hist, flags), loads)| {
             let c0 = if t == 0 { 0 } else { cuts[t - 1] };
             let k0 = if t == 0 { 0 } else { stretch_end(c0) };
-            for (load, &(a, k)) in loads.iter_mut().zip(&crossing[c0..cuts[t]]) {
-                let b = x.partners[k] as usize;
-                *load =
-                    pair_load::<HERTZ, INCREMENTAL>(x, a as usize, b, &mut hist[k - k0], &mut flags[k - k0]);
+            let mut lanes = Lanes::new();
+            if let Some(c) = x.coeffs.uniform_pair() {
+                lanes.input.fill_coeffs(c);
+            }
+            for (pairs, loads) in crossing[c0..cuts[t]].chunks(LANES).zip(loads.chunks_mut(LANES)) {
+                lanes.crossing_loads::<HERTZ, INCREMENTAL>(x, pairs, k0, hist, flags, loads);
             }
         });
     }
@@ -793,6 +795,59 @@ impl Lanes {
         }
     }
 
+    /// The loads of crossing pairs `pairs` (at most [`LANES`]; row a and pair index k each)
+    /// into `loads` (None for a pair that does not touch), their contact flags set and their
+    /// histories stored in `hist` and `flags` (those of the pairs from index `k0` on). Like
+    /// the contact test, without a branch on its outcome: every pair takes the next lane, which
+    /// only a touching pair keeps.
+    #[inline(always)]
+    fn crossing_loads<const HERTZ: bool, const INCREMENTAL: bool>(
+        &mut self,
+        x: &ForceInputs,
+        pairs: &[(u32, usize)],
+        k0: usize,
+        hist: &mut [Vec3],
+        flags: &mut [bool],
+        loads: &mut [CrossingLoad],
+    ) {
+        let uniform = x.coeffs.uniform_pair().is_some();
+        let mut kept = [0usize; LANES];
+        let mut n = 0;
+        for (i, &(a, k)) in pairs.iter().enumerate() {
+            let (a, b) = (a as usize, x.partners[k] as usize);
+            let d = x.images.nearest(x.position[b] - x.position[a]);
+            let touching = pair_touching(d.length_squared(), x.radius[a], x.radius[b]);
+            let flag = &mut flags[k - k0];
+            let fresh = !*flag;
+            *flag = touching;
+            loads[i] = None;
+            let p = pair_input(x, a, b, d, kept_or_zero(hist[k - k0], !fresh));
+            if uniform {
+                self.input.set_motion(n, &p);
+            } else {
+                self.input.set(n, &p);
+            }
+            kept[n] = i;
+            n += touching as usize;
+        }
+        if n == 0 {
+            return;
+        }
+        contact_loads::<HERTZ, INCREMENTAL, false>(
+            &x.law,
+            x.coeffs.rolling(),
+            x.dt,
+            &self.input,
+            &mut self.output,
+        );
+        for (lane, &i) in kept[..n].iter().enumerate() {
+            let k = pairs[i].1;
+            let (l, h) = self.output.get(lane);
+            hist[k - k0] = if x.advance { h } else { self.input.h.get(lane) };
+            loads[i] = Some(l);
+        }
+    }
+
     /// As [`add_loads`](Self::add_loads), for the listed wall pairs `group` (indices into
     /// `wall_pairs`, whose histories are `hist`).
     #[inline(always)]
@@ -957,13 +1012,6 @@ mod simd {
     }
 }
 
-/// x_b − x_a (nearest image) if pair (a, b) touches.
-#[inline(always)]
-fn touching_pair(x: &ForceInputs, a: usize, b: usize) -> Option<Vec3> {
-    let d = x.images.nearest(x.position[b] - x.position[a]);
-    pair_touching(d.length_squared(), x.radius[a], x.radius[b]).then_some(d)
-}
-
 /// The force law's inputs for the touching pair (a, b) at separation `d`, history `h`.
 #[inline(always)]
 fn pair_input(x: &ForceInputs, a: usize, b: usize, d: Vec3, h: Vec3) -> PairInput {
@@ -1075,27 +1123,6 @@ fn kept_or_zero(h: Vec3, keep: bool) -> Vec3 {
     let mask = (keep as u64).wrapping_neg();
     let masked = |v: f64| f64::from_bits(v.to_bits() & mask);
     Vec3::new(masked(h.x), masked(h.y), masked(h.z))
-}
-
-/// The load of pair (a, b), a < b, with stored tangential history `h` (advanced if the
-/// stage advances them) and contact flag `in_contact`; None when they do not touch.
-#[inline(always)]
-fn pair_load<const HERTZ: bool, const INCREMENTAL: bool>(
-    x: &ForceInputs,
-    a: usize,
-    b: usize,
-    h: &mut Vec3,
-    in_contact: &mut bool,
-) -> CrossingLoad {
-    let touching = touching_pair(x, a, b);
-    let fresh = !*in_contact;
-    *in_contact = touching.is_some();
-    let d = touching?;
-    let stored = kept_or_zero(*h, !fresh);
-    let (load, advanced) =
-        pair_law::<HERTZ, INCREMENTAL, { parts::ALL }>(&x.law, x.dt, &pair_input(x, a, b, d, stored));
-    *h = if x.advance { advanced } else { stored };
-    Some(load)
 }
 
 /// Effective mass of the particles in slots i and j: m_i m_j/(m_i + m_j), or the other one's
