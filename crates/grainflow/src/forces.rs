@@ -30,12 +30,12 @@
 //! particles about to come within the pairs' reach (`prefetch_ahead`).
 //!
 //! ## Threads
-//! The slots are cut into blocks of consecutive rows with about equal work (pairs to test,
-//! touching pairs weighted by their larger cost: `ForcePlan::prepare`). A pair whose
+//! The slots are cut into blocks of consecutive rows with about equal work (rows, pairs to
+//! test, touching pairs weighted by their larger cost: `ForcePlan::prepare`). A pair whose
 //! two particles lie in one block is computed by that block's thread, which adds it to both
 //! particles directly. A pair (a, b) with b in a later block (a *crossing* pair) is computed
-//! first, in a pass shared evenly over all threads (the crossing pairs all lie in the lower
-//! blocks), and kept; its block then adds it to a in a's row, and b's block adds it to b before
+//! first, in batches as the blocks' own pairs are, in a pass shared evenly over all threads
+//! (the crossing pairs all lie in the lower blocks), and kept; its block then adds it to a in a's row, and b's block adds it to b before
 //! any of its own rows — where the order above puts it, since its row lies below b's block. One
 //! block is the serial loop itself. With particles in a spatial order (`[particles] order =
 //! "spatial"`) few pairs cross. Block t always runs on thread t (the `threads` module), so its
