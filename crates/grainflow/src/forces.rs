@@ -649,6 +649,17 @@ impl InputLanes {
         }
     }
 
+    /// Sets lane `i` to `p`, but for the coefficients if `uniform` (the coefficient lanes then
+    /// hold the one set of coefficients already: [`fill_coeffs`](Self::fill_coeffs)).
+    #[inline(always)]
+    fn set_pair(&mut self, i: usize, p: &PairInput, uniform: bool) {
+        if uniform {
+            self.set_motion(i, p);
+        } else {
+            self.set(i, p);
+        }
+    }
+
     /// Sets lane `i` to `p` but for the coefficients.
     #[inline(always)]
     fn set_motion(&mut self, i: usize, p: &PairInput) {
@@ -760,12 +771,7 @@ impl Lanes {
                 // stays small, and these positions are in cache.
                 let d = x.images.nearest(x.position[b] - x.position[a]);
                 let p = pair_input(x, a, b, d, kept_or_zero(hist[k - k0], !f.fresh));
-                if uniform {
-                    // The coefficient lanes hold the one set of coefficients already.
-                    self.input.set_motion(i, &p);
-                } else {
-                    self.input.set(i, &p);
-                }
+                self.input.set_pair(i, &p, uniform);
             }
         }
         contact_loads::<HERTZ, INCREMENTAL, false>(
@@ -822,11 +828,7 @@ impl Lanes {
             *flag = touching;
             loads[i] = None;
             let p = pair_input(x, a, b, d, kept_or_zero(hist[k - k0], !fresh));
-            if uniform {
-                self.input.set_motion(n, &p);
-            } else {
-                self.input.set(n, &p);
-            }
+            self.input.set_pair(n, &p, uniform);
             kept[n] = i;
             n += touching as usize;
         }
