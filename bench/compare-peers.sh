@@ -2,7 +2,10 @@
 # grainflow against LAMMPS and LIGGGHTS on the three yardstick cases of ../shared/peers/, in
 # the same session: (1) physics — from the same LAMMPS state, the kinetic energy after 1 000
 # steps in both codes; (2) speed — particle-steps per second, median of RUNS runs each: LAMMPS
-# and LIGGGHTS on one core, grainflow on 1 and 2 threads, and the ratios. Results go on top of
+# and LIGGGHTS on one core, grainflow on 1 and 2 threads, and the ratios; (3) what two cores of
+# this machine give at best: LAMMPS on 2 MPI ranks, and two 1-thread grainflow runs at once
+# (their summed speed: no code sharing one case between two cores can beat it, since each run
+# has a core and its caches to itself). Results go on top of
 # bench/results/<date>-<host>.md (the day's earlier runs stay below) with a machine
 # description. Installs the peers from Debian's packages if they are missing.
 #
@@ -50,10 +53,11 @@ new="$W/section.md"
   echo
   echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}'), $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB;"
   echo "$(lmp -h | sed -n 2p | sed 's/^ *//'); $(liggghts -h 2>/dev/null | sed -n 's/.*(Version \(.*\), compiled.*/\1/p' | head -1); grainflow $($GF --version | awk '{print $2}')."
-  echo "Peers on one core; grainflow on 1 thread (-j 1) and on 2 threads (-j 2)."
+  echo "Peers on one core; grainflow on 1 thread (-j 1) and on 2 threads (-j 2). Two cores at best:"
+  echo "LAMMPS on 2 MPI ranks ÷ 1, and two 1-thread grainflow runs at once (summed speed) ÷ one alone."
   echo
-  echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS | LIGGGHTS | grainflow 1 thread | ÷ LAMMPS | ÷ LIGGGHTS | grainflow 2 threads | 2 threads ÷ 1 |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS | LIGGGHTS | grainflow 1 thread | ÷ LAMMPS | ÷ LIGGGHTS | grainflow 2 threads | 2 threads ÷ 1 | LAMMPS 2 ranks ÷ 1 | 2 runs at once ÷ 1 |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } > "$new"
 for c in box_hm box_lsd chute; do
   # Physics: 1 000 steps from the same state.
@@ -70,21 +74,32 @@ for c in box_hm box_lsd chute; do
     awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lmp.$c.t$i
   done | median > lmp.$c.speed
   for i in $(seq "$RUNS"); do
+    mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp2.$c.t$i -screen none
+    awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lmp2.$c.t$i
+  done | median > lmp2.$c.speed
+  for i in $(seq "$RUNS"); do
     liggghts -in ${LIG_IN[$c]} -var nrun "$NRUN" -log lig.$c.t$i -screen none
     awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lig.$c.t$i
   done | median > lig.$c.speed
   dtl=$(awk '/^dt = /{print $3}' $c.toml)
   sed "s|^t_stop = .*|t_stop = $(python3 -c "print($NRUN*$dtl)")|; s|^interval = .*|interval = 1e9|" $c.toml > $c.speed.toml
-  for j in 1 2; do
-    for i in $(seq "$RUNS"); do
-      $GF run $c.speed.toml -j $j --out gf.$c.t$i -q | awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'
-    done | median > gf.$c.speed.$j
+  gf_speed() { awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'; }
+  # 1 thread, 2 threads and two 1-thread runs at once, taken in turn, so that a slow spell of
+  # the machine does not fall on one of them only.
+  for i in $(seq "$RUNS"); do
+    $GF run $c.speed.toml -j 1 --out gf.$c.t$i -q | gf_speed >> gf.$c.speed.1
+    $GF run $c.speed.toml -j 2 --out gf.$c.t$i -q | gf_speed >> gf.$c.speed.2
+    $GF run $c.speed.toml -j 1 --out gf.$c.a$i -q | gf_speed > gf.$c.a &
+    $GF run $c.speed.toml -j 1 --out gf.$c.b$i -q | gf_speed > gf.$c.b
+    wait
+    cat gf.$c.a gf.$c.b | awk '{s+=$1} END {print s}' >> gf.$c.speed.both
   done
-  python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat lig.$c.speed)" "$(cat gf.$c.speed.1)" "$(cat gf.$c.speed.2)" >> "$new" <<'PY'
+  python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat lig.$c.speed)" "$(median < gf.$c.speed.1)" \
+    "$(median < gf.$c.speed.2)" "$(cat lmp2.$c.speed)" "$(median < gf.$c.speed.both)" >> "$new" <<'PY'
 import sys
 c = sys.argv[1]
-kl, kg, sl, sli, g1, g2 = map(float, sys.argv[2:])
-print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sli:.2f} | {g1:.2f} | {g1/sl:.2f} | {g1/sli:.2f} | {g2:.2f} | {g2/g1:.2f} |")
+kl, kg, sl, sli, g1, g2, sl2, gb = map(float, sys.argv[2:])
+print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sli:.2f} | {g1:.2f} | {g1/sl:.2f} | {g1/sli:.2f} | {g2:.2f} | {g2/g1:.2f} | {sl2/sl:.2f} | {gb/g1:.2f} |")
 PY
 done
 echo >> "$new"
