@@ -8,12 +8,6 @@
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// Spins of a thread that finished its parts, waiting for the others, before it yields its core
-/// at each further look (so that more threads than cores still make progress). 65 536 spin
-/// hints took 1.7 ms on the development machine (AMD EPYC): longer than the threads' times for
-/// their parts of a stage usually differ by (up to 0.2 ms on the chute).
-const SPINS_BEFORE_YIELDING: u32 = 1 << 16;
-
 /// Runs `work(i, part)` for each of `parts`, part i on thread i mod T of the current rayon pool
 /// of T threads (outside a pool, on the global one), and returns the results in part order.
 pub(crate) fn pinned<T: Send, R: Send>(parts: Vec<T>, work: impl Fn(usize, T) -> R + Sync) -> Vec<R> {
@@ -28,16 +22,14 @@ pub(crate) fn pinned<T: Send, R: Send>(parts: Vec<T>, work: impl Fn(usize, T) ->
         let results = (ctx.index()..n).step_by(ctx.num_threads()).map(|i| work(i, take(i))).collect();
         // Wait for the other threads here rather than in rayon's idle loop, which puts a thread
         // to sleep after a few tens of microseconds: the next stage, usually a few
-        // microseconds away, would wait as long again for it to wake.
+        // microseconds away, would wait 40-80 µs for it to wake. The thread yields its core at
+        // each look instead of spinning on it: a spinning thread slowed the other thread's
+        // work on the development machine (2-thread runs took 1-18 % longer: medians per case
+        // of three series of 6-10 alternated runs), and with more threads than cores a yield
+        // lets the others run.
         finished.fetch_add(1, Ordering::AcqRel);
-        let mut spins = 0u32;
         while finished.load(Ordering::Acquire) < ctx.num_threads() {
-            if spins < SPINS_BEFORE_YIELDING {
-                spins += 1;
-                std::hint::spin_loop();
-            } else {
-                std::thread::yield_now();
-            }
+            std::thread::yield_now();
         }
         results
     });
