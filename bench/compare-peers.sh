@@ -3,9 +3,10 @@
 # the same session: (1) physics — from the same LAMMPS state, the kinetic energy after 1 000
 # steps in both codes; (2) speed — particle-steps per second, median of RUNS runs each: LAMMPS
 # and LIGGGHTS on one core, grainflow on 1 and 2 threads, and the ratios; (3) what two cores of
-# this machine give at best: LAMMPS on 2 MPI ranks, and two 1-thread grainflow runs at once
-# (their summed speed: no code sharing one case between two cores can beat it, since each run
-# has a core and its caches to itself). Results go on top of
+# this machine give: LAMMPS on 2 MPI ranks, and two 1-thread grainflow runs at once (their
+# summed speed: what both cores give grainflow's 1-thread code at that time, each with a whole
+# run; a code splitting one case gains beyond it only from each core holding half the data).
+# Results go on top of
 # bench/results/<date>-<host>.md (the day's earlier runs stay below) with a machine
 # description. Installs the peers from Debian's packages if they are missing.
 #
@@ -53,7 +54,7 @@ new="$W/section.md"
   echo
   echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}'), $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB;"
   echo "$(lmp -h | sed -n 2p | sed 's/^ *//'); $(liggghts -h 2>/dev/null | sed -n 's/.*(Version \(.*\), compiled.*/\1/p' | head -1); grainflow $($GF --version | awk '{print $2}')."
-  echo "Peers on one core; grainflow on 1 thread (-j 1) and on 2 threads (-j 2). Two cores at best:"
+  echo "Peers on one core; grainflow on 1 thread (-j 1) and on 2 threads (-j 2). What two cores give:"
   echo "LAMMPS on 2 MPI ranks ÷ 1, and two 1-thread grainflow runs at once (summed speed) ÷ one alone."
   echo
   echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS | LIGGGHTS | grainflow 1 thread | ÷ LAMMPS | ÷ LIGGGHTS | grainflow 2 threads | 2 threads ÷ 1 | LAMMPS 2 ranks ÷ 1 | 2 runs at once ÷ 1 |"
