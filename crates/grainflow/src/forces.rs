@@ -746,6 +746,26 @@ impl Lanes {
         Lanes { input: InputLanes::ZERO, output: OutputLanes::ZERO }
     }
 
+    /// The loads of the batch in the input lanes ([`contact_loads`]), into the output lanes; a
+    /// wall batch with `WALL`.
+    #[inline(always)]
+    fn compute<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(&mut self, x: &ForceInputs) {
+        contact_loads::<HERTZ, INCREMENTAL, WALL>(
+            &x.law,
+            x.coeffs.rolling(),
+            x.dt,
+            &self.input,
+            &mut self.output,
+        );
+    }
+
+    /// The history to store for pair lane `lane`, whose advanced history is `h`: `h`, or the
+    /// input's when the springs are not advanced (so a fresh contact's history becomes zero).
+    #[inline(always)]
+    fn stored_history(&self, x: &ForceInputs, lane: usize, h: Vec3) -> Vec3 {
+        if x.advance { h } else { self.input.h.get(lane) }
+    }
+
     /// Computes the loads of the listed pairs `group` (at most [`LANES`]) of the block's
     /// `rows` and adds them, in order, to the rows' accumulators, storing the histories in
     /// `hist` (those of the rows' pairs). A crossing pair takes its load from `crossing`.
@@ -774,19 +794,12 @@ impl Lanes {
                 self.input.set_pair(i, &p, uniform);
             }
         }
-        contact_loads::<HERTZ, INCREMENTAL, false>(
-            &x.law,
-            x.coeffs.rolling(),
-            x.dt,
-            &self.input,
-            &mut self.output,
-        );
+        self.compute::<HERTZ, INCREMENTAL, false>(x);
         for (i, f) in group.iter().enumerate() {
             let (a, b, k) = (f.a as usize, x.partners[f.k] as usize, f.k);
             let l = if b < r1 {
                 let (l, h) = self.output.get(i);
-                // Stored even when not advanced: a fresh contact's history becomes zero.
-                hist[k - k0] = if x.advance { h } else { self.input.h.get(i) };
+                hist[k - k0] = self.stored_history(x, i, h);
                 force[b - r0] -= l.f;
                 torque[b - r0] += l.tb;
                 l
@@ -835,17 +848,11 @@ impl Lanes {
         if n == 0 {
             return;
         }
-        contact_loads::<HERTZ, INCREMENTAL, false>(
-            &x.law,
-            x.coeffs.rolling(),
-            x.dt,
-            &self.input,
-            &mut self.output,
-        );
+        self.compute::<HERTZ, INCREMENTAL, false>(x);
         for (lane, &i) in kept[..n].iter().enumerate() {
             let k = pairs[i].1;
             let (l, h) = self.output.get(lane);
-            hist[k - k0] = if x.advance { h } else { self.input.h.get(lane) };
+            hist[k - k0] = self.stored_history(x, lane, h);
             loads[i] = Some(l);
         }
     }
@@ -882,13 +889,7 @@ impl Lanes {
                 self.input.set(lane, &input);
             }
         }
-        contact_loads::<HERTZ, INCREMENTAL, true>(
-            &x.law,
-            x.coeffs.rolling(),
-            x.dt,
-            &self.input,
-            &mut self.output,
-        );
+        self.compute::<HERTZ, INCREMENTAL, true>(x);
         for (lane, &j) in group.iter().enumerate() {
             let i = wall_pairs[j][0] as usize;
             let (l, h) = self.output.get(lane);
