@@ -643,26 +643,6 @@ impl InputLanes {
     /// Sets lane `i` to `p`.
     #[inline(always)]
     fn set(&mut self, i: usize, p: &PairInput) {
-        self.set_motion(i, p);
-        for (lane, v) in self.coeffs.iter_mut().zip(coeff_lanes(&p.c)) {
-            lane[i] = v;
-        }
-    }
-
-    /// Sets lane `i` to `p`, but for the coefficients if `uniform` (the coefficient lanes then
-    /// hold the one set of coefficients already: [`fill_coeffs`](Self::fill_coeffs)).
-    #[inline(always)]
-    fn set_pair(&mut self, i: usize, p: &PairInput, uniform: bool) {
-        if uniform {
-            self.set_motion(i, p);
-        } else {
-            self.set(i, p);
-        }
-    }
-
-    /// Sets lane `i` to `p` but for the coefficients.
-    #[inline(always)]
-    fn set_motion(&mut self, i: usize, p: &PairInput) {
         self.d.set(i, p.d);
         self.va.set(i, p.va);
         self.vb.set(i, p.vb);
@@ -671,6 +651,53 @@ impl InputLanes {
         self.h.set(i, p.h);
         for (lane, v) in self.scalars.iter_mut().zip([p.ra, p.rb, p.m_eff]) {
             lane[i] = v;
+        }
+        for (lane, v) in self.coeffs.iter_mut().zip(coeff_lanes(&p.c)) {
+            lane[i] = v;
+        }
+    }
+
+    /// Sets lane `i` to the pair (a, b) of slots at separation `d` (x_b − x_a, nearest image)
+    /// with stored history `h`; its coefficients only if the phase pairs have their own (the
+    /// coefficient lanes hold the one set all pairs share otherwise:
+    /// [`fill_coeffs`](Self::fill_coeffs)).
+    #[inline(always)]
+    fn set_pair(&mut self, i: usize, s: &PairData, a: usize, b: usize, d: Vec3, h: Vec3) {
+        let n = s.position.len();
+        assert!(a < n && b < n);
+        self.d.set(i, d);
+        self.va.set(i, s.velocity[a]);
+        self.vb.set(i, s.velocity[b]);
+        self.wa.set(i, s.omega[a]);
+        self.wb.set(i, s.omega[b]);
+        self.h.set(i, h);
+        let m_eff = if s.per_mass { pair_mass(s.mass, s.held, a, b) } else { 0.0 };
+        for (lane, v) in self.scalars.iter_mut().zip([s.radius[a], s.radius[b], m_eff]) {
+            lane[i] = v;
+        }
+        if let Some(phase) = s.phase {
+            let c = s.coeffs.pair(phase[a] as usize, phase[b] as usize);
+            for (lane, v) in self.coeffs.iter_mut().zip(coeff_lanes(c)) {
+                lane[i] = v;
+            }
+        }
+    }
+
+    /// Sets the lanes of the listed pairs `group` of the rows below `r1` (a crossing pair's
+    /// lane is left as it is); `hist` holds the histories of the pairs from index `k0` on.
+    /// Not inlined into the batch loop (one copy serves every law): on its own, its loop keeps
+    /// the arrays' addresses in registers, where the inlined loop reloaded them for each pair.
+    #[inline(never)]
+    fn gather_pairs(&mut self, x: &ForceInputs, r1: usize, k0: usize, group: &[Found], hist: &[Vec3]) {
+        let s = PairData::of(x);
+        for (i, f) in group.iter().enumerate() {
+            let (a, b) = (f.a as usize, x.partners[f.k] as usize);
+            if b < r1 {
+                // The separation again, rather than kept from the contact test: the listing
+                // stays small, and these positions are in cache.
+                let d = s.separation(a, b);
+                self.set_pair(i, &s, a, b, d, kept_or_zero(hist[f.k - k0], !f.fresh));
+            }
         }
     }
 
@@ -783,17 +810,7 @@ impl Lanes {
     ) {
         let (r0, r1) = (rows.start, rows.end);
         let k0 = x.offsets[r0];
-        let uniform = x.coeffs.uniform_pair().is_some();
-        for (i, f) in group.iter().enumerate() {
-            let (a, b, k) = (f.a as usize, x.partners[f.k] as usize, f.k);
-            if b < r1 {
-                // The separation again, rather than kept from the contact test: the listing
-                // stays small, and these positions are in cache.
-                let d = x.images.nearest(x.position[b] - x.position[a]);
-                let p = pair_input(x, a, b, d, kept_or_zero(hist[k - k0], !f.fresh));
-                self.input.set_pair(i, &p, uniform);
-            }
-        }
+        self.input.gather_pairs(x, r1, k0, group, hist);
         self.compute::<HERTZ, INCREMENTAL, false>(x);
         for (i, f) in group.iter().enumerate() {
             let (a, b, k) = (f.a as usize, x.partners[f.k] as usize, f.k);
@@ -829,19 +846,18 @@ impl Lanes {
         flags: &mut [bool],
         loads: &mut [CrossingLoad],
     ) {
-        let uniform = x.coeffs.uniform_pair().is_some();
+        let s = PairData::of(x);
         let mut kept = [0usize; LANES];
         let mut n = 0;
         for (i, &(a, k)) in pairs.iter().enumerate() {
             let (a, b) = (a as usize, x.partners[k] as usize);
-            let d = x.images.nearest(x.position[b] - x.position[a]);
-            let touching = pair_touching(d.length_squared(), x.radius[a], x.radius[b]);
+            let d = s.separation(a, b);
+            let touching = pair_touching(d.length_squared(), s.radius[a], s.radius[b]);
             let flag = &mut flags[k - k0];
             let fresh = !*flag;
             *flag = touching;
             loads[i] = None;
-            let p = pair_input(x, a, b, d, kept_or_zero(hist[k - k0], !fresh));
-            self.input.set_pair(n, &p, uniform);
+            self.input.set_pair(n, &s, a, b, d, kept_or_zero(hist[k - k0], !fresh));
             kept[n] = i;
             n += touching as usize;
         }
@@ -1015,25 +1031,48 @@ mod simd {
     }
 }
 
-/// The force law's inputs for the touching pair (a, b) at separation `d`, history `h`.
-#[inline(always)]
-fn pair_input(x: &ForceInputs, a: usize, b: usize, d: Vec3, h: Vec3) -> PairInput {
-    let c = match x.coeffs.uniform_pair() {
-        Some(c) => *c,
-        None => *x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize),
-    };
-    let m_eff = if x.law.damping.per_particle_mass() { pair_mass(x.mass, x.held, a, b) } else { 0.0 };
-    PairInput {
-        d,
-        ra: x.radius[a],
-        rb: x.radius[b],
-        va: x.velocity[a],
-        vb: x.velocity[b],
-        wa: x.omega[a],
-        wb: x.omega[b],
-        h,
-        c,
-        m_eff,
+/// What the force stage reads of the particles for a pair's lane: the per-particle arrays, cut
+/// to one length (so that one check of a slot covers them all), and the settings that decide
+/// what the lane holds.
+#[derive(Clone, Copy)]
+struct PairData<'a> {
+    position: &'a [Vec3],
+    velocity: &'a [Vec3],
+    omega: &'a [Vec3],
+    radius: &'a [f64],
+    mass: &'a [f64],
+    /// Slots held fixed (empty if none).
+    held: &'a [bool],
+    /// The phases, if the phase pairs have coefficients of their own.
+    phase: Option<&'a [u32]>,
+    coeffs: &'a CoeffTable,
+    /// The damping takes the contact's effective mass.
+    per_mass: bool,
+    images: Images,
+}
+
+impl<'a> PairData<'a> {
+    #[inline(always)]
+    fn of(x: &ForceInputs<'a>) -> Self {
+        let n = x.position.len();
+        PairData {
+            position: x.position,
+            velocity: &x.velocity[..n],
+            omega: &x.omega[..n],
+            radius: &x.radius[..n],
+            mass: &x.mass[..n],
+            held: if x.held.is_empty() { &[] } else { &x.held[..n] },
+            phase: x.coeffs.uniform_pair().is_none().then(|| &x.phase[..n]),
+            coeffs: x.coeffs,
+            per_mass: x.law.damping.per_particle_mass(),
+            images: x.images,
+        }
+    }
+
+    /// x_b − x_a, the nearest image on periodic axes.
+    #[inline(always)]
+    fn separation(&self, a: usize, b: usize) -> Vec3 {
+        self.images.nearest(self.position[b] - self.position[a])
     }
 }
 
