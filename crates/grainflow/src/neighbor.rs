@@ -94,6 +94,10 @@ const HALF_SHELL: [(i64, i64, i64); 13] = [
     (1, 1, 1),
 ];
 
+/// On threads, the pairs a thread has found are added to the list's keys once it holds this
+/// many (512 KiB).
+const HAND_OVER_KEYS: usize = 1 << 16;
+
 /// The sort key of the pair of slots a < b (or of a slot and a wall index).
 #[inline]
 fn pair_key(a: u32, b: u32) -> u64 {
@@ -498,18 +502,33 @@ impl NeighborList {
             };
             if parallel {
                 use rayon::prelude::*;
-                let layers: Vec<(Vec<u64>, u64)> = (0..nz)
+                // The keys go into the list in any order (it is sorted below): each thread
+                // hands its pairs over a bufferful at a time, so that the pairs found but not
+                // yet handed over stay a small part of the list (collecting every layer's
+                // pairs first would hold a second copy of its keys).
+                let keys = std::sync::Mutex::new(std::mem::take(&mut self.fresh));
+                let hand_over = |buf: &mut Vec<u64>| {
+                    keys.lock().unwrap_or_else(|e| e.into_inner()).extend_from_slice(buf);
+                    buf.clear();
+                };
+                self.stats.distance_checks += (0..nz)
                     .into_par_iter()
-                    .map(|cz| {
-                        let mut out = Vec::new();
-                        let checks = layer(cz, &mut out);
-                        (out, checks)
+                    .fold(
+                        || (Vec::new(), 0u64),
+                        |(mut buf, checks), cz| {
+                            let checks = checks + layer(cz, &mut buf);
+                            if buf.len() >= HAND_OVER_KEYS {
+                                hand_over(&mut buf);
+                            }
+                            (buf, checks)
+                        },
+                    )
+                    .map(|(mut buf, checks)| {
+                        hand_over(&mut buf);
+                        checks
                     })
-                    .collect();
-                for (pairs, checks) in layers {
-                    self.fresh.extend_from_slice(&pairs);
-                    self.stats.distance_checks += checks;
-                }
+                    .sum::<u64>();
+                self.fresh = keys.into_inner().unwrap_or_else(|e| e.into_inner());
             } else {
                 for cz in 0..nz {
                     self.stats.distance_checks += layer(cz, &mut self.fresh);
@@ -579,8 +598,11 @@ impl NeighborList {
         self.partners.clear();
         self.partners.reserve_exact(len);
         self.partners.extend(self.fresh.iter().map(|&key| key as u32));
-        // The pairs of the next build are about as many; the scratch is not kept meanwhile.
-        self.fresh = Vec::new();
+        // Kept for the next build, which finds about as many pairs. Freed and allocated again
+        // at every build, they made the peak memory grow with the rebuilds (the allocator
+        // kept what they left behind): the 1 000 000-particle bed peaked at 326 MB after its
+        // first steps and at 374 MB after five rebuilds; 346 MB with the keys kept.
+        self.fresh.clear();
     }
 
     fn build_walls(&mut self, p: &Particles, walls: &[Wall]) {
