@@ -6,9 +6,8 @@
 # this machine give: LAMMPS on 2 MPI ranks, and two 1-thread grainflow runs at once (their
 # summed speed: what both cores give grainflow's 1-thread code at that time, each with a whole
 # run; a code splitting one case gains beyond it only from each core holding half the data).
-# Results go on top of
-# bench/results/<date>-<host>.md (the day's earlier runs stay below) with a machine
-# description. Installs the peers from Debian's packages if they are missing.
+# Results go on top of bench/results/<date>-<host>.md (the day's earlier runs stay below) with
+# a machine description. Installs the peers from Debian's packages if they are missing.
 #
 #   bench/compare-peers.sh              (RUNS=3 NRUN=2000 by default)
 set -euo pipefail
