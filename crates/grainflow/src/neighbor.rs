@@ -12,7 +12,7 @@
 //! of each step writes one byte per pair instead of clearing the 24-byte history of every pair
 //! that does not touch — in a flowing bed most of them.
 
-use crate::boundary::Periodic;
+use crate::boundary::{Images, Periodic};
 use crate::math::Vec3;
 use crate::state::Particles;
 use crate::wall::Wall;
@@ -77,22 +77,6 @@ pub struct NeighborState {
     /// Positions at the last build.
     pub reference: Vec<Vec3>,
 }
-
-const HALF_SHELL: [(i64, i64, i64); 13] = [
-    (1, 0, 0),
-    (-1, 1, 0),
-    (0, 1, 0),
-    (1, 1, 0),
-    (-1, -1, 1),
-    (0, -1, 1),
-    (1, -1, 1),
-    (-1, 0, 1),
-    (0, 0, 1),
-    (1, 0, 1),
-    (-1, 1, 1),
-    (0, 1, 1),
-    (1, 1, 1),
-];
 
 /// On threads, the pairs a thread has found are added to the list's keys once it holds this
 /// many (512 KiB).
@@ -444,17 +428,12 @@ impl NeighborList {
             }
             let start = &self.cell_count;
             let sorted = &self.sorted;
-            let excluded = &self.excluded;
-            let images = per.images();
-            let consider = |i: usize, j: usize, out: &mut Vec<u64>| {
-                if !excluded.is_empty() && excluded[i] && excluded[j] {
-                    return;
-                }
-                let cut = p.radius[i] + p.radius[j] + skin;
-                if images.nearest(p.position[j] - p.position[i]).length_squared() < cut * cut {
-                    let (a, b) = if i < j { (i, j) } else { (j, i) };
-                    out.push(pair_key(a as u32, b as u32));
-                }
+            let search = PairSearch {
+                position: &p.position,
+                radius: &p.radius,
+                excluded: &self.excluded,
+                skin,
+                images: per.images(),
             };
             let wrap_axis = |o: i64, m: usize, k: usize| -> Option<usize> {
                 if o >= 0 && o < m as i64 {
@@ -465,36 +444,63 @@ impl NeighborList {
                     None
                 }
             };
-            // The pairs of the cells of layer cz with their half shells, into `out`; returns
-            // the distance tests made.
-            let layer = |cz: usize, out: &mut Vec<u64>| -> u64 {
+            let cell = |ox: usize, oy: usize, oz: usize| {
+                let c = ox + nx * (oy + ny * oz);
+                &sorted[start[c] as usize..start[c + 1] as usize]
+            };
+            // The slots of the cells cx − 1 ..= cx + 1 of row (cy, cz) (cy, cz possibly out of
+            // range: no cells then), as up to three slices of `sorted`. Cells next to each other
+            // along x are next to each other in `sorted`, so the row is one slice unless it
+            // wraps around a periodic x axis or is cut by the box's edge.
+            let row_of_three = |cx: usize, cy: i64, cz: i64| -> [&[u32]; 3] {
+                let (Some(oy), Some(oz)) = (wrap_axis(cy, ny, 1), wrap_axis(cz, nz, 2)) else {
+                    return [&[]; 3];
+                };
+                if cx >= 1 && cx + 1 < nx {
+                    let row = nx * (oy + ny * oz);
+                    return [&sorted[start[row + cx - 1] as usize..start[row + cx + 2] as usize], &[], &[]];
+                }
+                [-1, 0, 1].map(|dx| wrap_axis(cx as i64 + dx, nx, 0).map_or(&[][..], |ox| cell(ox, oy, oz)))
+            };
+            // The pairs of the cells of layer cz with their half shells (the cell itself, the
+            // next cell along x, the row of three at y + 1 and the three rows of three at z + 1),
+            // into `out`; returns the distance tests made.
+            let layer = |cz: usize, out: &mut Keys| -> u64 {
                 let mut checks = 0u64;
                 for cy in 0..ny {
                     for cx in 0..nx {
-                        let c = cx + nx * (cy + ny * cz);
-                        let own = &sorted[start[c] as usize..start[c + 1] as usize];
-                        for (k, &i) in own.iter().enumerate() {
-                            for &j in &own[k + 1..] {
-                                consider(i as usize, j as usize, out);
-                            }
-                            checks += (own.len() - k - 1) as u64;
+                        let own = cell(cx, cy, cz);
+                        if own.is_empty() {
+                            continue;
                         }
-                        for (dx, dy, dz) in HALF_SHELL {
-                            let (Some(ox), Some(oy), Some(oz)) = (
-                                wrap_axis(cx as i64 + dx, nx, 0),
-                                wrap_axis(cy as i64 + dy, ny, 1),
-                                wrap_axis(cz as i64 + dz, nz, 2),
-                            ) else {
-                                continue;
-                            };
-                            let o = ox + nx * (oy + ny * oz);
-                            let other = &sorted[start[o] as usize..start[o + 1] as usize];
-                            for &i in own {
-                                for &j in other {
-                                    consider(i as usize, j as usize, out);
-                                }
+                        // The partners in the cell itself and in the next one along x: one
+                        // slice of `sorted`, the rest of the cell's and the next cell's slots,
+                        // unless the box ends there or x wraps around.
+                        if cx + 1 < nx {
+                            let s0 = start[cx + nx * (cy + ny * cz)] as usize;
+                            let s2 = start[cx + 2 + nx * (cy + ny * cz)] as usize;
+                            for (k, &i) in own.iter().enumerate() {
+                                search.row(i, &sorted[s0 + k + 1..s2], out);
+                                checks += (s2 - s0 - k - 1) as u64;
                             }
-                            checks += (own.len() * other.len()) as u64;
+                        } else {
+                            let next = wrap_axis(nx as i64, nx, 0).map_or(&[][..], |ox| cell(ox, cy, cz));
+                            for (k, &i) in own.iter().enumerate() {
+                                search.row(i, &own[k + 1..], out);
+                                search.row(i, next, out);
+                                checks += (own.len() - k - 1 + next.len()) as u64;
+                            }
+                        }
+                        let (y, z) = (cy as i64, cz as i64);
+                        for (dy, dz) in [(1, 0), (-1, 1), (0, 1), (1, 1)] {
+                            for other in
+                                row_of_three(cx, y + dy, z + dz).into_iter().filter(|o| !o.is_empty())
+                            {
+                                for &i in own {
+                                    search.row(i, other, out);
+                                }
+                                checks += (own.len() * other.len()) as u64;
+                            }
                         }
                     }
                 }
@@ -507,17 +513,17 @@ impl NeighborList {
                 // yet handed over stay a small part of the list (collecting every layer's
                 // pairs first would hold a second copy of its keys).
                 let keys = std::sync::Mutex::new(std::mem::take(&mut self.fresh));
-                let hand_over = |buf: &mut Vec<u64>| {
-                    keys.lock().unwrap_or_else(|e| e.into_inner()).extend_from_slice(buf);
-                    buf.clear();
+                let hand_over = |buf: &mut Keys| {
+                    keys.lock().unwrap_or_else(|e| e.into_inner()).extend_from_slice(buf.found());
+                    buf.used = 0;
                 };
                 self.stats.distance_checks += (0..nz)
                     .into_par_iter()
                     .fold(
-                        || (Vec::new(), 0u64),
+                        || (Keys::default(), 0u64),
                         |(mut buf, checks), cz| {
                             let checks = checks + layer(cz, &mut buf);
-                            if buf.len() >= HAND_OVER_KEYS {
+                            if buf.used >= HAND_OVER_KEYS {
                                 hand_over(&mut buf);
                             }
                             (buf, checks)
@@ -530,9 +536,12 @@ impl NeighborList {
                     .sum::<u64>();
                 self.fresh = keys.into_inner().unwrap_or_else(|e| e.into_inner());
             } else {
+                let mut buf = Keys { keys: std::mem::take(&mut self.fresh), used: 0 };
                 for cz in 0..nz {
-                    self.stats.distance_checks += layer(cz, &mut self.fresh);
+                    self.stats.distance_checks += layer(cz, &mut buf);
                 }
+                buf.keys.truncate(buf.used);
+                self.fresh = buf.keys;
             }
         }
         if parallel {
@@ -628,6 +637,64 @@ impl NeighborList {
         }
         self.wall_pairs = fresh;
         self.wall_history = history;
+    }
+}
+
+/// Keys of pairs found, written into `keys[..used]`; `keys` beyond that is room already
+/// filled, so that a key can be written before it is known whether it is kept.
+#[derive(Default)]
+struct Keys {
+    keys: Vec<u64>,
+    used: usize,
+}
+
+impl Keys {
+    /// The keys found.
+    fn found(&self) -> &[u64] {
+        &self.keys[..self.used]
+    }
+
+    /// Room for `m` more keys after the ones found. The buffer grows by what is missing (plus
+    /// a little), within the capacity reserved for it where that suffices.
+    #[inline(always)]
+    fn room(&mut self, m: usize) -> &mut [u64] {
+        if self.keys.len() < self.used + m {
+            self.keys.resize(self.used + m + 256, 0);
+        }
+        &mut self.keys[self.used..self.used + m]
+    }
+}
+
+/// What the pair search reads: the particles, the cut-off's skin, the nearest-image rule and
+/// the slots whose pairs with each other are left out (empty if none).
+struct PairSearch<'a> {
+    position: &'a [Vec3],
+    radius: &'a [f64],
+    excluded: &'a [bool],
+    skin: f64,
+    images: Images,
+}
+
+impl PairSearch<'_> {
+    /// Appends to `out` the key of every pair (i, j), j in `others`, closer than
+    /// R_i + R_j + skin (and not left out). Without a branch on the outcome, which no predictor
+    /// could guess: each key is written into the next place, which only a pair within the
+    /// cut-off keeps.
+    #[inline(always)]
+    fn row(&self, i: u32, others: &[u32], out: &mut Keys) {
+        let (xi, ri) = (self.position[i as usize], self.radius[i as usize]);
+        let room = out.room(others.len());
+        let mut n = 0;
+        let ex_i = self.excluded.get(i as usize).copied().unwrap_or(false);
+        for &j in others {
+            let cut = ri + self.radius[j as usize] + self.skin;
+            let d = self.images.nearest(self.position[j as usize] - xi);
+            let left_out = ex_i && self.excluded.get(j as usize).copied().unwrap_or(false);
+            let within = (d.length_squared() < cut * cut) & !left_out;
+            room[n] = pair_key(i.min(j), i.max(j));
+            n += within as usize;
+        }
+        out.used += n;
     }
 }
 
