@@ -483,12 +483,33 @@ fn prefetch_ahead(x: &ForceInputs, a: usize, rows: Range<usize>, acc: [&[Vec3]; 
 const FOUND: usize = 256;
 
 /// A pair listed by the contact test: pair `k` of row `a`; `fresh` if it did not touch at
-/// the last evaluation (its stored history is then not its own).
+/// the last evaluation (its stored history is then not its own). Packed in 8 bytes (the test
+/// writes one for every pair it tests): the row, and the pair index with the flag in its top
+/// bit (a list of 2^31 pairs or more would take over 100 GB).
 #[derive(Debug, Clone, Copy, Default)]
 struct Found {
     a: u32,
-    fresh: bool,
-    k: usize,
+    k_fresh: u32,
+}
+
+impl Found {
+    const FRESH: u32 = 1 << 31;
+
+    #[inline(always)]
+    fn new(a: usize, k: usize, fresh: bool) -> Self {
+        Found { a: a as u32, k_fresh: k as u32 | (fresh as u32) << 31 }
+    }
+
+    /// The pair's index in the list.
+    #[inline(always)]
+    fn k(&self) -> usize {
+        (self.k_fresh & !Self::FRESH) as usize
+    }
+
+    #[inline(always)]
+    fn fresh(&self) -> bool {
+        self.k_fresh & Self::FRESH != 0
+    }
 }
 
 /// Where the contact test of a block's rows has got to: pair k of row a.
@@ -539,7 +560,7 @@ fn find_contacts(
             } else {
                 (true, false)
             };
-            found[n] = Found { a: a as u32, fresh, k };
+            found[n] = Found::new(a, k, fresh);
             n += keep as usize;
             k += 1;
         }
@@ -691,12 +712,12 @@ impl InputLanes {
     fn gather_pairs(&mut self, x: &ForceInputs, r1: usize, k0: usize, group: &[Found], hist: &[Vec3]) {
         let s = PairData::of(x);
         for (i, f) in group.iter().enumerate() {
-            let (a, b) = (f.a as usize, x.partners[f.k] as usize);
+            let (a, b) = (f.a as usize, x.partners[f.k()] as usize);
             if b < r1 {
                 // The separation again, rather than kept from the contact test: the listing
                 // stays small, and these positions are in cache.
                 let d = s.separation(a, b);
-                self.set_pair(i, &s, a, b, d, kept_or_zero(hist[f.k - k0], !f.fresh));
+                self.set_pair(i, &s, a, b, d, kept_or_zero(hist[f.k() - k0], !f.fresh()));
             }
         }
     }
@@ -813,7 +834,7 @@ impl Lanes {
         self.input.gather_pairs(x, r1, k0, group, hist);
         self.compute::<HERTZ, INCREMENTAL, false>(x);
         for (i, f) in group.iter().enumerate() {
-            let (a, b, k) = (f.a as usize, x.partners[f.k] as usize, f.k);
+            let (a, b, k) = (f.a as usize, x.partners[f.k()] as usize, f.k());
             let l = if b < r1 {
                 let (l, h) = self.output.get(i);
                 hist[k - k0] = self.stored_history(x, i, h);
