@@ -175,3 +175,91 @@ fn history_is_reset_when_contact_ends() {
         );
     }
 }
+
+/// A pair that touches again after a contact, with no rebuild of the neighbour list between the
+/// two (so the spring of the first contact is still stored beside the pair), starts the second
+/// contact from a zero spring (mfix-dem-model.md §1–2: "reset to zero when contact ends"): the
+/// run is bit-identical to one started afresh, with no stored spring, from the state between
+/// the two contacts. Set-up: a sphere (R = 1 mm, ρ = 2500 kg/m³) falling under gravity onto a
+/// held one right below it and bouncing on it, drifting sideways at 5 mm/s (so each contact
+/// loads the tangential spring); LSD k_n = 1e3 N/m, e = 0.5, μ = 0.3, Δt = 5 µs; the skin
+/// (0.4 mm) keeps the list from being rebuilt between the bounces (asserted).
+#[test]
+fn a_second_contact_starts_from_a_zero_spring() {
+    use grainflow::state::ParticleInit;
+    use grainflow::{MotionRule, PrescribedMotion};
+    for integrator in [Integrator::Euler, Integrator::VelocityVerlet] {
+        let make = |init: &[ParticleInit]| {
+            let p = lsd_params(1e3, 0.5, 0.3);
+            let mut cfg = config(
+                ContactLaw::mfix(NormalModel::LinearSpringDashpot),
+                vec![phase("p", 0.002, 2500.0)],
+                vec![],
+                vec![],
+                vec![p],
+                vec![],
+                integrator,
+                5e-6,
+            );
+            cfg.gravity = Vec3::new(0.0, -9.81, 0.0);
+            cfg.skin = Some(4e-4);
+            cfg.motion = vec![PrescribedMotion { particle: 1, rule: MotionRule::Hold }];
+            simulation(cfg, init)
+        };
+        let touching = |sim: &Simulation| {
+            let p = sim.particles();
+            (p.position[1] - p.position[0]).length() < p.radius[0] + p.radius[1]
+        };
+        let mut sim = make(&[
+            particle(1, 0, 1e-3, 2500.0, Vec3::ZERO, Vec3::ZERO),
+            particle(2, 0, 1e-3, 2500.0, Vec3::new(0.0, 2.001e-3, 0.0), Vec3::new(5e-3, -0.05, 0.0)),
+        ]);
+        // Through the first contact, to the first step after it.
+        let mut steps = 0;
+        let mut step_while = |sim: &mut Simulation, touch: bool| {
+            while touching(sim) == touch {
+                sim.step();
+                steps += 1;
+                assert!(steps < 20_000, "{integrator:?}: the bounce never came");
+            }
+        };
+        step_while(&mut sim, false);
+        step_while(&mut sim, true);
+        let builds = sim.neighbors().stats().builds;
+        let p = sim.particles();
+        let between: Vec<ParticleInit> = (0..2)
+            .map(|i| ParticleInit {
+                id: p.id[i],
+                phase: p.phase[i],
+                radius: p.radius[i],
+                density: 2500.0,
+                position: p.position[i],
+                velocity: p.velocity[i],
+                omega: p.omega[i],
+            })
+            .collect();
+        assert!(between[1].omega != Vec3::ZERO, "{integrator:?}: the first contact loaded no spring");
+        let mut fresh = make(&between);
+        // The second contact, side by side, to its end.
+        let (mut second, mut ended) = (false, false);
+        for _ in 0..20_000 {
+            sim.step();
+            fresh.step();
+            let (a, b) = (sim.particles(), fresh.particles());
+            assert_eq!(
+                (&a.position, &a.velocity, &a.omega),
+                (&b.position, &b.velocity, &b.omega),
+                "{integrator:?}: the second contact differs from one without a stored spring"
+            );
+            if touching(&sim) && !second {
+                second = true;
+                assert_eq!(sim.neighbors().stats().builds, builds, "{integrator:?}: the list was rebuilt");
+            }
+            if second && !touching(&sim) {
+                ended = true;
+                break;
+            }
+        }
+        assert!(second && ended, "{integrator:?}: no second contact ({second}, {ended})");
+    }
+}
