@@ -121,6 +121,30 @@ fn uniform_polydisperse_matches_brute_force() {
     }
 }
 
+/// Pairs among marked particles (held ones, whose mutual forces act on nothing that moves)
+/// are left out, all others kept: the list equals the brute force less the marked–marked
+/// pairs, which must be there to leave out.
+#[test]
+fn pairs_among_marked_particles_are_left_out() {
+    let mut rng = Rng::new(7);
+    let (n, r0, skin) = (2000, 0.01, 0.002);
+    let x: Vec<Vec3> = (0..n).map(|_| rng.in_box(Vec3::ZERO, Vec3::ONE)).collect();
+    let r = poly_radii(&mut rng, n, r0);
+    let p = particles_from(&x, &r);
+    // The lower third of the box marked, as a rough base would be.
+    let marked: Vec<bool> = p.position.iter().map(|x| x.y < 1.0 / 3.0).collect();
+    let is_marked: HashMap<u32, bool> = p.id.iter().copied().zip(marked.iter().copied()).collect();
+    let mut nl = NeighborList::new(skin);
+    nl.exclude_pairs_among(marked);
+    nl.build(&p, &[]);
+    let all = brute_pairs(&p, skin);
+    let kept: HashSet<(u32, u32)> =
+        all.iter().copied().filter(|(i, j)| !(is_marked[i] && is_marked[j])).collect();
+    let left_out = all.len() - kept.len();
+    assert!(left_out > 100 && kept.len() > 100, "{left_out} pairs to leave out, {} to keep", kept.len());
+    assert_same("marked", &listed_pairs(&nl, &p), &kept);
+}
+
 /// Dense Gaussian clusters of very different sizes, some particles far outside (which forces
 /// the cell grid to coarsen: more cells than the engine allows), and a wide radius range.
 #[test]
