@@ -485,7 +485,7 @@ const FOUND: usize = 256;
 /// A pair listed by the contact test: pair `k` of row `a`; `fresh` if it did not touch at
 /// the last evaluation (its stored history is then not its own). Packed in 8 bytes (the test
 /// writes one for every pair it tests): the row, and the pair index with the flag in its top
-/// bit (a list of 2^31 pairs or more would take over 100 GB).
+/// bit (a list holds at most [`MAX_PAIRS`](crate::neighbor::MAX_PAIRS), 2^31 − 1).
 #[derive(Debug, Clone, Copy, Default)]
 struct Found {
     a: u32,
@@ -497,6 +497,7 @@ impl Found {
 
     #[inline(always)]
     fn new(a: usize, k: usize, fresh: bool) -> Self {
+        debug_assert!(k <= crate::neighbor::MAX_PAIRS);
         Found { a: a as u32, k_fresh: k as u32 | (fresh as u32) << 31 }
     }
 

@@ -78,6 +78,10 @@ pub struct NeighborState {
     pub reference: Vec<Vec3>,
 }
 
+/// The most pairs a list holds: the force stage lists a pair by its index in 31 bits. (A list
+/// that long would take some 80 GB for its pairs alone.)
+pub(crate) const MAX_PAIRS: usize = (1 << 31) - 1;
+
 /// On threads, the pairs a thread has found are added to the list's keys once it holds this
 /// many (512 KiB).
 const HAND_OVER_KEYS: usize = 1 << 16;
@@ -147,6 +151,12 @@ impl NeighborList {
             && s.wall_pairs.iter().all(|&[i, w]| (i as usize) < n && (w as usize) < n_walls);
         if !(lens_ok && in_range) {
             return Err("the neighbour list does not fit the particles and walls of the case".into());
+        }
+        if s.pairs.len() > MAX_PAIRS {
+            return Err(format!(
+                "the neighbour list holds {} pairs; at most {MAX_PAIRS} are supported",
+                s.pairs.len()
+            ));
         }
         let mut pairs: Vec<(u64, Vec3)> = s
             .pairs
@@ -562,6 +572,11 @@ impl NeighborList {
     /// of persisting contacts are first packed to the front of the buffer (in order), then
     /// spread backwards to their new places (a packed entry never lies behind its new place).
     fn renew_pairs(&mut self, n: usize) {
+        assert!(
+            self.fresh.len() <= MAX_PAIRS,
+            "{} particle pairs within the neighbour cut-off: at most {MAX_PAIRS} are supported",
+            self.fresh.len()
+        );
         let mut persists = vec![0u64; self.fresh.len().div_ceil(64)];
         let (mut a_old, mut k, mut kept) = (0usize, 0usize, 0usize);
         for (f, &key) in self.fresh.iter().enumerate() {
