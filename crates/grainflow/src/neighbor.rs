@@ -78,8 +78,8 @@ pub struct NeighborState {
     pub reference: Vec<Vec3>,
 }
 
-/// The most pairs a list holds: the force stage lists a pair by its index in 31 bits. (A list
-/// that long would take some 80 GB for its pairs alone.)
+/// The most pairs a list holds: the force stage lists a pair by its index in 31 bits. (At 37
+/// bytes a pair — partner, history, contact flag, sort key — a list that long takes 80 GB.)
 pub(crate) const MAX_PAIRS: usize = (1 << 31) - 1;
 
 /// On threads, the pairs a thread has found are added to the list's keys once it holds this
