@@ -487,8 +487,8 @@ impl NeighborList {
                         // slice of `sorted`, the rest of the cell's and the next cell's slots,
                         // unless the box ends there or x wraps around.
                         if cx + 1 < nx {
-                            let s0 = start[cx + nx * (cy + ny * cz)] as usize;
-                            let s2 = start[cx + 2 + nx * (cy + ny * cz)] as usize;
+                            let c = cx + nx * (cy + ny * cz);
+                            let (s0, s2) = (start[c] as usize, start[c + 2] as usize);
                             for (k, &i) in own.iter().enumerate() {
                                 search.row(i, &sorted[s0 + k + 1..s2], out);
                                 checks += (s2 - s0 - k - 1) as u64;
