@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # grainflow against LAMMPS and LIGGGHTS on the three yardstick cases of ../shared/peers/, in
 # the same session: (1) physics — from the same LAMMPS state, the kinetic energy after 1 000
-# steps in both codes; (2) speed — particle-steps per second, median of RUNS runs each: LAMMPS
-# and LIGGGHTS on one core, grainflow on 1 and 2 threads, and the ratios; (3) what two cores of
+# steps in both codes; (2) speed — particle-steps per second, median of RUNS rounds in which
+# every code runs once, in turn: LAMMPS and LIGGGHTS on one core, grainflow on 1 and 2
+# threads, and the ratios (also round by round); (3) what two cores of
 # this machine give: LAMMPS on 2 MPI ranks, and two 1-thread grainflow runs at once (their
 # summed speed: what both cores give grainflow's 1-thread code at that time, each with a whole
 # run; a code splitting one case gains beyond it only from each core holding half the data).
@@ -67,33 +68,34 @@ for c in box_hm box_lsd chute; do
   sed -i "s|file = \"data/|file = \"$DATA/|" $c.toml
   $GF run $c.toml --out gf.$c.1000 -q >/dev/null
   ke_g=$(awk -F, '$1==1000 {print $3}' gf.$c.1000/timeseries.csv)
-  # Speed: NRUN steps, RUNS times each.
+  # Speed: NRUN steps, RUNS rounds. Each round takes every code once, one after the other
+  # (LAMMPS, grainflow on 1 thread, LIGGGHTS, grainflow on 2 threads, LAMMPS on 2 ranks, two
+  # 1-thread grainflow runs at once), so that a slow spell of this shared machine falls on all
+  # of them alike rather than on whichever ran then; each figure is the median of its rounds.
   n=$(grep -m1 ' atoms$' "$DATA/$( [ $c = chute ] && echo chute_eq || echo ${c}_settled ).data" | awk '{print $1}')
-  for i in $(seq "$RUNS"); do
-    lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp.$c.t$i -screen none
-    awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lmp.$c.t$i
-  done | median > lmp.$c.speed
-  for i in $(seq "$RUNS"); do
-    mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp2.$c.t$i -screen none
-    awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lmp2.$c.t$i
-  done | median > lmp2.$c.speed
-  for i in $(seq "$RUNS"); do
-    liggghts -in ${LIG_IN[$c]} -var nrun "$NRUN" -log lig.$c.t$i -screen none
-    awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' lig.$c.t$i
-  done | median > lig.$c.speed
   dtl=$(awk '/^dt = /{print $3}' $c.toml)
   sed "s|^t_stop = .*|t_stop = $(python3 -c "print($NRUN*$dtl)")|; s|^interval = .*|interval = 1e9|" $c.toml > $c.speed.toml
+  lmp_speed() { awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' "$1"; }
   gf_speed() { awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'; }
-  # 1 thread, 2 threads and two 1-thread runs at once, taken in turn, so that a slow spell of
-  # the machine does not fall on one of them only.
+  rm -f lmp.$c.speeds lmp2.$c.speeds lig.$c.speeds gf.$c.speed.1 gf.$c.speed.2 gf.$c.speed.both
   for i in $(seq "$RUNS"); do
+    lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp.$c.t$i -screen none
+    lmp_speed lmp.$c.t$i >> lmp.$c.speeds
     $GF run $c.speed.toml -j 1 --out gf.$c.t$i -q | gf_speed >> gf.$c.speed.1
+    liggghts -in ${LIG_IN[$c]} -var nrun "$NRUN" -log lig.$c.t$i -screen none
+    lmp_speed lig.$c.t$i >> lig.$c.speeds
     $GF run $c.speed.toml -j 2 --out gf.$c.t$i -q | gf_speed >> gf.$c.speed.2
+    mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp2.$c.t$i -screen none
+    lmp_speed lmp2.$c.t$i >> lmp2.$c.speeds
     $GF run $c.speed.toml -j 1 --out gf.$c.a$i -q | gf_speed > gf.$c.a &
     $GF run $c.speed.toml -j 1 --out gf.$c.b$i -q | gf_speed > gf.$c.b
     wait
     cat gf.$c.a gf.$c.b | awk '{s+=$1} END {print s}' >> gf.$c.speed.both
   done
+  median < lmp.$c.speeds > lmp.$c.speed
+  echo "- $c: $(paste -d' ' gf.$c.speed.1 lmp.$c.speeds | awk '{printf "%s%.2f", (NR > 1 ? " / " : ""), $1 / $2}')" >> rounds.md
+  median < lmp2.$c.speeds > lmp2.$c.speed
+  median < lig.$c.speeds > lig.$c.speed
   python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat lig.$c.speed)" "$(median < gf.$c.speed.1)" \
     "$(median < gf.$c.speed.2)" "$(cat lmp2.$c.speed)" "$(median < gf.$c.speed.both)" >> "$new" <<'PY'
 import sys
@@ -103,7 +105,10 @@ print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sli
 PY
 done
 echo >> "$new"
-echo "Speeds are medians of $RUNS runs of $NRUN steps, in millions of particle-steps per second." >> "$new"
+echo "Speeds are medians of $RUNS rounds of $NRUN steps, in millions of particle-steps per second; in each" >> "$new"
+echo "round every code ran once, in turn. grainflow on 1 thread ÷ LAMMPS, round by round:" >> "$new"
+echo >> "$new"
+cat rounds.md >> "$new"
 if [ -f "$out" ]; then
   { cat "$new"; echo; cat "$out"; } > "$out.tmp"
 else
