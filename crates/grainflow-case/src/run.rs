@@ -167,9 +167,11 @@ pub fn run_case(
         None => Simulation::new(case.config, case.particles)?,
         Some(path) => {
             let restart_err = |message: String| RunError::Restart { path: path.clone(), message };
-            let bytes = std::fs::read(path).map_err(|e| restart_err(e.to_string()))?;
+            let file = std::fs::File::open(path).map_err(|e| restart_err(e.to_string()))?;
+            let size = file.metadata().map_err(|e| restart_err(e.to_string()))?.len();
             let expected = (!options.accept_changed_case).then_some(hash.as_str());
-            Simulation::restore(case.config, &bytes, expected).map_err(|e| {
+            let reader = std::io::BufReader::with_capacity(1 << 20, file);
+            Simulation::restore_from(case.config, reader, size, expected).map_err(|e| {
                 let hint = if matches!(
                     e,
                     grainflow::checkpoint::RestoreError::Checkpoint(

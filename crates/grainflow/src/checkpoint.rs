@@ -5,13 +5,14 @@
 //! Layout (little-endian): magic `GRAINFLW`, format version (u32), then a length-prefixed
 //! payload and its FNV-1a 64 checksum. The payload starts with the case hash given by the
 //! caller, so a checkpoint is never applied to another case by mistake. Writing the bytes to a
-//! file (atomically) is the caller's business.
+//! file (atomically) is the caller's business. Both ways the bytes stream: a checkpoint is
+//! written from the state and read into it without a second copy of it in memory.
 
 use crate::math::Vec3;
 use crate::neighbor::NeighborState;
 use crate::simulation::{Simulation, SimulationConfig};
 use crate::state::Particles;
-use std::io::{self, Write};
+use std::io::{self, Read, Write};
 use thiserror::Error;
 
 /// The checkpoint format this build writes and reads (2: pairs by slots, without id keys).
@@ -51,6 +52,9 @@ pub enum CheckpointError {
     /// Consistent bytes that do not fit the case (particle count, ids, …).
     #[error("the checkpoint does not fit the case: {0}")]
     Mismatch(String),
+    /// The bytes could not be read.
+    #[error("cannot read the checkpoint: {0}")]
+    Read(String),
 }
 
 const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
@@ -61,10 +65,6 @@ fn fnv1a_update(mut h: u64, bytes: &[u8]) -> u64 {
         h = h.wrapping_mul(0x0000_0100_0000_01b3);
     }
     h
-}
-
-fn fnv1a(bytes: &[u8]) -> u64 {
-    fnv1a_update(FNV_OFFSET, bytes)
 }
 
 /// Writes the payload to `w`, keeping its checksum and length.
@@ -111,55 +111,170 @@ impl<W: Write> Enc<W> {
     }
 }
 
-struct Dec<'a>(&'a [u8]);
+/// Reads the payload from a stream, keeping its checksum and the bytes left of it.
+struct Dec<R: Read> {
+    r: R,
+    left: u64,
+    sum: u64,
+    /// The bytes read last (at most [`CHUNK_ELEMENTS`] elements of a vector).
+    scratch: Vec<u8>,
+}
 
-impl<'a> Dec<'a> {
-    fn take(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], CheckpointError> {
-        let all: &'a [u8] = self.0;
-        if all.len() < n {
+/// Elements of a vector read at a time.
+const CHUNK_ELEMENTS: usize = 4096;
+
+/// `r.read_exact(buf)`, an early end counting as a truncated checkpoint.
+fn read_exact(mut r: impl Read, buf: &mut [u8], what: &'static str) -> Result<(), CheckpointError> {
+    r.read_exact(buf).map_err(|e| match e.kind() {
+        io::ErrorKind::UnexpectedEof => CheckpointError::Truncated(what),
+        _ => CheckpointError::Read(e.to_string()),
+    })
+}
+
+impl<R: Read> Dec<R> {
+    /// Reads the next `n` bytes of the payload into `scratch`.
+    fn fill(&mut self, n: usize, what: &'static str) -> Result<&[u8], CheckpointError> {
+        if n as u64 > self.left {
             return Err(CheckpointError::Truncated(what));
         }
-        let (a, b) = all.split_at(n);
-        self.0 = b;
-        Ok(a)
+        self.scratch.clear();
+        self.scratch.resize(n, 0);
+        read_exact(&mut self.r, &mut self.scratch, what)?;
+        self.sum = fnv1a_update(self.sum, &self.scratch);
+        self.left -= n as u64;
+        Ok(&self.scratch)
     }
     fn u64(&mut self, what: &'static str) -> Result<u64, CheckpointError> {
-        let b = self.take(8, what)?;
-        Ok(u64::from_le_bytes(b.try_into().map_err(|_| CheckpointError::Truncated(what))?))
+        let b = self.fill(8, what)?;
+        Ok(u64::from_le_bytes(std::array::from_fn(|i| b[i])))
     }
     fn f64(&mut self, what: &'static str) -> Result<f64, CheckpointError> {
         Ok(f64::from_bits(self.u64(what)?))
     }
+    /// A count of elements of `elem` bytes each. A count the rest of the payload cannot hold
+    /// was damaged (the payload's length is checked against the checkpoint's size before), and
+    /// never asks for more memory than the checkpoint's size.
     fn len(&mut self, elem: usize, what: &'static str) -> Result<usize, CheckpointError> {
-        let n = self.u64(what)? as usize;
-        if n.checked_mul(elem).is_none_or(|bytes| bytes > self.0.len()) {
-            return Err(CheckpointError::Truncated(what));
+        let n = self.u64(what)?;
+        match n.checked_mul(elem as u64) {
+            Some(bytes) if bytes <= self.left => Ok(n as usize),
+            _ => Err(CheckpointError::Corrupted),
         }
-        Ok(n)
+    }
+    /// `n` elements of `elem` bytes each, decoded by `decode`, read a chunk at a time.
+    fn elements<T>(
+        &mut self,
+        n: usize,
+        elem: usize,
+        what: &'static str,
+        decode: impl Fn(&[u8]) -> T,
+    ) -> Result<Vec<T>, CheckpointError> {
+        let mut out = Vec::with_capacity(n);
+        while out.len() < n {
+            let m = CHUNK_ELEMENTS.min(n - out.len());
+            out.extend(self.fill(m * elem, what)?.chunks_exact(elem).map(&decode));
+        }
+        Ok(out)
     }
     fn bytes(&mut self, what: &'static str) -> Result<Vec<u8>, CheckpointError> {
         let n = self.len(1, what)?;
-        Ok(self.take(n, what)?.to_vec())
+        self.elements(n, 1, what, |c| c[0])
     }
     fn u32s(&mut self, what: &'static str) -> Result<Vec<u32>, CheckpointError> {
         let n = self.len(4, what)?;
-        let b = self.take(4 * n, what)?;
-        Ok(b.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+        self.elements(n, 4, what, le_u32)
     }
     fn f64s(&mut self, what: &'static str) -> Result<Vec<f64>, CheckpointError> {
         let n = self.len(8, what)?;
-        (0..n).map(|_| self.f64(what)).collect()
+        self.elements(n, 8, what, le_f64)
     }
     fn vec3s(&mut self, what: &'static str) -> Result<Vec<Vec3>, CheckpointError> {
         let n = self.len(24, what)?;
-        (0..n).map(|_| Ok(Vec3::new(self.f64(what)?, self.f64(what)?, self.f64(what)?))).collect()
+        self.elements(n, 24, what, |c| Vec3::new(le_f64(&c[..8]), le_f64(&c[8..16]), le_f64(&c[16..])))
     }
     fn pairs(&mut self, what: &'static str) -> Result<Vec<[u32; 2]>, CheckpointError> {
-        let flat = self.u32s(what)?;
-        if flat.len() % 2 != 0 {
+        let flat = self.len(4, what)?;
+        if flat % 2 != 0 {
             return Err(CheckpointError::Mismatch(format!("{what}: odd length")));
         }
-        Ok(flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
+        self.elements(flat / 2, 8, what, |c| [le_u32(&c[..4]), le_u32(&c[4..])])
+    }
+    /// Reads what is left of the payload (its checksum still to be checked).
+    fn skip_rest(&mut self) -> Result<(), CheckpointError> {
+        while self.left > 0 {
+            let n = self.left.min(1 << 16) as usize;
+            self.fill(n, "payload")?;
+        }
+        Ok(())
+    }
+}
+
+fn le_u32(c: &[u8]) -> u32 {
+    u32::from_le_bytes(std::array::from_fn(|i| c[i]))
+}
+
+fn le_f64(c: &[u8]) -> f64 {
+    f64::from_le_bytes(std::array::from_fn(|i| c[i]))
+}
+
+/// A checkpoint's payload, decoded.
+struct Payload {
+    case_hash: String,
+    step: u64,
+    timing: (f64, f64, f64),
+    history_started: bool,
+    forces_current: bool,
+    particles: Particles,
+    neighbors: NeighborState,
+    anchors: Vec<Vec3>,
+}
+
+impl Payload {
+    fn decode(d: &mut Dec<impl Read>) -> Result<Payload, CheckpointError> {
+        let case_hash = String::from_utf8_lossy(&d.bytes("case hash")?).into_owned();
+        let step = d.u64("step")?;
+        let timing = (d.f64("time")?, d.f64("time step")?, d.f64("start time")?);
+        let history_started = d.u64("flags")? != 0;
+        let forces_current = d.u64("flags")? != 0;
+        let mut p = Particles {
+            id: d.u32s("ids")?,
+            phase: d.u32s("phases")?,
+            radius: d.f64s("radii")?,
+            mass: d.f64s("masses")?,
+            inertia: d.f64s("inertia")?,
+            ..Default::default()
+        };
+        for v in [
+            &mut p.position,
+            &mut p.velocity,
+            &mut p.omega,
+            &mut p.force,
+            &mut p.torque,
+            &mut p.accel_prev,
+            &mut p.alpha_prev,
+        ] {
+            *v = d.vec3s("particle vectors")?;
+        }
+        let neighbors = NeighborState {
+            skin: d.f64("skin")?,
+            built: d.u64("flags")? != 0,
+            pairs: d.pairs("pairs")?,
+            pair_history: d.vec3s("pair history")?,
+            wall_pairs: d.pairs("wall pairs")?,
+            wall_history: d.vec3s("wall history")?,
+            reference: d.vec3s("reference positions")?,
+        };
+        let anchors = d.vec3s("motion anchors")?;
+        Ok(Payload {
+            case_hash,
+            step,
+            timing,
+            history_started,
+            forces_current,
+            particles: p,
+            neighbors,
+            anchors,
+        })
     }
 }
 
@@ -258,67 +373,58 @@ impl Simulation {
         bytes: &[u8],
         case_hash: Option<&str>,
     ) -> Result<Simulation, RestoreError> {
-        let mut d = Dec(bytes);
-        if d.0.len() < 8 || &d.0[..8] != MAGIC {
+        Simulation::restore_from(config, bytes, bytes.len() as u64, case_hash)
+    }
+
+    /// [`restore`](Self::restore) from a stream of `size` bytes (a checkpoint file and its
+    /// length), read as it is decoded: the checkpoint is never held in memory whole.
+    pub fn restore_from(
+        config: SimulationConfig,
+        mut r: impl Read,
+        size: u64,
+        case_hash: Option<&str>,
+    ) -> Result<Simulation, RestoreError> {
+        let mut magic = [0u8; 8];
+        if size < 8 || read_exact(&mut r, &mut magic, "signature").is_err() || &magic != MAGIC {
             return Err(CheckpointError::NotACheckpoint.into());
         }
-        d.take(8, "signature")?;
-        let version = u32::from_le_bytes(
-            d.take(4, "version")?.try_into().map_err(|_| CheckpointError::Truncated("version"))?,
-        );
+        let mut word = [0u8; 4];
+        read_exact(&mut r, &mut word, "version")?;
+        let version = u32::from_le_bytes(word);
         if version != FORMAT_VERSION {
             return Err(CheckpointError::Version { found: version, expected: FORMAT_VERSION }.into());
         }
-        let len = d.u64("length")? as usize;
-        if d.0.len() < len + 8 {
+        let mut long = [0u8; 8];
+        read_exact(&mut r, &mut long, "length")?;
+        let len = u64::from_le_bytes(long);
+        if len.checked_add((HEADER + 8) as u64).is_none_or(|total| total > size) {
             return Err(CheckpointError::Truncated("payload").into());
         }
-        let payload = d.take(len, "payload")?;
-        let sum = d.u64("checksum")?;
-        if fnv1a(payload) != sum {
+        let mut d = Dec { r, left: len, sum: FNV_OFFSET, scratch: Vec::new() };
+        let payload = Payload::decode(&mut d);
+        // The checksum covers the whole payload: read what the decoding left (all of it if a
+        // damaged count stopped it), so that damage is reported as such.
+        match &payload {
+            Err(e @ (CheckpointError::Truncated(_) | CheckpointError::Read(_))) => {
+                return Err(e.clone().into());
+            }
+            _ => d.skip_rest()?,
+        }
+        read_exact(&mut d.r, &mut long, "checksum")?;
+        if u64::from_le_bytes(long) != d.sum {
             return Err(CheckpointError::Corrupted.into());
         }
-        let mut d = Dec(payload);
-        let found = String::from_utf8_lossy(&d.bytes("case hash")?).into_owned();
+        let payload = payload?;
         if let Some(expected) = case_hash
-            && found != expected
+            && payload.case_hash != expected
         {
-            return Err(CheckpointError::WrongCase { found, expected: expected.into() }.into());
+            return Err(
+                CheckpointError::WrongCase { found: payload.case_hash, expected: expected.into() }.into()
+            );
         }
-        let step = d.u64("step")?;
-        let timing = (d.f64("time")?, d.f64("time step")?, d.f64("start time")?);
-        let history_started = d.u64("flags")? != 0;
-        let forces_current = d.u64("flags")? != 0;
-        let mut p = Particles {
-            id: d.u32s("ids")?,
-            phase: d.u32s("phases")?,
-            radius: d.f64s("radii")?,
-            mass: d.f64s("masses")?,
-            inertia: d.f64s("inertia")?,
-            ..Default::default()
-        };
-        for v in [
-            &mut p.position,
-            &mut p.velocity,
-            &mut p.omega,
-            &mut p.force,
-            &mut p.torque,
-            &mut p.accel_prev,
-            &mut p.alpha_prev,
-        ] {
-            *v = d.vec3s("particle vectors")?;
-        }
-        let neighbors = NeighborState {
-            skin: d.f64("skin")?,
-            built: d.u64("flags")? != 0,
-            pairs: d.pairs("pairs")?,
-            pair_history: d.vec3s("pair history")?,
-            wall_pairs: d.pairs("wall pairs")?,
-            wall_history: d.vec3s("wall history")?,
-            reference: d.vec3s("reference positions")?,
-        };
-        let anchors = d.vec3s("motion anchors")?;
-        let mut sim = Simulation::new(config, p)?;
+        let Payload { step, timing, history_started, forces_current, particles, neighbors, anchors, .. } =
+            payload;
+        let mut sim = Simulation::unbuilt(config, particles)?;
         sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
             .map_err(CheckpointError::Mismatch)?;
         Ok(sim)

@@ -158,26 +158,42 @@ impl NeighborList {
                 s.pairs.len()
             ));
         }
-        let mut pairs: Vec<(u64, Vec3)> = s
-            .pairs
-            .iter()
-            .zip(&s.pair_history)
-            .map(|(&[a, b], &h)| if a < b { (pair_key(a, b), h) } else { (pair_key(b, a), -h) })
-            .collect();
-        pairs.sort_unstable_by_key(|e| e.0);
         let mut walls: Vec<(u64, Vec3)> =
             s.wall_pairs.iter().zip(&s.wall_history).map(|(&[i, w], &h)| (pair_key(i, w), h)).collect();
         walls.sort_unstable_by_key(|e| e.0);
-        if pairs.windows(2).any(|w| w[0].0 == w[1].0) || walls.windows(2).any(|w| w[0].0 == w[1].0) {
-            return Err("the neighbour list holds a pair twice".into());
+        let twice = || Err("the neighbour list holds a pair twice".to_string());
+        if walls.windows(2).any(|w| w[0].0 == w[1].0) {
+            return twice();
+        }
+        // A checkpoint lists the pairs in list order: taken as they are, the histories moved
+        // rather than copied (a large bed's list is the largest part of its state).
+        let keys = || s.pairs.iter().map(|&[a, b]| pair_key(a, b));
+        let in_order = s.pairs.iter().all(|&[a, b]| a < b) && keys().zip(keys().skip(1)).all(|(k, l)| k < l);
+        if in_order {
+            row_offsets(keys(), n, &mut self.offsets);
+            self.partners = s.pairs.iter().map(|&[_, b]| b).collect();
+            drop(s.pairs);
+            // A zero history is the same as no contact (bit for bit: a negative zero is kept).
+            self.in_contact = s.pair_history.iter().map(|&h| nonzero(h)).collect();
+            self.pair_history = s.pair_history;
+        } else {
+            let mut pairs: Vec<(u64, Vec3)> = s
+                .pairs
+                .iter()
+                .zip(&s.pair_history)
+                .map(|(&[a, b], &h)| if a < b { (pair_key(a, b), h) } else { (pair_key(b, a), -h) })
+                .collect();
+            pairs.sort_unstable_by_key(|e| e.0);
+            if pairs.windows(2).any(|w| w[0].0 == w[1].0) {
+                return twice();
+            }
+            row_offsets(pairs.iter().map(|e| e.0), n, &mut self.offsets);
+            self.partners = pairs.iter().map(|e| e.0 as u32).collect();
+            self.pair_history = pairs.iter().map(|e| e.1).collect();
+            self.in_contact = pairs.iter().map(|e| nonzero(e.1)).collect();
         }
         self.skin = s.skin;
         self.built = s.built;
-        row_offsets(pairs.iter().map(|e| e.0), n, &mut self.offsets);
-        self.partners = pairs.iter().map(|e| e.0 as u32).collect();
-        self.pair_history = pairs.iter().map(|e| e.1).collect();
-        // A zero history is the same as no contact (bit for bit: a negative zero is kept).
-        self.in_contact = pairs.iter().map(|e| nonzero(e.1)).collect();
         self.wall_pairs = walls.iter().map(|e| [(e.0 >> 32) as u32, e.0 as u32]).collect();
         self.wall_history = walls.iter().map(|e| e.1).collect();
         self.reference = s.reference;

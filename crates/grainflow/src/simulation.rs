@@ -99,6 +99,14 @@ impl Simulation {
     /// Checks the inputs, derives the coefficients and the time step, and builds the
     /// neighbour list.
     pub fn new(config: SimulationConfig, particles: Particles) -> Result<Self, EngineError> {
+        let mut sim = Simulation::unbuilt(config, particles)?;
+        sim.neighbors.build(&sim.particles, &sim.walls);
+        Ok(sim)
+    }
+
+    /// [`new`](Self::new) without building the neighbour list: for a restart, whose list comes
+    /// from the checkpoint (a large bed would otherwise hold two lists at once).
+    pub(crate) fn unbuilt(config: SimulationConfig, particles: Particles) -> Result<Self, EngineError> {
         for ph in &config.phases {
             ph.validate()?;
         }
@@ -173,7 +181,6 @@ impl Simulation {
         let held = motion::held(&motion, particles.len());
         neighbors.exclude_pairs_among(held.clone());
         let held = if held.iter().any(|&h| h) { held } else { Vec::new() };
-        neighbors.build(&particles, &config.walls);
         Ok(Simulation {
             particles,
             phases: config.phases,

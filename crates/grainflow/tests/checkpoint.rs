@@ -133,3 +133,87 @@ fn broken_checkpoints_are_refused_with_a_clear_error() {
     Simulation::restore(cfg.clone(), &good, Some("h1")).expect("restores");
     Simulation::restore(cfg, &good, None).expect("restores for a changed case when asked");
 }
+
+/// Hands out at most `piece` bytes per read, as a pipe or a slow file system may, and fails
+/// with an I/O error after `fail_after` bytes.
+struct Trickle<'a> {
+    bytes: &'a [u8],
+    piece: usize,
+    fail_after: usize,
+    given: usize,
+}
+
+impl std::io::Read for Trickle<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.given >= self.fail_after {
+            return Err(std::io::Error::other("device went away"));
+        }
+        let n = buf.len().min(self.piece).min(self.bytes.len()).min(self.fail_after - self.given);
+        buf[..n].copy_from_slice(&self.bytes[..n]);
+        self.bytes = &self.bytes[n..];
+        self.given += n;
+        Ok(n)
+    }
+}
+
+#[test]
+fn a_checkpoint_read_as_a_stream_restores_the_same_state() {
+    let (cfg, init) = setup(NormalModel::Hertz, Integrator::VelocityVerlet);
+    let mut sim = simulation(cfg.clone(), &init);
+    for _ in 0..6000 {
+        sim.step();
+    }
+    let bytes = sim.checkpoint("h");
+    let contacts = sim.diagnostics().contacts;
+    assert!(contacts > 50, "only {contacts} contacts: the state should hold contact histories");
+    let trickle = |piece, fail_after| Trickle { bytes: &bytes, piece, fail_after, given: 0 };
+    // In pieces of 7 bytes (never a whole number, never aligned to a value): the same state as
+    // from memory, and as the simulation itself.
+    let streamed =
+        Simulation::restore_from(cfg.clone(), trickle(7, usize::MAX), bytes.len() as u64, Some("h"))
+            .expect("restores from a stream");
+    let from_memory = Simulation::restore(cfg.clone(), &bytes, Some("h")).expect("restores");
+    assert_identical(&streamed, &from_memory, "stream vs memory");
+    assert_identical(&streamed, &sim, "stream vs the simulation");
+    // A read that fails half-way is reported as such (not as damage), one that ends early as
+    // truncation, and a stream shorter than its stated size too.
+    let restore =
+        |r: Trickle, size: usize| match Simulation::restore_from(cfg.clone(), r, size as u64, Some("h")) {
+            Err(RestoreError::Checkpoint(e)) => e,
+            other => panic!("expected a checkpoint error, got {other:?}"),
+        };
+    let half = bytes.len() / 2;
+    match restore(trickle(4096, half), bytes.len()) {
+        CheckpointError::Read(m) => assert!(m.contains("device went away"), "{m}"),
+        other => panic!("expected a read error, got {other:?}"),
+    }
+    let short = Trickle { bytes: &bytes[..half], piece: 4096, fail_after: usize::MAX, given: 0 };
+    assert!(matches!(restore(short, bytes.len()), CheckpointError::Truncated(_)));
+    assert!(matches!(restore(trickle(4096, usize::MAX), half), CheckpointError::Truncated(_)));
+}
+
+#[test]
+fn a_damaged_count_is_refused_as_corruption_without_allocating_it() {
+    let (cfg, init) = setup(NormalModel::LinearSpringDashpot, Integrator::Euler);
+    let mut sim = simulation(cfg.clone(), &init);
+    for _ in 0..200 {
+        sim.step();
+    }
+    let good = sim.checkpoint("h");
+    // The payload starts (after the 20-byte header) with the case hash's length, then the
+    // hash, step, time, time step, start time and two flags (8 bytes each), then the count of
+    // ids. Claiming 2^61 ids (16 EiB) must be refused from the payload's length, before any
+    // memory is asked for.
+    let ids_count = 20 + 8 + "h".len() + 6 * 8;
+    assert_eq!(
+        u64::from_le_bytes(good[ids_count..ids_count + 8].try_into().unwrap()),
+        init.len() as u64,
+        "layout assumed by this test"
+    );
+    let mut damaged = good.clone();
+    damaged[ids_count..ids_count + 8].copy_from_slice(&(1u64 << 61).to_le_bytes());
+    match Simulation::restore(cfg, &damaged, Some("h")) {
+        Err(RestoreError::Checkpoint(e)) => assert_eq!(e, CheckpointError::Corrupted),
+        other => panic!("expected corruption, got {other:?}"),
+    }
+}

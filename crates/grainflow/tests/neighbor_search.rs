@@ -147,6 +147,47 @@ fn pairs_among_marked_particles_are_left_out() {
 
 /// Dense Gaussian clusters of very different sizes, some particles far outside (which forces
 /// the cell grid to coarsen: more cells than the engine allows), and a wide radius range.
+/// A list's state restores to the same list whether its pairs come in list order (as a
+/// checkpoint writes them, taken as they are) or in any other (sorted, a pair given the other
+/// way round taking its history negated); a pair listed twice is refused, leaving the list as
+/// it was.
+#[test]
+fn a_restored_list_is_the_same_in_any_pair_order() {
+    let mut rng = Rng::new(11);
+    let n = 2000;
+    let x: Vec<Vec3> = (0..n).map(|_| rng.in_box(Vec3::ZERO, Vec3::ONE)).collect();
+    let r = poly_radii(&mut rng, n, 0.01);
+    let p = particles_from(&x, &r);
+    let walls = unit_box_walls();
+    let mut nl = check_build("restore", &p, &walls, 0.002);
+    // Every other pair carries a history (distinct values, so a misplaced one shows).
+    for k in (0..nl.pair_count()).step_by(2) {
+        nl.set_pair_history(k, Vec3::new(k as f64 + 1.0, -(k as f64), 0.5));
+    }
+    let state = nl.state();
+    assert!(state.pairs.len() > 100, "too few pairs ({}) to test", state.pairs.len());
+    let restored = |s: grainflow::neighbor::NeighborState| {
+        let mut other = NeighborList::new(0.0);
+        other.set_state(s, p.len(), walls.len()).map(|_| other.state())
+    };
+    assert_eq!(restored(state.clone()), Ok(state.clone()), "in list order");
+    let mut shuffled = state.clone();
+    shuffled.pairs.reverse();
+    shuffled.pair_history.reverse();
+    for k in (0..shuffled.pairs.len()).step_by(3) {
+        let [a, b] = shuffled.pairs[k];
+        shuffled.pairs[k] = [b, a];
+        shuffled.pair_history[k] = -shuffled.pair_history[k];
+    }
+    assert_eq!(restored(shuffled), Ok(state.clone()), "reversed, every third pair turned");
+    let mut doubled = state.clone();
+    doubled.pairs[1] = doubled.pairs[0];
+    let mut other = check_build("restore", &p, &walls, 0.002);
+    let before = other.state();
+    assert!(other.set_state(doubled, p.len(), walls.len()).is_err(), "a pair listed twice");
+    assert_eq!(other.state(), before, "a refused state leaves the list as it was");
+}
+
 #[test]
 fn clustered_polydisperse_matches_brute_force() {
     let mut rng = Rng::new(2);
