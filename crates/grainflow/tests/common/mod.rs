@@ -141,3 +141,27 @@ impl Rng {
 pub fn rel_err(a: f64, b: f64) -> f64 {
     ((a - b) / b).abs()
 }
+
+/// Random dense bed: `n` spheres in random slots (ids in random order, positions on a jittered
+/// lattice so that they start touching), random velocities.
+pub fn bed(n: usize, lo: Vec3, hi: Vec3, radius: f64, seed: u64) -> Vec<ParticleInit> {
+    let mut rng = Rng::new(seed);
+    let pitch = 2.0 * radius;
+    let cells = ((hi - lo) / pitch).floor();
+    let (nx, ny) = (cells.x as usize, cells.y as usize);
+    let mut init: Vec<ParticleInit> = (0..n)
+        .map(|k| {
+            let (ix, iy, iz) = (k % nx, (k / nx) % ny, k / (nx * ny));
+            let x = lo + pitch * (Vec3::new(ix as f64, iy as f64, iz as f64) + Vec3::splat(0.5));
+            let r = radius * rng.range(0.97, 1.0);
+            let jitter =
+                0.1 * radius * Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            particle(k as u32 + 1, 0, r, 2500.0, x + jitter, 0.3 * rng.unit())
+        })
+        .collect();
+    // Random slot order: a Fisher–Yates shuffle.
+    for k in (1..init.len()).rev() {
+        init.swap(k, rng.index(k + 1));
+    }
+    init
+}
