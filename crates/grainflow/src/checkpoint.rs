@@ -152,8 +152,8 @@ impl<R: Read> Dec<R> {
         Ok(f64::from_bits(self.u64(what)?))
     }
     /// A count of elements of `elem` bytes each. A count the rest of the payload cannot hold
-    /// was damaged (the payload's length is checked against the checkpoint's size before), and
-    /// never asks for more memory than the checkpoint's size.
+    /// was damaged (the payload's length was checked against the checkpoint's size before):
+    /// it is refused, so no count asks for more memory than the checkpoint's size.
     fn len(&mut self, elem: usize, what: &'static str) -> Result<usize, CheckpointError> {
         let n = self.u64(what)?;
         match n.checked_mul(elem as u64) {
@@ -384,9 +384,19 @@ impl Simulation {
         size: u64,
         case_hash: Option<&str>,
     ) -> Result<Simulation, RestoreError> {
+        // Shorter than a signature, or another one: not a checkpoint (a failing read is
+        // reported as such).
         let mut magic = [0u8; 8];
-        if size < 8 || read_exact(&mut r, &mut magic, "signature").is_err() || &magic != MAGIC {
-            return Err(CheckpointError::NotACheckpoint.into());
+        let read = if size < 8 {
+            Err(CheckpointError::Truncated("signature"))
+        } else {
+            read_exact(&mut r, &mut magic, "signature")
+        };
+        match read {
+            Err(CheckpointError::Read(e)) => return Err(CheckpointError::Read(e).into()),
+            Err(_) => return Err(CheckpointError::NotACheckpoint.into()),
+            Ok(()) if &magic != MAGIC => return Err(CheckpointError::NotACheckpoint.into()),
+            Ok(()) => {}
         }
         let mut word = [0u8; 4];
         read_exact(&mut r, &mut word, "version")?;

@@ -183,9 +183,11 @@ fn a_checkpoint_read_as_a_stream_restores_the_same_state() {
             other => panic!("expected a checkpoint error, got {other:?}"),
         };
     let half = bytes.len() / 2;
-    match restore(trickle(4096, half), bytes.len()) {
-        CheckpointError::Read(m) => assert!(m.contains("device went away"), "{m}"),
-        other => panic!("expected a read error, got {other:?}"),
+    for fail_after in [half, 3] {
+        match restore(trickle(4096, fail_after), bytes.len()) {
+            CheckpointError::Read(m) => assert!(m.contains("device went away"), "{m}"),
+            other => panic!("expected a read error after {fail_after} bytes, got {other:?}"),
+        }
     }
     let short = Trickle { bytes: &bytes[..half], piece: 4096, fail_after: usize::MAX, given: 0 };
     assert!(matches!(restore(short, bytes.len()), CheckpointError::Truncated(_)));
