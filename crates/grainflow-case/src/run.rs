@@ -166,6 +166,9 @@ pub fn run_case(
     let mut sim = match &options.restart {
         None => Simulation::new(case.config, case.particles)?,
         Some(path) => {
+            // The checkpoint holds the particles: the case's initial ones go before it is read
+            // (on a large bed they would hold a second copy of the state meanwhile).
+            drop(case.particles);
             let restart_err = |message: String| RunError::Restart { path: path.clone(), message };
             let file = std::fs::File::open(path).map_err(|e| restart_err(e.to_string()))?;
             let size = file.metadata().map_err(|e| restart_err(e.to_string()))?.len();
