@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use grainflow::contact::{CoulombCap, HistoryFrame, LeverArm, NormalDamping, TangentialModel};
-use grainflow::{ContactLaw, ContactParams, Integrator, NormalModel, Periodic, Simulation, Vec3, Wall};
+use grainflow::{ContactLaw, ContactParams, Integrator, NormalModel, Simulation};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -50,7 +50,6 @@ fn calls() -> usize {
 /// A dense periodic bed under a lid, flowing under tilted gravity: contacts forming and
 /// breaking, the list rebuilt every few tens of steps.
 fn flowing_bed(integrator: Integrator, normal: NormalModel) -> Simulation {
-    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
     // LAMMPS's two laws (the yardstick cases').
     let (law, params) = match normal {
         NormalModel::LinearSpringDashpot => (
@@ -82,19 +81,14 @@ fn flowing_bed(integrator: Integrator, normal: NormalModel) -> Simulation {
             ContactParams { etat_fac: 1.0, ..hertz_params(0.9, 0.9, 0.5) },
         ),
     };
-    let lid = Wall::plane("lid", Vec3::new(0.0, 0.0, 0.031), Vec3::new(0.0, 0.0, -1.0), 0);
-    let mut cfg = config(
+    let cfg = chute_config(
         law,
-        vec![elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3)],
-        vec![wall_material("lid", Some(5.0e6), Some(0.3))],
-        vec![lid],
-        vec![params],
-        vec![params],
+        elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3),
+        wall_material("lid", Some(5.0e6), Some(0.3)),
+        params,
         integrator,
-        2.0e-5,
     );
-    cfg.periodic = Some(Periodic { lo, hi, axes: [true, true, false] });
-    cfg.gravity = 9.81 * Vec3::new(26f64.to_radians().sin(), 0.0, -26f64.to_radians().cos());
+    let (lo, hi) = CHUTE_BOX;
     simulation(cfg, &bed(3000, lo, hi, 0.001, 5))
 }
 

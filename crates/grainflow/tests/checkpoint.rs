@@ -100,6 +100,14 @@ fn restarted_runs_are_bit_identical_for_every_integrator_and_law() {
     }
 }
 
+/// The checkpoint's own error of a restore that must fail.
+fn checkpoint_error(restored: Result<Simulation, RestoreError>) -> CheckpointError {
+    match restored {
+        Err(RestoreError::Checkpoint(e)) => e,
+        other => panic!("expected a checkpoint error, got {other:?}"),
+    }
+}
+
 #[test]
 fn broken_checkpoints_are_refused_with_a_clear_error() {
     let (cfg, init) = setup(NormalModel::LinearSpringDashpot, Integrator::AdamsBashforth);
@@ -108,10 +116,8 @@ fn broken_checkpoints_are_refused_with_a_clear_error() {
         sim.step();
     }
     let good = sim.checkpoint("h1");
-    let err = |bytes: &[u8], hash: &str| match Simulation::restore(cfg.clone(), bytes, Some(hash)) {
-        Err(RestoreError::Checkpoint(e)) => e,
-        other => panic!("expected a checkpoint error, got {other:?}"),
-    };
+    let err =
+        |bytes: &[u8], hash: &str| checkpoint_error(Simulation::restore(cfg.clone(), bytes, Some(hash)));
     assert!(matches!(err(&good[..good.len() / 2], "h1"), CheckpointError::Truncated(_)));
     assert!(matches!(err(&good[..10], "h1"), CheckpointError::Truncated(_)));
     let mut flipped = good.clone();
@@ -177,11 +183,9 @@ fn a_checkpoint_read_as_a_stream_restores_the_same_state() {
     assert_identical(&streamed, &sim, "stream vs the simulation");
     // A read that fails half-way is reported as such (not as damage), one that ends early as
     // truncation, and a stream shorter than its stated size too.
-    let restore =
-        |r: Trickle, size: usize| match Simulation::restore_from(cfg.clone(), r, size as u64, Some("h")) {
-            Err(RestoreError::Checkpoint(e)) => e,
-            other => panic!("expected a checkpoint error, got {other:?}"),
-        };
+    let restore = |r: Trickle, size: usize| {
+        checkpoint_error(Simulation::restore_from(cfg.clone(), r, size as u64, Some("h")))
+    };
     let half = bytes.len() / 2;
     for fail_after in [half, 3] {
         match restore(trickle(4096, fail_after), bytes.len()) {
@@ -214,8 +218,5 @@ fn a_damaged_count_is_refused_as_corruption_without_allocating_it() {
     );
     let mut damaged = good.clone();
     damaged[ids_count..ids_count + 8].copy_from_slice(&(1u64 << 61).to_le_bytes());
-    match Simulation::restore(cfg, &damaged, Some("h")) {
-        Err(RestoreError::Checkpoint(e)) => assert_eq!(e, CheckpointError::Corrupted),
-        other => panic!("expected corruption, got {other:?}"),
-    }
+    assert_eq!(checkpoint_error(Simulation::restore(cfg, &damaged, Some("h"))), CheckpointError::Corrupted);
 }

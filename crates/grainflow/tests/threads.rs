@@ -20,7 +20,7 @@ use grainflow::contact::{
 };
 use grainflow::motion::{MotionRule, PrescribedMotion};
 use grainflow::state::ParticleInit;
-use grainflow::{ContactParams, Integrator, Periodic, Simulation, Vec3, Wall};
+use grainflow::{ContactParams, Integrator, Simulation, Vec3, Wall};
 
 /// Everything a step depends on or produces, as bits.
 fn fingerprint(sim: &Simulation) -> Vec<u64> {
@@ -119,7 +119,7 @@ fn periodic_chute(nudged: bool) -> Simulation {
 /// another along x: prescribed motion that moves at every step, so that the forces must be
 /// evaluated again before each first half kick.
 fn periodic_chute_with(nudged: bool, integrator: Integrator, follower: bool) -> Simulation {
-    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
+    let (lo, hi) = CHUTE_BOX;
     let law = ContactLaw {
         damping: NormalDamping::MassVelocity,
         history: HistoryFrame::Project,
@@ -134,20 +134,13 @@ fn periodic_chute_with(nudged: bool, integrator: Integrator, follower: bool) -> 
         mu: 0.5,
         ..Default::default()
     };
-    // A lid keeps the agitated bed dense (walls may face the non-periodic axis).
-    let lid = Wall::plane("lid", Vec3::new(0.0, 0.0, 0.031), Vec3::new(0.0, 0.0, -1.0), 0);
-    let mut cfg = config(
+    let mut cfg = chute_config(
         law,
-        vec![phase("glass", 0.002, 2500.0)],
-        vec![wall_material("lid", None, None)],
-        vec![lid],
-        vec![params],
-        vec![params],
+        phase("glass", 0.002, 2500.0),
+        wall_material("lid", None, None),
+        params,
         integrator,
-        2.0e-5,
     );
-    cfg.periodic = Some(Periodic { lo, hi, axes: [true, true, false] });
-    cfg.gravity = 9.81 * Vec3::new(26f64.to_radians().sin(), 0.0, -26f64.to_radians().cos());
     let mut init = bed(3000, lo, hi, 0.001, 12);
     if nudged {
         nudge(&mut init);

@@ -165,3 +165,25 @@ pub fn bed(n: usize, lo: Vec3, hi: Vec3, radius: f64, seed: u64) -> Vec<Particle
     }
     init
 }
+
+/// The box of [`chute_config`]: 30 × 30 mm, periodic in x and y, 60 mm high.
+pub const CHUTE_BOX: (Vec3, Vec3) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
+
+/// A chute: [`CHUTE_BOX`] with a lid at z = 31 mm that keeps an agitated bed dense (walls may
+/// face the non-periodic axis), gravity 9.81 m/s² tilted 26° along x, one phase and the lid's
+/// material, the same contact parameters for pairs and the lid, Δt = 20 µs.
+pub fn chute_config(
+    law: ContactLaw,
+    phase: Phase,
+    lid: WallMaterial,
+    params: ContactParams,
+    integrator: Integrator,
+) -> SimulationConfig {
+    let (lo, hi) = CHUTE_BOX;
+    let wall = Wall::plane("lid", Vec3::new(0.0, 0.0, 0.031), Vec3::new(0.0, 0.0, -1.0), 0);
+    let mut cfg =
+        config(law, vec![phase], vec![lid], vec![wall], vec![params], vec![params], integrator, 2.0e-5);
+    cfg.periodic = Some(grainflow::Periodic { lo, hi, axes: [true, true, false] });
+    cfg.gravity = 9.81 * Vec3::new(26f64.to_radians().sin(), 0.0, -26f64.to_radians().cos());
+    cfg
+}
