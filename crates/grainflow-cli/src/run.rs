@@ -291,6 +291,17 @@ pub fn main(args: RunArgs) -> ExitCode {
                 s.output_seconds,
                 pct(s.output_seconds)
             );
+            if s.threads > 1 && st.threads_slowest > 0.0 {
+                let force = st.walls + st.pairs;
+                println!(
+                    "force stage on {} threads: {:.3} s = {:.3} s working (mean per thread) + {:.3} s waiting for the slowest thread + {:.3} s cutting blocks and handing work over",
+                    s.threads,
+                    force,
+                    st.threads_mean,
+                    st.threads_slowest - st.threads_mean,
+                    (force - st.threads_slowest).max(0.0)
+                );
+            }
             if s.interrupted {
                 let at = s.checkpoint.as_ref().map_or("(no checkpoint)".into(), |c| c.display().to_string());
                 eprintln!(

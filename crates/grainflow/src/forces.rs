@@ -284,16 +284,28 @@ pub(crate) fn serial<const HERTZ: bool, const INCREMENTAL: bool>(
     )
 }
 
+/// How long the threads worked in one parallel force evaluation (zero unless clocked).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct ThreadWork {
+    /// Seconds the blocks spent on wall contacts, averaged over the blocks.
+    pub walls: f64,
+    /// Seconds each thread worked on its shares of the two passes, averaged over the threads.
+    pub mean: f64,
+    /// The same for the slowest thread of each pass, summed over the passes: the passes take
+    /// at least this long, since each waits for its slowest thread.
+    pub slowest: f64,
+}
+
 /// Evaluates every contact into `out` on the blocks of `plan`, in parallel on the current
 /// rayon pool, block t on thread t (see [`crate::threads`]). Bit-identical to [`serial`]. With
-/// `clock`, returns the seconds the blocks spent on wall contacts, averaged over the blocks (0
-/// otherwise).
+/// `clock`, returns how long the threads worked (zero otherwise).
 pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
     x: &ForceInputs,
     plan: &mut ForcePlan,
     out: ForceOutputs,
     clock: bool,
-) -> f64 {
+) -> ThreadWork {
+    let since = |t0: Option<std::time::Instant>| t0.map_or(0.0, |t| t.elapsed().as_secs_f64());
     let blocks = &plan.blocks;
     let pair_ends = || blocks.iter().map(|r| x.offsets[r.end]);
     let slot_ends = || blocks.iter().map(|r| r.end);
@@ -302,7 +314,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
     // Pass 1: the crossing pairs, shared out evenly over the threads (they all lie in the rows
     // of the lower blocks). The list is in pair order, so each share's pairs lie in one stretch
     // of the histories, from the end of the previous share's stretch.
-    {
+    let crossing_busy = {
         let crossing = &plan.crossing;
         let shares = rayon::current_num_threads().max(1);
         let cuts: Vec<usize> = (1..=shares).map(|t| crossing.len() * t / shares).collect();
@@ -312,6 +324,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
         let loads = split_at_ends(&mut plan.loads[..], cuts.iter().copied());
         let parts: Vec<_> = hist.into_iter().zip(flags).zip(loads).collect();
         crate::threads::pinned(parts, |t, ((hist, flags), loads)| {
+            let t0 = clock.then(std::time::Instant::now);
             let c0 = if t == 0 { 0 } else { cuts[t - 1] };
             let k0 = if t == 0 { 0 } else { stretch_end(c0) };
             let mut lanes = Lanes::new();
@@ -321,8 +334,9 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
             for (pairs, loads) in crossing[c0..cuts[t]].chunks(LANES).zip(loads.chunks_mut(LANES)) {
                 lanes.crossing_loads::<HERTZ, INCREMENTAL>(x, pairs, k0, hist, flags, loads);
             }
-        });
-    }
+            since(t0)
+        })
+    };
     // Pass 2: each block's walls, arriving crossing pairs and own rows.
     let force = split_at_ends(&mut *out.force, slot_ends());
     let torque = split_at_ends(&mut *out.torque, slot_ends());
@@ -334,10 +348,11 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
     let crossing_start = &plan.crossing_start;
     let loads = &plan.loads;
     let parts: Vec<_> = force.into_iter().zip(torque).zip(hist).zip(flags).zip(whist).collect();
-    let wall_seconds: f64 = crate::threads::pinned(parts, |t, ((((force, torque), hist), flags), whist)| {
+    let block_times = crate::threads::pinned(parts, |t, ((((force, torque), hist), flags), whist)| {
         let rows = blocks[t].clone();
         let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
-        block::<HERTZ, INCREMENTAL>(
+        let t0 = clock.then(std::time::Instant::now);
+        let walls = block::<HERTZ, INCREMENTAL>(
             clock,
             x,
             rows,
@@ -349,11 +364,23 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
             w0,
             incoming,
             &loads[crossing_start[t]..crossing_start[t + 1]],
-        )
-    })
-    .into_iter()
-    .sum();
-    wall_seconds / blocks.len().max(1) as f64
+        );
+        (walls, since(t0))
+    });
+    let walls = block_times.iter().map(|b| b.0).sum::<f64>() / block_times.len().max(1) as f64;
+    let crossing = per_thread(crossing_busy.len(), |i| crossing_busy[i]);
+    let blocks = per_thread(block_times.len(), |i| block_times[i].1);
+    ThreadWork { walls, mean: crossing.0 + blocks.0, slowest: crossing.1 + blocks.1 }
+}
+
+/// The mean and the largest over the threads of the current rayon pool of the seconds each
+/// thread worked, from the seconds `part(i)` of each of `n` parts (part i runs on thread i mod
+/// T: see [`crate::threads::pinned`]).
+fn per_thread(n: usize, part: impl Fn(usize) -> f64) -> (f64, f64) {
+    let threads = rayon::current_num_threads().clamp(1, n.max(1));
+    let of = |t: usize| (t..n).step_by(threads).map(&part).sum::<f64>();
+    let total: f64 = (0..n).map(&part).sum();
+    (total / threads as f64, (0..threads).map(of).fold(0.0, f64::max))
 }
 
 /// Crossing pairs that arrive at a block from rows below it.

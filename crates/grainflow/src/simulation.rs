@@ -588,16 +588,21 @@ impl Simulation {
             wall_history,
         };
         let timed = clock.is_some();
-        let wall_seconds = match blocks {
+        let work = match blocks {
             Some((pool, plan)) => {
                 pool.install(|| forces::parallel::<HERTZ, INCREMENTAL>(&x, plan, out, timed))
             }
-            None => forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
+            None => forces::ThreadWork {
+                walls: forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
+                ..Default::default()
+            },
         };
         if let (Some(c), Some(t)) = (clock, self.timing.as_mut()) {
             let total = c.elapsed().as_secs_f64();
-            t.walls += wall_seconds.min(total);
-            t.pairs += (total - wall_seconds).max(0.0);
+            t.walls += work.walls.min(total);
+            t.pairs += (total - work.walls).max(0.0);
+            t.threads_mean += work.mean;
+            t.threads_slowest += work.slowest;
         }
     }
 
@@ -701,6 +706,14 @@ pub struct StageTimes {
     pub pairs: f64,
     /// Integration, prescribed motion, periodic wrapping.
     pub integrate: f64,
+    /// On threads: the seconds each thread worked in the force stage (walls and pairs),
+    /// averaged over the threads. The rest of the stage's time is waiting: for the slowest
+    /// thread, then for the threads to start and finish ([`threads_slowest`](Self::threads_slowest)).
+    pub threads_mean: f64,
+    /// On threads: the seconds the slowest thread of each parallel pass of the force stage
+    /// worked, summed over the passes. The stage took at least this long; `threads_slowest −
+    /// threads_mean` is the time the other threads waited for it.
+    pub threads_slowest: f64,
 }
 
 /// Heap bytes of the simulation's parts.

@@ -202,3 +202,29 @@ fn verlet_steps_taken_together_equal_steps_taken_one_at_a_time() {
         }
     }
 }
+
+/// The force stage's accounting on threads ([`grainflow::StageTimes`]): the threads' mean
+/// working time, the slowest thread's and the stage's wall time are parts of one another
+/// (mean ≤ slowest ≤ stage), and on one thread, where no thread waits for another, nothing is
+/// counted.
+#[test]
+fn thread_working_times_are_parts_of_the_force_stage() {
+    for threads in [1, 2, 3] {
+        let mut sim = periodic_chute(false);
+        sim.set_threads(threads).expect("thread pool");
+        sim.enable_stage_timing();
+        sim.advance(30);
+        let t = sim.stage_times().expect("timing is on");
+        if threads == 1 {
+            assert_eq!((t.threads_mean, t.threads_slowest), (0.0, 0.0));
+            continue;
+        }
+        // The mean is the sum of all parts over the thread count, the slowest the largest
+        // sum of one thread's parts: with equal parts the two roundings can put the mean an
+        // ulp or so above; 1e-12 relative is thousands of ulps and far below any real wait.
+        assert!(t.threads_mean > 0.0, "{threads} threads: {t:?}");
+        assert!(t.threads_mean <= t.threads_slowest * (1.0 + 1e-12), "{threads} threads: {t:?}");
+        // Each thread's time is measured inside the stage's own (monotonic clock).
+        assert!(t.threads_slowest <= t.walls + t.pairs, "{threads} threads: {t:?}");
+    }
+}
