@@ -38,6 +38,15 @@ cd "$W"
 lmp_ke() { awk '/^Step/{f=1;next} f && $1==1000 {print $3; exit}' "$1"; }
 loop_time() { awk '/^Loop time of/{print $4; exit}' "$1"; }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+# grainflow's force stage on 2 threads (`grainflow run`'s "force stage on 2 threads" line: the
+# threads' mean work, waiting for the slowest thread, handing work over) in units of half the
+# same round's 1-thread force stage (walls + pairs): three 1.00, 0 and 0 would be twice the speed.
+force_parts() {
+  awk 'FNR==NR && /^stages:/ {for(k=1;k<=NF;k++) if($k=="walls"||$k=="pairs") f+=$(k+1); next}
+       FNR!=NR && /^force stage on/ {h=f/2; printf "%.3f %.3f %.3f\n", $9/h, $16/h, $24/h}' "$1" "$2"
+}
+# LAMMPS on 2 ranks: the slowest rank's Pair time over the ranks' mean (its log's timing table).
+pair_balance() { awk '$1=="Pair" && $2=="|" {printf "%.3f\n", $7/$5; exit}' "$1"; }
 
 declare -A LIG_IN=( [box_hm]="$PEERS/liggghts/in.box_walls.liggghts -var model hm -var mdir $PEERS/liggghts -var data $DATA/box_hm_settled.data"
                     [box_lsd]="$PEERS/liggghts/in.box_walls.liggghts -var model lsd -var mdir $PEERS/liggghts -var data $DATA/box_lsd_settled.data"
@@ -77,16 +86,20 @@ for c in box_hm box_lsd chute; do
   sed "s|^t_stop = .*|t_stop = $(python3 -c "print($NRUN*$dtl)")|; s|^interval = .*|interval = 1e9|" $c.toml > $c.speed.toml
   lmp_speed() { awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' "$1"; }
   gf_speed() { awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'; }
-  rm -f lmp.$c.speeds lmp2.$c.speeds lig.$c.speeds gf.$c.speed.1 gf.$c.speed.2 gf.$c.speed.both
+  rm -f lmp.$c.speeds lmp2.$c.speeds lig.$c.speeds gf.$c.speed.1 gf.$c.speed.2 gf.$c.speed.both gf.$c.parts lmp2.$c.balance
   for i in $(seq "$RUNS"); do
     lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp.$c.t$i -screen none
     lmp_speed lmp.$c.t$i >> lmp.$c.speeds
-    $GF run $c.speed.toml -j 1 --out gf.$c.t$i -q | gf_speed >> gf.$c.speed.1
+    $GF run $c.speed.toml -j 1 --out gf.$c.t$i -q > gf1.$c.t$i.log
+    gf_speed < gf1.$c.t$i.log >> gf.$c.speed.1
     liggghts -in ${LIG_IN[$c]} -var nrun "$NRUN" -log lig.$c.t$i -screen none
     lmp_speed lig.$c.t$i >> lig.$c.speeds
-    $GF run $c.speed.toml -j 2 --out gf.$c.t$i -q | gf_speed >> gf.$c.speed.2
+    $GF run $c.speed.toml -j 2 --out gf.$c.t$i -q > gf2.$c.t$i.log
+    gf_speed < gf2.$c.t$i.log >> gf.$c.speed.2
+    force_parts gf1.$c.t$i.log gf2.$c.t$i.log >> gf.$c.parts
     mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp2.$c.t$i -screen none
     lmp_speed lmp2.$c.t$i >> lmp2.$c.speeds
+    pair_balance lmp2.$c.t$i >> lmp2.$c.balance
     $GF run $c.speed.toml -j 1 --out gf.$c.a$i -q | gf_speed > gf.$c.a &
     $GF run $c.speed.toml -j 1 --out gf.$c.b$i -q | gf_speed > gf.$c.b
     wait
@@ -95,6 +108,8 @@ for c in box_hm box_lsd chute; do
   median < lmp.$c.speeds > lmp.$c.speed
   echo "- $c: $(paste -d' ' gf.$c.speed.1 lmp.$c.speeds | awk '{printf "%s%.2f", (NR > 1 ? " / " : ""), $1 / $2}')" >> rounds.md
   median < lmp2.$c.speeds > lmp2.$c.speed
+  part() { cut -d' ' -f"$1" gf.$c.parts | median; }
+  echo "- $c: working $(part 1), waiting for the slowest thread $(part 2), handing over $(part 3); LAMMPS on 2 ranks: slowest rank's Pair time ÷ mean $(median < lmp2.$c.balance)" >> threads.md
   median < lig.$c.speeds > lig.$c.speed
   python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat lig.$c.speed)" "$(median < gf.$c.speed.1)" \
     "$(median < gf.$c.speed.2)" "$(cat lmp2.$c.speed)" "$(median < gf.$c.speed.both)" >> "$new" <<'PY'
@@ -109,6 +124,11 @@ echo "Speeds are medians of $RUNS rounds of $NRUN steps, in millions of particle
 echo "round every code ran once, in turn. grainflow on 1 thread ÷ LAMMPS, round by round:" >> "$new"
 echo >> "$new"
 cat rounds.md >> "$new"
+echo >> "$new"
+echo "grainflow's force stage on 2 threads, in units of half its 1-thread force stage of the same round" >> "$new"
+echo "(1.00, 0 and 0 would make it twice as fast), medians of the rounds:" >> "$new"
+echo >> "$new"
+cat threads.md >> "$new"
 if [ -f "$out" ]; then
   { cat "$new"; echo; cat "$out"; } > "$out.tmp"
 else
