@@ -153,6 +153,20 @@ impl Images {
         if !self.any {
             return d;
         }
+        self.nearest_on_periodic_axes(d)
+    }
+
+    /// True if some axis is periodic.
+    #[inline(always)]
+    pub fn any(&self) -> bool {
+        self.any
+    }
+
+    /// The nearest image without looking whether any axis is periodic: `d` itself, to the
+    /// bit, if none is (the shifts are 0·0), at the cost of the arithmetic. For loops that
+    /// make the choice once ([`any`](Self::any)).
+    #[inline(always)]
+    pub fn nearest_on_periodic_axes(&self, d: Vec3) -> Vec3 {
         let n = (d * self.inverse + Vec3::splat(Self::ROUND)) - Vec3::splat(Self::ROUND);
         d - n * self.length
     }

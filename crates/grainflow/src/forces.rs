@@ -552,8 +552,28 @@ struct Cursor {
 /// The test does not branch on its outcome (which no predictor could guess): every pair is
 /// written into the next place, which only a touching pair keeps. `acc` are the rows'
 /// accumulators, for [`prefetch_ahead`].
-#[inline(never)]
+#[inline(always)]
 fn find_contacts(
+    x: &ForceInputs,
+    rows: Range<usize>,
+    acc: [&[Vec3]; 2],
+    cursor: &mut Cursor,
+    in_contact: &mut [bool],
+    found: &mut [Found; FOUND],
+) -> usize {
+    if x.images.any() {
+        find_contacts_in::<true>(x, rows, acc, cursor, in_contact, found)
+    } else {
+        find_contacts_in::<false>(x, rows, acc, cursor, in_contact, found)
+    }
+}
+
+/// [`find_contacts`] for domains with (`PERIODIC`) or without periodic axes: the choice made
+/// once, not per pair. The loop reads each row's partners and contact flags as slices, and the
+/// particles below the rows' end through slices of that length, so that it makes no bounds
+/// check per pair.
+#[inline(never)]
+fn find_contacts_in<const PERIODIC: bool>(
     x: &ForceInputs,
     rows: Range<usize>,
     acc: [&[Vec3]; 2],
@@ -563,35 +583,41 @@ fn find_contacts(
 ) -> usize {
     let (r0, r1) = (rows.start, rows.end);
     let k0 = x.offsets[r0];
+    // Slices of exactly the slots below r1: a partner below r1 (not crossing) is then read
+    // without a bounds check.
+    let (position, radius) = (&x.position[..r1], &x.radius[..r1]);
+    let images = x.images;
     let mut n = 0;
     let Cursor { mut a, mut k } = *cursor;
     let far = x.position.len() >= PREFETCH_MIN_PARTICLES;
     while a < r1 {
-        let (xa, ra) = (x.position[a], x.radius[a]);
+        let (xa, ra) = (position[a], radius[a]);
         let end = x.offsets[a + 1];
         if far {
             prefetch_ahead(x, a, r0..r1, acc);
         }
-        while k < end {
-            if n == FOUND {
-                *cursor = Cursor { a, k };
+        // The row's pairs from k on, with their contact flags.
+        let flags = &mut in_contact[k - k0..end - k0];
+        for (j, (&b, flag)) in x.partners[k..end].iter().zip(flags).enumerate() {
+            if n >= FOUND {
+                *cursor = Cursor { a, k: k + j };
                 return n;
             }
-            let b = x.partners[k] as usize;
+            let b = b as usize;
             let (keep, fresh) = if b < r1 {
-                let d = x.images.nearest(x.position[b] - xa);
-                let touching = pair_touching(d.length_squared(), ra, x.radius[b]);
-                let flag = &mut in_contact[k - k0];
+                let d = position[b] - xa;
+                let d = if PERIODIC { images.nearest_on_periodic_axes(d) } else { d };
+                let touching = pair_touching(d.length_squared(), ra, radius[b]);
                 let fresh = !*flag;
                 *flag = touching;
                 (touching, fresh)
             } else {
                 (true, false)
             };
-            found[n] = Found::new(a, k, fresh);
+            found[n] = Found::new(a, k + j, fresh);
             n += keep as usize;
-            k += 1;
         }
+        k = end;
         a += 1;
     }
     *cursor = Cursor { a, k };
@@ -712,6 +738,26 @@ impl InputLanes {
     /// [`fill_coeffs`](Self::fill_coeffs)).
     #[inline(always)]
     fn set_pair(&mut self, i: usize, s: &PairData, a: usize, b: usize, d: Vec3, h: Vec3) {
+        let held = !s.held.is_empty();
+        match (s.per_mass, held) {
+            (true, true) => self.set_pair_for::<true, true>(i, s, a, b, d, h),
+            (true, false) => self.set_pair_for::<true, false>(i, s, a, b, d, h),
+            _ => self.set_pair_for::<false, false>(i, s, a, b, d, h),
+        }
+    }
+
+    /// [`set_pair`](Self::set_pair) with `PER_MASS` if the damping takes the effective mass
+    /// and `HELD` if some slots are held fixed (and so the list of held slots is not empty).
+    #[inline(always)]
+    fn set_pair_for<const PER_MASS: bool, const HELD: bool>(
+        &mut self,
+        i: usize,
+        s: &PairData,
+        a: usize,
+        b: usize,
+        d: Vec3,
+        h: Vec3,
+    ) {
         let n = s.position.len();
         assert!(a < n && b < n);
         self.d.set(i, d);
@@ -720,7 +766,13 @@ impl InputLanes {
         self.wa.set(i, s.omega[a]);
         self.wb.set(i, s.omega[b]);
         self.h.set(i, h);
-        let m_eff = if s.per_mass { pair_mass(s.mass, s.held, a, b) } else { 0.0 };
+        let m_eff = if !PER_MASS {
+            0.0
+        } else if HELD {
+            pair_mass(s.mass, s.held, a, b)
+        } else {
+            pair_mass(s.mass, &[], a, b)
+        };
         for (lane, v) in self.scalars.iter_mut().zip([s.radius[a], s.radius[b], m_eff]) {
             lane[i] = v;
         }
@@ -734,18 +786,45 @@ impl InputLanes {
 
     /// Sets the lanes of the listed pairs `group` of the rows below `r1` (a crossing pair's
     /// lane is left as it is); `hist` holds the histories of the pairs from index `k0` on.
-    /// Not inlined into the batch loop (one copy serves every law): on its own, its loop keeps
-    /// the arrays' addresses in registers, where the inlined loop reloaded them for each pair.
-    #[inline(never)]
+    #[inline(always)]
     fn gather_pairs(&mut self, x: &ForceInputs, r1: usize, k0: usize, group: &[Found], hist: &[Vec3]) {
         let s = PairData::of(x);
+        let held = !s.held.is_empty();
+        match (x.images.any(), s.per_mass, held) {
+            (true, true, true) => self.gather_pairs_for::<true, true, true>(x, r1, k0, group, hist),
+            (true, true, false) => self.gather_pairs_for::<true, true, false>(x, r1, k0, group, hist),
+            (true, false, _) => self.gather_pairs_for::<true, false, false>(x, r1, k0, group, hist),
+            (false, true, true) => self.gather_pairs_for::<false, true, true>(x, r1, k0, group, hist),
+            (false, true, false) => self.gather_pairs_for::<false, true, false>(x, r1, k0, group, hist),
+            (false, false, _) => self.gather_pairs_for::<false, false, false>(x, r1, k0, group, hist),
+        }
+    }
+
+    /// [`gather_pairs`](Self::gather_pairs) for a domain with periodic axes (`PERIODIC`),
+    /// damping that takes the contact's effective mass (`PER_MASS`) and slots held fixed
+    /// (`HELD`), or without: the choices made once, not for each pair. Not inlined into the
+    /// batch loop (one copy per choice serves every law): on its own, its loop keeps the
+    /// arrays' addresses in registers, where the inlined loop reloaded them for each pair.
+    #[inline(never)]
+    fn gather_pairs_for<const PERIODIC: bool, const PER_MASS: bool, const HELD: bool>(
+        &mut self,
+        x: &ForceInputs,
+        r1: usize,
+        k0: usize,
+        group: &[Found],
+        hist: &[Vec3],
+    ) {
+        let s = PairData::of(x);
+        let group = &group[..group.len().min(LANES)];
         for (i, f) in group.iter().enumerate() {
             let (a, b) = (f.a as usize, x.partners[f.k()] as usize);
             if b < r1 {
                 // The separation again, rather than kept from the contact test: the listing
                 // stays small, and these positions are in cache.
-                let d = s.separation(a, b);
-                self.set_pair(i, &s, a, b, d, kept_or_zero(hist[f.k() - k0], !f.fresh()));
+                let d = s.position[b] - s.position[a];
+                let d = if PERIODIC { s.images.nearest_on_periodic_axes(d) } else { d };
+                let h = kept_or_zero(hist[f.k() - k0], !f.fresh());
+                self.set_pair_for::<PER_MASS, HELD>(i, &s, a, b, d, h);
             }
         }
     }
