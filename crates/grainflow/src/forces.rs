@@ -46,7 +46,7 @@ use std::ops::Range;
 use crate::boundary::{Images, Periodic};
 use crate::contact::geometry::{
     ContactGeometry, pair_contact_separation, pair_geometry, pair_geometry_without_levers, pair_touching,
-    relative_velocity, wall_contact,
+    relative_velocity_of_centres, wall_contact,
 };
 use crate::contact::law::{ContactForce, contact_force_for, parts, rolling_torque};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
@@ -635,8 +635,9 @@ pub(crate) struct PairInput {
     d: Vec3,
     ra: f64,
     rb: f64,
-    va: Vec3,
-    vb: Vec3,
+    /// v_a − v_b: what the law needs of the velocities (one vector instead of two in the batch
+    /// lanes: 0.93-0.99 of the chute's time, in one process alternating both forms).
+    dv: Vec3,
     wa: Vec3,
     wb: Vec3,
     /// The stored tangential history.
@@ -692,8 +693,7 @@ impl Vec3Lanes {
 #[derive(Debug, Clone, Copy)]
 struct InputLanes {
     d: Vec3Lanes,
-    va: Vec3Lanes,
-    vb: Vec3Lanes,
+    dv: Vec3Lanes,
     wa: Vec3Lanes,
     wb: Vec3Lanes,
     h: Vec3Lanes,
@@ -706,8 +706,7 @@ struct InputLanes {
 impl InputLanes {
     const ZERO: InputLanes = InputLanes {
         d: Vec3Lanes::ZERO,
-        va: Vec3Lanes::ZERO,
-        vb: Vec3Lanes::ZERO,
+        dv: Vec3Lanes::ZERO,
         wa: Vec3Lanes::ZERO,
         wb: Vec3Lanes::ZERO,
         h: Vec3Lanes::ZERO,
@@ -719,8 +718,7 @@ impl InputLanes {
     #[inline(always)]
     fn set(&mut self, i: usize, p: &PairInput) {
         self.d.set(i, p.d);
-        self.va.set(i, p.va);
-        self.vb.set(i, p.vb);
+        self.dv.set(i, p.dv);
         self.wa.set(i, p.wa);
         self.wb.set(i, p.wb);
         self.h.set(i, p.h);
@@ -761,8 +759,7 @@ impl InputLanes {
         let n = s.position.len();
         assert!(a < n && b < n);
         self.d.set(i, d);
-        self.va.set(i, s.velocity[a]);
-        self.vb.set(i, s.velocity[b]);
+        self.dv.set(i, s.velocity[a] - s.velocity[b]);
         self.wa.set(i, s.omega[a]);
         self.wb.set(i, s.omega[b]);
         self.h.set(i, h);
@@ -846,8 +843,7 @@ impl InputLanes {
             d: self.d.get(i),
             ra,
             rb,
-            va: self.va.get(i),
-            vb: self.vb.get(i),
+            dv: self.dv.get(i),
             wa: self.wa.get(i),
             wb: self.wb.get(i),
             h: self.h.get(i),
@@ -1022,8 +1018,7 @@ impl Lanes {
                     d: g.normal,
                     ra: g.overlap,
                     rb: g.lever_i,
-                    va: x.velocity[i],
-                    vb: Vec3::ZERO,
+                    dv: x.velocity[i],
                     wa: x.omega[i],
                     wb: Vec3::ZERO,
                     h: hist[j],
@@ -1222,7 +1217,7 @@ fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
     let radical = law.lever == LeverArm::RadicalPlane;
     g.lever_i = if radical { g.lever_i } else { p.ra };
     g.lever_j = if radical { g.lever_j } else { p.rb };
-    let v_r = relative_velocity(&g, p.va, p.vb, p.wa, p.wb);
+    let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, p.wb);
     let (f, h) = law_force::<HERTZ, INCREMENTAL, PARTS>(law, dt, p, &g, v_r);
     let load = PairLoad {
         f: f.total(),
@@ -1271,7 +1266,7 @@ fn law_force<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
 
 /// The load of a particle touching a wall (its force in `f`, its torque in `ta`) and the
 /// advanced history, from a [`PairInput`] that holds the wall geometry: the normal in `d`, the
-/// overlap in `ra`, the lever arm in `rb`, the particle's velocity and spin in `va`, `wa`, its
+/// overlap in `ra`, the lever arm in `rb`, the particle's velocity and spin in `dv`, `wa`, its
 /// mass in `m_eff`. Branch-free.
 #[inline(always)]
 fn wall_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
@@ -1280,7 +1275,8 @@ fn wall_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
     p: &PairInput,
 ) -> (PairLoad, Vec3) {
     let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb, lever_j: 0.0 };
-    let v_r = relative_velocity(&g, p.va, Vec3::ZERO, p.wa, Vec3::ZERO);
+    // v − 0 = v: the same bits as the pair form with the wall at rest.
+    let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, Vec3::ZERO);
     let (f, h) = law_force::<HERTZ, INCREMENTAL, PARTS>(law, dt, p, &g, v_r);
     let torque = f.torque(g.lever_i, g.normal) + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wa);
     (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
@@ -1422,8 +1418,7 @@ mod tests {
                 d,
                 ra,
                 rb,
-                va: rng.vec(1.0),
-                vb: rng.vec(1.0),
+                dv: rng.vec(1.0) - rng.vec(1.0),
                 wa: if i % 5 == 0 { Vec3::ZERO } else { rng.vec(100.0) },
                 wb: rng.vec(100.0),
                 h,

@@ -76,5 +76,12 @@ pub fn wall_contact(x: Vec3, r: f64, point: Vec3, wall_normal: Vec3) -> Option<C
 /// Relative velocity at the contact point: v_r = v_i − v_j + (a_i·ω_i + a_j·ω_j) × n.
 #[inline(always)]
 pub fn relative_velocity(g: &ContactGeometry, vi: Vec3, vj: Vec3, wi: Vec3, wj: Vec3) -> Vec3 {
-    vi - vj + (g.lever_i * wi + g.lever_j * wj).cross(g.normal)
+    relative_velocity_of_centres(g, vi - vj, wi, wj)
+}
+
+/// [`relative_velocity`] from the centres' relative velocity `dv` = v_i − v_j (the same bits:
+/// the difference is the first operation either way).
+#[inline(always)]
+pub fn relative_velocity_of_centres(g: &ContactGeometry, dv: Vec3, wi: Vec3, wj: Vec3) -> Vec3 {
+    dv + (g.lever_i * wi + g.lever_j * wj).cross(g.normal)
 }
