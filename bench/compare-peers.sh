@@ -40,7 +40,7 @@ loop_time() { awk '/^Loop time of/{print $4; exit}' "$1"; }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
 # grainflow's force stage on 2 threads (`grainflow run`'s "force stage on 2 threads" line: the
 # threads' mean work, waiting for the slowest thread, handing work over) in units of half the
-# same round's 1-thread force stage (walls + pairs): three 1.00, 0 and 0 would be twice the speed.
+# same round's 1-thread force stage (walls + pairs): 1.00, 0 and 0 would be twice the speed.
 force_parts() {
   awk 'FNR==NR && /^stages:/ {for(k=1;k<=NF;k++) if($k=="walls"||$k=="pairs") f+=$(k+1); next}
        FNR!=NR && /^force stage on/ {h=f/2; printf "%.3f %.3f %.3f\n", $9/h, $16/h, $24/h}' "$1" "$2"
