@@ -79,6 +79,9 @@ pub struct Simulation {
     periodic: Periodic,
     /// Slots held fixed by prescribed motion (empty if none).
     held: Vec<bool>,
+    /// The mass all particles have, if they have the same; `None` inside when they differ,
+    /// `None` outside when not known (the particles were lent out for changes since).
+    common_mass: Option<Option<f64>>,
     /// Runs of slots that are integrated (every slot not under prescribed motion).
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
@@ -198,6 +201,7 @@ impl Simulation {
             motion,
             periodic,
             held,
+            common_mass: None,
             free,
             history_started: false,
             forces_current: false,
@@ -216,6 +220,7 @@ impl Simulation {
     /// The particles, for user hooks that change the state between steps.
     pub fn particles_mut(&mut self) -> &mut Particles {
         self.forces_current = false;
+        self.common_mass = None;
         &mut self.particles
     }
 
@@ -546,6 +551,10 @@ impl Simulation {
     fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool, par: bool) {
         let clock = self.timing.map(|_| std::time::Instant::now());
         let p = &mut self.particles;
+        let common_mass = *self.common_mass.get_or_insert_with(|| {
+            let m = p.mass.first().copied();
+            m.filter(|m| p.mass.iter().all(|x| x.to_bits() == m.to_bits()))
+        });
         let build = self.neighbors.stats().builds;
         let (offsets, partners, pair_history, in_contact, wall_pairs, wall_history) =
             self.neighbors.split_mut();
@@ -557,6 +566,7 @@ impl Simulation {
             mass: &p.mass,
             phase: &p.phase,
             held: &self.held,
+            common_mass,
             walls: &self.walls,
             coeffs: &self.coeffs,
             law: self.law,
