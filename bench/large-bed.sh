@@ -11,6 +11,9 @@
 #
 #   bench/large-bed.sh            (RUNS=2 NRUN10K=2000 NRUN1M=200 by default)
 set -euo pipefail
+# The whole script is one block, read before it runs: an edit of this file during a run (bash
+# reads a script as it goes) cannot change what the run does.
+{
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 RUNS=${RUNS:-2}
@@ -71,3 +74,5 @@ out="$ROOT/bench/results/$(date +%Y-%m-%d)-$(hostname).md"
 if [ -f "$out" ]; then { cat "$section"; echo; cat "$out"; } > "$out.tmp"; else cp "$section" "$out.tmp"; fi
 mv "$out.tmp" "$out"
 cat "$section"
+}
+exit
