@@ -12,8 +12,9 @@
 #
 #   bench/compare-peers.sh              (RUNS=3 NRUN=2000 by default)
 set -euo pipefail
-# The whole script is one block, read before it runs: an edit of this file during a run (bash
-# reads a script as it goes) cannot change what the run does.
+# The whole script is one block, read before it runs and ending in `exit`, so that bash (which
+# reads a script as it goes) never reads on: an edit of this file during a run cannot change
+# what the run does.
 {
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -139,5 +140,5 @@ else
 fi
 mv "$out.tmp" "$out"
 cat "$new"
-}
 exit
+}

@@ -11,8 +11,9 @@
 #
 #   bench/large-bed.sh            (RUNS=2 NRUN10K=2000 NRUN1M=200 by default)
 set -euo pipefail
-# The whole script is one block, read before it runs: an edit of this file during a run (bash
-# reads a script as it goes) cannot change what the run does.
+# The whole script is one block, read before it runs and ending in `exit`, so that bash (which
+# reads a script as it goes) never reads on: an edit of this file during a run cannot change
+# what the run does.
 {
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -74,5 +75,5 @@ out="$ROOT/bench/results/$(date +%Y-%m-%d)-$(hostname).md"
 if [ -f "$out" ]; then { cat "$section"; echo; cat "$out"; } > "$out.tmp"; else cp "$section" "$out.tmp"; fi
 mv "$out.tmp" "$out"
 cat "$section"
-}
 exit
+}

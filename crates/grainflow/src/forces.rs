@@ -792,9 +792,8 @@ impl InputLanes {
     /// lane is left as it is); `hist` holds the histories of the pairs from index `k0` on.
     #[inline(always)]
     fn gather_pairs(&mut self, x: &ForceInputs, r1: usize, k0: usize, group: &[Found], hist: &[Vec3]) {
-        let s = PairData::of(x);
-        let held = !s.held.is_empty();
-        match (x.images.any(), s.per_mass, held) {
+        let (per_mass, held) = (x.law.damping.per_particle_mass(), !x.held.is_empty());
+        match (x.images.any(), per_mass, held) {
             (true, true, true) => self.gather_pairs_for::<true, true, true>(x, r1, k0, group, hist),
             (true, true, false) => self.gather_pairs_for::<true, true, false>(x, r1, k0, group, hist),
             (true, false, _) => self.gather_pairs_for::<true, false, false>(x, r1, k0, group, hist),

@@ -6,8 +6,7 @@
 mod common;
 
 use common::*;
-use grainflow::contact::{CoulombCap, HistoryFrame, LeverArm, NormalDamping, TangentialModel};
-use grainflow::{ContactLaw, ContactParams, Integrator, NormalModel, Simulation};
+use grainflow::{Integrator, NormalModel, Simulation};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -52,34 +51,8 @@ fn calls() -> usize {
 fn flowing_bed(integrator: Integrator, normal: NormalModel) -> Simulation {
     // LAMMPS's two laws (the yardstick cases').
     let (law, params) = match normal {
-        NormalModel::LinearSpringDashpot => (
-            ContactLaw {
-                damping: NormalDamping::MassVelocity,
-                history: HistoryFrame::Project,
-                lever: LeverArm::Radius,
-                coulomb: CoulombCap::Lammps,
-                ..ContactLaw::mfix(normal)
-            },
-            ContactParams {
-                kn: Some(2000.0),
-                gamma_n: Some(1314.0),
-                gamma_t: Some(657.0),
-                mu: 0.5,
-                ..Default::default()
-            },
-        ),
-        NormalModel::Hertz => (
-            ContactLaw {
-                normal,
-                tangential: TangentialModel::IncrementalMindlin,
-                history: HistoryFrame::Rotate,
-                lever: LeverArm::LammpsGranular,
-                damping: NormalDamping::Tsuji,
-                clip_attraction: false,
-                coulomb: CoulombCap::Lammps,
-            },
-            ContactParams { etat_fac: 1.0, ..hertz_params(0.9, 0.9, 0.5) },
-        ),
+        NormalModel::LinearSpringDashpot => lammps_hooke(),
+        NormalModel::Hertz => lammps_mindlin(),
     };
     let cfg = chute_config(
         law,

@@ -15,12 +15,9 @@
 mod common;
 
 use common::*;
-use grainflow::contact::{
-    ContactLaw, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel,
-};
 use grainflow::motion::{MotionRule, PrescribedMotion};
 use grainflow::state::ParticleInit;
-use grainflow::{ContactParams, Integrator, Simulation, Vec3, Wall};
+use grainflow::{Integrator, Simulation, Vec3, Wall};
 
 /// Everything a step depends on or produces, as bits.
 fn fingerprint(sim: &Simulation) -> Vec<u64> {
@@ -83,23 +80,14 @@ fn nudge(init: &mut [ParticleInit]) {
 
 fn walled_bed(nudged: bool) -> Simulation {
     let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
-    let law = ContactLaw {
-        normal: NormalModel::Hertz,
-        tangential: TangentialModel::IncrementalMindlin,
-        history: HistoryFrame::Rotate,
-        lever: LeverArm::LammpsGranular,
-        damping: NormalDamping::Tsuji,
-        clip_attraction: false,
-        coulomb: CoulombCap::Lammps,
-    };
-    let elastic = || ContactParams { etat_fac: 1.0, ..hertz_params(0.9, 0.9, 0.5) };
+    let (law, elastic) = lammps_mindlin();
     let mut cfg = config(
         law,
         vec![elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3)],
         vec![wall_material("wall", Some(5.0e6), Some(0.3))],
         Wall::domain_box(lo, hi, 0),
-        vec![elastic()],
-        vec![elastic()],
+        vec![elastic],
+        vec![elastic],
         Integrator::VelocityVerlet,
         2.0e-5,
     );
@@ -120,20 +108,7 @@ fn periodic_chute(nudged: bool) -> Simulation {
 /// evaluated again before each first half kick.
 fn periodic_chute_with(nudged: bool, integrator: Integrator, follower: bool) -> Simulation {
     let (lo, hi) = CHUTE_BOX;
-    let law = ContactLaw {
-        damping: NormalDamping::MassVelocity,
-        history: HistoryFrame::Project,
-        lever: LeverArm::Radius,
-        coulomb: CoulombCap::Lammps,
-        ..ContactLaw::mfix(NormalModel::LinearSpringDashpot)
-    };
-    let params = ContactParams {
-        kn: Some(2000.0),
-        gamma_n: Some(1314.0),
-        gamma_t: Some(657.0),
-        mu: 0.5,
-        ..Default::default()
-    };
+    let (law, params) = lammps_hooke();
     let mut cfg = chute_config(
         law,
         phase("glass", 0.002, 2500.0),

@@ -3,7 +3,9 @@
 //! Every test file includes this module with `mod common;`; not every file uses every helper.
 #![allow(dead_code)]
 
-use grainflow::contact::ContactParams;
+use grainflow::contact::{
+    ContactParams, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel,
+};
 use grainflow::state::ParticleInit;
 use grainflow::{
     ContactLaw, Integrator, Particles, Phase, Simulation, SimulationConfig, TimeStepRule, Vec3, Wall,
@@ -186,4 +188,40 @@ pub fn chute_config(
     cfg.periodic = Some(grainflow::Periodic { lo, hi, axes: [true, true, false] });
     cfg.gravity = 9.81 * Vec3::new(26f64.to_radians().sin(), 0.0, -26f64.to_radians().cos());
     cfg
+}
+
+/// LAMMPS's `gran/hooke/history` law as the yardstick chute sets it (damping γ·m_eff, history
+/// projected on the tangent plane, radius lever arms, LAMMPS's Coulomb cap), with the test
+/// chute's coefficients.
+pub fn lammps_hooke() -> (ContactLaw, ContactParams) {
+    let law = ContactLaw {
+        damping: NormalDamping::MassVelocity,
+        history: HistoryFrame::Project,
+        lever: LeverArm::Radius,
+        coulomb: CoulombCap::Lammps,
+        ..ContactLaw::mfix(NormalModel::LinearSpringDashpot)
+    };
+    let params = ContactParams {
+        kn: Some(2000.0),
+        gamma_n: Some(1314.0),
+        gamma_t: Some(657.0),
+        mu: 0.5,
+        ..Default::default()
+    };
+    (law, params)
+}
+
+/// LAMMPS's `granular hertz/material … tangential mindlin … damping tsuji` as the Hertz–Mindlin
+/// yardstick bed sets it, with e_n = e_t = 0.9 and μ = 0.5.
+pub fn lammps_mindlin() -> (ContactLaw, ContactParams) {
+    let law = ContactLaw {
+        normal: NormalModel::Hertz,
+        tangential: TangentialModel::IncrementalMindlin,
+        history: HistoryFrame::Rotate,
+        lever: LeverArm::LammpsGranular,
+        damping: NormalDamping::Tsuji,
+        clip_attraction: false,
+        coulomb: CoulombCap::Lammps,
+    };
+    (law, ContactParams { etat_fac: 1.0, ..hertz_params(0.9, 0.9, 0.5) })
 }
