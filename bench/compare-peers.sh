@@ -4,9 +4,11 @@
 # steps in both codes; (2) speed — particle-steps per second, median of RUNS rounds in which
 # every code runs once, in turn: LAMMPS and LIGGGHTS on one core, grainflow on 1 and 2
 # threads, and the ratios (also round by round); (3) what two cores of
-# this machine give: LAMMPS on 2 MPI ranks, and two 1-thread grainflow runs at once (their
-# summed speed: what both cores give grainflow's 1-thread code at that time, each with a whole
-# run; a code splitting one case gains beyond it only from each core holding half the data).
+# this machine give: LAMMPS on 2 MPI ranks ÷ 1, and, in one process taking turns of 100 steps
+# (the example `alternate`), grainflow on 2 threads ÷ 1 beside two independent copies of the
+# 1-thread simulation at once ÷ one (what both cores give grainflow's code when nothing is
+# shared: a simulation split over the two gains beyond it only from each core holding half the
+# data).
 # Results go on top of bench/results/<date>-<host>.md (the day's earlier runs stay below) with
 # a machine description. Installs the peers from Debian's packages if they are missing.
 #
@@ -27,7 +29,9 @@ if ! command -v lmp >/dev/null || ! command -v liggghts >/dev/null; then
   apt-get update -qq && apt-get install -y -qq --no-install-recommends lammps liggghts openmpi-bin >/dev/null
 fi
 cargo build --release --quiet
+cargo build --release --quiet -p grainflow-case --example alternate
 GF=$ROOT/target/release/grainflow
+ALT=$ROOT/target/release/examples/alternate
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 
@@ -42,12 +46,14 @@ cd "$W"
 lmp_ke() { awk '/^Step/{f=1;next} f && $1==1000 {print $3; exit}' "$1"; }
 loop_time() { awk '/^Loop time of/{print $4; exit}' "$1"; }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
-# grainflow's force stage on 2 threads (`grainflow run`'s "force stage on 2 threads" line: the
-# threads' mean work, waiting for the slowest thread, handing work over) in units of half the
-# same round's 1-thread force stage (walls + pairs): 1.00, 0 and 0 would be twice the speed.
-force_parts() {
-  awk 'FNR==NR && /^stages:/ {for(k=1;k<=NF;k++) if($k=="walls"||$k=="pairs") f+=$(k+1); next}
-       FNR!=NR && /^force stage on/ {h=f/2; printf "%.3f %.3f %.3f\n", $9/h, $16/h, $24/h}' "$1" "$2"
+# From `alternate CASE 1,1x2,2`: two copies at once ÷ one, 2 threads ÷ 1 (speeds), and the
+# 2-thread force stage's parts (the threads' mean work, waiting for the slowest thread, handing
+# work over) in units of half the 1-thread force stage: 1.00, 0 and 0 would be twice the speed.
+alt_figures() {
+  awk '/x 2 copies at once:/ {for(k=1;k<=NF;k++) if($k=="times") c=$(k-1)}
+       /^2 threads:/ {for(k=1;k<=NF;k++) {if($k=="times") t=$(k-1); if($k=="working") w=$(k+1);
+                      if($k=="thread") q=$(k+1); if($k=="over") h=$(k+1)}}
+       END {gsub(",","",w); gsub(",","",q); printf "%s %s %s %s %s\n", c, t, w, q, h}' "$1"
 }
 # LAMMPS on 2 ranks: the slowest rank's Pair time over the ranks' mean (its log's timing table).
 pair_balance() { awk '$1=="Pair" && $2=="|" {printf "%.3f\n", $7/$5; exit}' "$1"; }
@@ -68,10 +74,12 @@ new="$W/section.md"
   echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}'), $(nproc) cores, $(free -g | awk '/Mem/{print $2}') GiB;"
   echo "$(lmp -h | sed -n 2p | sed 's/^ *//'); $(liggghts -h 2>/dev/null | sed -n 's/.*(Version \(.*\), compiled.*/\1/p' | head -1); grainflow $($GF --version | awk '{print $2}')."
   echo "Peers on one core; grainflow on 1 thread (-j 1) and on 2 threads (-j 2). What two cores give:"
-  echo "LAMMPS on 2 MPI ranks ÷ 1, and two 1-thread grainflow runs at once (summed speed) ÷ one alone."
+  echo "LAMMPS on 2 MPI ranks ÷ 1; in one grainflow process taking turns of 100 steps, 2 threads ÷ 1"
+  echo "and two independent 1-thread copies at once ÷ one (summed speed: the machine's two cores for"
+  echo "this code with nothing shared)."
   echo
-  echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS | LIGGGHTS | grainflow 1 thread | ÷ LAMMPS | ÷ LIGGGHTS | grainflow 2 threads | 2 threads ÷ 1 | LAMMPS 2 ranks ÷ 1 | 2 runs at once ÷ 1 |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| case | KE after 1000 steps, LAMMPS | grainflow | rel. diff | LAMMPS | LIGGGHTS | grainflow 1 thread | ÷ LAMMPS | ÷ LIGGGHTS | grainflow 2 threads | 2 threads ÷ 1 | LAMMPS 2 ranks ÷ 1 | in one process: 2 threads ÷ 1 | two copies at once ÷ 1 |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } > "$new"
 for c in box_hm box_lsd chute; do
   # Physics: 1 000 steps from the same state.
@@ -82,15 +90,15 @@ for c in box_hm box_lsd chute; do
   $GF run $c.toml --out gf.$c.1000 -q >/dev/null
   ke_g=$(awk -F, '$1==1000 {print $3}' gf.$c.1000/timeseries.csv)
   # Speed: NRUN steps, RUNS rounds. Each round takes every code once, one after the other
-  # (LAMMPS, grainflow on 1 thread, LIGGGHTS, grainflow on 2 threads, LAMMPS on 2 ranks, two
-  # 1-thread grainflow runs at once), so that a slow spell of this shared machine falls on all
+  # (LAMMPS, grainflow on 1 thread, LIGGGHTS, grainflow on 2 threads, LAMMPS on 2 ranks, the
+  # turns of `alternate`), so that a slow spell of this shared machine falls on all
   # of them alike rather than on whichever ran then; each figure is the median of its rounds.
   n=$(grep -m1 ' atoms$' "$DATA/$( [ $c = chute ] && echo chute_eq || echo ${c}_settled ).data" | awk '{print $1}')
   dtl=$(awk '/^dt = /{print $3}' $c.toml)
   sed "s|^t_stop = .*|t_stop = $(python3 -c "print($NRUN*$dtl)")|; s|^interval = .*|interval = 1e9|" $c.toml > $c.speed.toml
   lmp_speed() { awk -v n="$n" -v s="$NRUN" '/^Loop time of/{print n*s/$4/1e6; exit}' "$1"; }
   gf_speed() { awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/s") print $(k-1)/1e6}'; }
-  rm -f lmp.$c.speeds lmp2.$c.speeds lig.$c.speeds gf.$c.speed.1 gf.$c.speed.2 gf.$c.speed.both gf.$c.parts lmp2.$c.balance
+  rm -f lmp.$c.speeds lmp2.$c.speeds lig.$c.speeds gf.$c.speed.1 gf.$c.speed.2 gf.$c.alt lmp2.$c.balance
   for i in $(seq "$RUNS"); do
     lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp.$c.t$i -screen none
     lmp_speed lmp.$c.t$i >> lmp.$c.speeds
@@ -100,27 +108,24 @@ for c in box_hm box_lsd chute; do
     lmp_speed lig.$c.t$i >> lig.$c.speeds
     $GF run $c.speed.toml -j 2 --out gf.$c.t$i -q > gf2.$c.t$i.log
     gf_speed < gf2.$c.t$i.log >> gf.$c.speed.2
-    force_parts gf1.$c.t$i.log gf2.$c.t$i.log >> gf.$c.parts
     mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in ${LMP_IN[$c]} -var nrun "$NRUN" -log lmp2.$c.t$i -screen none
     lmp_speed lmp2.$c.t$i >> lmp2.$c.speeds
     pair_balance lmp2.$c.t$i >> lmp2.$c.balance
-    $GF run $c.speed.toml -j 1 --out gf.$c.a$i -q | gf_speed > gf.$c.a &
-    $GF run $c.speed.toml -j 1 --out gf.$c.b$i -q | gf_speed > gf.$c.b
-    wait
-    cat gf.$c.a gf.$c.b | awk '{s+=$1} END {print s}' >> gf.$c.speed.both
+    "$ALT" $c.speed.toml 1,1x2,2 100 > alt.$c.t$i.log
+    alt_figures alt.$c.t$i.log >> gf.$c.alt
   done
   median < lmp.$c.speeds > lmp.$c.speed
   echo "- $c: $(paste -d' ' gf.$c.speed.1 lmp.$c.speeds | awk '{printf "%s%.2f", (NR > 1 ? " / " : ""), $1 / $2}')" >> rounds.md
   median < lmp2.$c.speeds > lmp2.$c.speed
-  part() { cut -d' ' -f"$1" gf.$c.parts | median; }
-  echo "- $c: working $(part 1), waiting for the slowest thread $(part 2), handing over $(part 3); LAMMPS on 2 ranks: slowest rank's Pair time ÷ mean $(median < lmp2.$c.balance)" >> threads.md
+  alt() { cut -d' ' -f"$1" gf.$c.alt | median; }
+  echo "- $c: working $(alt 3), waiting for the slowest thread $(alt 4), handing over $(alt 5); LAMMPS on 2 ranks: slowest rank's Pair time ÷ mean $(median < lmp2.$c.balance)" >> threads.md
   median < lig.$c.speeds > lig.$c.speed
   python3 - "$c" "$ke_l" "$ke_g" "$(cat lmp.$c.speed)" "$(cat lig.$c.speed)" "$(median < gf.$c.speed.1)" \
-    "$(median < gf.$c.speed.2)" "$(cat lmp2.$c.speed)" "$(median < gf.$c.speed.both)" >> "$new" <<'PY'
+    "$(median < gf.$c.speed.2)" "$(cat lmp2.$c.speed)" "$(alt 2)" "$(alt 1)" >> "$new" <<'PY'
 import sys
 c = sys.argv[1]
-kl, kg, sl, sli, g1, g2, sl2, gb = map(float, sys.argv[2:])
-print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sli:.2f} | {g1:.2f} | {g1/sl:.2f} | {g1/sli:.2f} | {g2:.2f} | {g2/g1:.2f} | {sl2/sl:.2f} | {gb/g1:.2f} |")
+kl, kg, sl, sli, g1, g2, sl2, a2, ac = map(float, sys.argv[2:])
+print(f"| {c} | {kl:.7e} | {kg:.7e} | {abs(kg-kl)/abs(kl):.1e} | {sl:.2f} | {sli:.2f} | {g1:.2f} | {g1/sl:.2f} | {g1/sli:.2f} | {g2:.2f} | {g2/g1:.2f} | {sl2/sl:.2f} | {a2:.2f} | {ac:.2f} |")
 PY
 done
 echo >> "$new"
@@ -129,8 +134,8 @@ echo "round every code ran once, in turn. grainflow on 1 thread ÷ LAMMPS, round
 echo >> "$new"
 cat rounds.md >> "$new"
 echo >> "$new"
-echo "grainflow's force stage on 2 threads, in units of half its 1-thread force stage of the same round" >> "$new"
-echo "(1.00, 0 and 0 would make it twice as fast), medians of the rounds:" >> "$new"
+echo "grainflow's force stage on 2 threads, in units of half its 1-thread force stage in the same process" >> "$new"
+echo "(\`alternate\`; 1.00, 0 and 0 would make it twice as fast), medians of the rounds:" >> "$new"
 echo >> "$new"
 cat threads.md >> "$new"
 if [ -f "$out" ]; then

@@ -1,16 +1,25 @@
-//! Thread counts compared in one process, in turns: one simulation of the case per thread count
-//! given, each taking `chunk` steps in its turn, until the case ends. A slow spell of a shared
-//! machine then falls on all of them alike, where separate runs minutes apart can differ by a
-//! third. Prints each one's time and its ratio to the first; on threads, where its force stage
-//! went (the threads' mean work, waiting for the slowest thread, handing work over), in units of
-//! the first one's force stage divided by the thread count. The final states must agree to the
-//! bit (checked).
+//! Ways of running a case compared in one process, in turns: each entry takes `chunk` steps in
+//! its turn, until the case ends. A slow spell of a shared machine then falls on all of them
+//! alike, where separate runs minutes apart can differ by a third.
 //!
-//! A simulation whose threads sat idle for a while takes a few milliseconds to resume on some
-//! virtual machines: keep `chunk` at 100 steps or more.
+//! An entry is a thread count `T` (one simulation on T threads) or `TxC`: C copies of the
+//! simulation at once, each on T threads of its own. `1x2` measures what two cores give this
+//! code on this machine when nothing is shared between them: two independent 1-thread
+//! simulations running side by side, each with its own data. A simulation split over two
+//! threads cannot expect more, unless each core holding half the data helps it.
+//!
+//! Prints each entry's time, its speed (particle-steps per second, all copies together) and
+//! that speed's ratio to the first entry's; for a single simulation on threads, where its force
+//! stage went (the threads' mean work, waiting for the slowest thread, handing work over), in
+//! units of the first entry's force stage divided by the thread count (meaningful when the
+//! first entry is `1`). The final states of every simulation must agree to the bit (checked).
+//!
+//! Threads that sat idle during the other entries' turns are woken before each turn is timed
+//! (on some virtual machines that takes milliseconds, which `grainflow run`, whose threads never
+//! sit idle, does not pay).
 //!
 //! ```text
-//! cargo run --release -p grainflow-case --example alternate -- bench/cases/chute.toml 1,2 100
+//! cargo run --release -p grainflow-case --example alternate -- bench/cases/chute.toml 1,1x2,2 100
 //! ```
 
 use std::process::ExitCode;
@@ -24,59 +33,99 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
             eprintln!("alternate: {message}");
-            eprintln!("usage: alternate CASE.toml THREADS[,THREADS...] [CHUNK_STEPS (default 100)]");
+            eprintln!("usage: alternate CASE.toml ENTRY[,ENTRY...] [CHUNK_STEPS (default 100)]");
+            eprintln!(
+                "       ENTRY: THREADS, or THREADSxCOPIES (copies run at once, each on its own threads)"
+            );
             ExitCode::from(2)
         }
     }
 }
 
-fn run(args: &[String]) -> Result<(), String> {
-    let [case, threads, rest @ ..] = args else {
-        return Err("a case file and thread counts are needed".into());
+/// One way of running the case: `copies` simulations at once, each on `threads` threads.
+#[derive(Clone, Copy)]
+struct Entry {
+    threads: usize,
+    copies: usize,
+}
+
+fn parse_entry(e: &str) -> Result<Entry, String> {
+    let count = |s: &str, what: &str| {
+        s.parse().ok().filter(|&n: &usize| n > 0).ok_or(format!("{s:?} is not a {what}"))
     };
-    let threads: Vec<usize> = threads
-        .split(',')
-        .map(|t| t.parse().ok().filter(|&t| t > 0).ok_or(format!("{t:?} is not a thread count")))
-        .collect::<Result<_, _>>()?;
+    match e.split_once('x') {
+        Some((t, c)) => Ok(Entry { threads: count(t, "thread count")?, copies: count(c, "copy count")? }),
+        None => Ok(Entry { threads: count(e, "thread count")?, copies: 1 }),
+    }
+}
+
+fn run(args: &[String]) -> Result<(), String> {
+    let [case, entries, rest @ ..] = args else {
+        return Err("a case file and entries are needed".into());
+    };
+    let entries: Vec<Entry> = entries.split(',').map(parse_entry).collect::<Result<_, _>>()?;
     let chunk: u64 = match rest.first() {
         Some(c) => c.parse().ok().filter(|&c| c > 0).ok_or(format!("{c:?} is not a step count"))?,
         None => 100,
     };
-    let mut sims = Vec::new();
-    for &t in &threads {
-        let case = grainflow_case::load(std::path::Path::new(case)).map_err(|e| e.to_string())?;
-        let mut sim = Simulation::new(case.config, case.particles).map_err(|e| e.to_string())?;
-        sim.set_threads(t).map_err(|e| e.to_string())?;
-        sim.enable_stage_timing();
-        sims.push(sim);
+    let mut groups: Vec<Vec<Simulation>> = Vec::new();
+    for e in &entries {
+        let mut group = Vec::new();
+        for _ in 0..e.copies {
+            let case = grainflow_case::load(std::path::Path::new(case)).map_err(|e| e.to_string())?;
+            let mut sim = Simulation::new(case.config, case.particles).map_err(|e| e.to_string())?;
+            sim.set_threads(e.threads).map_err(|e| e.to_string())?;
+            sim.enable_stage_timing();
+            group.push(sim);
+        }
+        groups.push(group);
     }
-    let mut seconds = vec![0.0; sims.len()];
-    while !sims[0].finished() {
-        for (sim, s) in sims.iter_mut().zip(&mut seconds) {
+    let mut seconds = vec![0.0; groups.len()];
+    while !groups[0][0].finished() {
+        for (group, s) in groups.iter_mut().zip(&mut seconds) {
+            // Threads left idle during the other entries' turns fall asleep, and waking them
+            // takes milliseconds on some virtual machines; `grainflow run` keeps them busy.
+            // They are woken before the clock starts.
+            for sim in group.iter_mut() {
+                sim.on_pool(|_| rayon::broadcast(|_| ()));
+            }
             let t0 = Instant::now();
-            sim.on_pool(|sim| sim.advance(chunk));
+            if let [sim] = group.as_mut_slice() {
+                sim.on_pool(|sim| sim.advance(chunk));
+            } else {
+                std::thread::scope(|scope| {
+                    for sim in group.iter_mut() {
+                        scope.spawn(move || sim.on_pool(|sim| sim.advance(chunk)));
+                    }
+                });
+            }
             *s += t0.elapsed().as_secs_f64();
         }
     }
-    let stages: Vec<_> = sims.iter().map(|s| s.stage_times().unwrap_or_default()).collect();
-    let force = |i: usize| stages[i].walls + stages[i].pairs;
-    let n = sims[0].particles().len() as f64 * sims[0].step_index() as f64;
-    for (i, &t) in threads.iter().enumerate() {
+    let first = &groups[0][0];
+    let stages = |g: usize| groups[g][0].stage_times().unwrap_or_default();
+    let force = |g: usize| stages(g).walls + stages(g).pairs;
+    let particle_steps = first.particles().len() as f64 * first.step_index() as f64;
+    let speed = |g: usize| entries[g].copies as f64 * particle_steps / seconds[g];
+    for (g, e) in entries.iter().enumerate() {
+        let copies = if e.copies == 1 { String::new() } else { format!(" x {} copies at once", e.copies) };
         print!(
-            "{t} thread{}: {:.3} s, {:.3e} particle-steps/s, {:.3} of the first's time",
-            if t == 1 { "" } else { "s" },
-            seconds[i],
-            n / seconds[i],
-            seconds[i] / seconds[0]
+            "{} thread{}{copies}: {:.3} s, {:.3e} particle-steps/s, {:.3} times the first's speed",
+            e.threads,
+            if e.threads == 1 { "" } else { "s" },
+            seconds[g],
+            speed(g),
+            speed(g) / speed(0)
         );
-        let st = stages[i];
-        if st.threads_slowest > 0.0 {
-            let unit = force(0) / t as f64;
+        let st = stages(g);
+        if e.copies == 1 && st.threads_slowest > 0.0 {
+            let unit = force(0) / e.threads as f64;
             print!(
-                "; force stage in units of the first's ÷ {t}: working {:.3}, waiting for the slowest thread {:.3}, handing over {:.3}",
+                "; force stage in units of the first's ÷ {}: working {:.3}, waiting for the slowest thread {:.3}, handing over {:.3}",
+                e.threads,
                 st.threads_mean / unit,
                 (st.threads_slowest - st.threads_mean) / unit,
-                (force(i) - st.threads_slowest).max(0.0) / unit
+                (force(g) - st.threads_slowest).max(0.0) / unit
             );
         }
         println!();
@@ -84,9 +133,9 @@ fn run(args: &[String]) -> Result<(), String> {
     let bits = |s: &Simulation| {
         s.particles().position.iter().flat_map(|x| x.to_array()).map(f64::to_bits).collect::<Vec<_>>()
     };
-    if sims.iter().any(|s| bits(s) != bits(&sims[0])) {
-        return Err("the final positions differ between thread counts".into());
+    if groups.iter().flatten().any(|s| bits(s) != bits(first)) {
+        return Err("the final positions differ between the simulations".into());
     }
-    println!("final positions bit-identical on every thread count");
+    println!("final positions bit-identical in every simulation");
     Ok(())
 }
