@@ -86,7 +86,7 @@ fn run(args: &[String]) -> Result<(), String> {
             // Threads left idle during the other entries' turns fall asleep, and waking them
             // takes milliseconds on some virtual machines; `grainflow run` keeps them busy.
             // They are woken before the clock starts.
-            for sim in group.iter_mut() {
+            for sim in group.iter_mut().filter(|s| s.threads() > 1) {
                 sim.on_pool(|_| rayon::broadcast(|_| ()));
             }
             let t0 = Instant::now();
