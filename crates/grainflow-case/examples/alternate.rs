@@ -1,6 +1,10 @@
-//! Ways of running a case compared in one process, in turns: each entry takes `chunk` steps in
-//! its turn, until the case ends. A slow spell of a shared machine then falls on all of them
-//! alike, where separate runs minutes apart can differ by a third.
+//! Ways of running a case compared in one process, in turns: each entry takes `lead` untimed
+//! steps and then `chunk` timed ones in its turn, until the case ends. A slow spell of a shared
+//! machine then falls on all of them alike, where separate runs minutes apart can differ by a
+//! third. The untimed steps let the caches refill and idle cores wake after the other entries'
+//! turns, which `grainflow run`, going on without a pause, never waits for: with none, 2
+//! threads on box_lsd came out at 1.34-1.41 times 1 thread, with 10 at 1.51-1.62 (3 runs each,
+//! turns of 100 steps; two copies at once 1.59-1.68 and 1.73-1.78).
 //!
 //! An entry is a thread count `T` (one simulation on T threads) or `TxC`: C copies of the
 //! simulation at once, each on T threads of its own. `1x2` measures what two cores give this
@@ -14,12 +18,8 @@
 //! units of the first entry's force stage divided by the thread count (meaningful when the
 //! first entry is `1`). The final states of every simulation must agree to the bit (checked).
 //!
-//! Threads that sat idle during the other entries' turns are woken before each turn is timed
-//! (on some virtual machines that takes milliseconds, which `grainflow run`, whose threads never
-//! sit idle, does not pay).
-//!
 //! ```text
-//! cargo run --release -p grainflow-case --example alternate -- bench/cases/chute.toml 1,1x2,2 100
+//! cargo run --release -p grainflow-case --example alternate -- bench/cases/chute.toml 1,1x2,2 100 10
 //! ```
 
 use std::process::ExitCode;
@@ -33,7 +33,9 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
             eprintln!("alternate: {message}");
-            eprintln!("usage: alternate CASE.toml ENTRY[,ENTRY...] [CHUNK_STEPS (default 100)]");
+            eprintln!(
+                "usage: alternate CASE.toml ENTRY[,ENTRY...] [CHUNK_STEPS (default 100)] [LEAD_STEPS (default 10)]"
+            );
             eprintln!(
                 "       ENTRY: THREADS, or THREADSxCOPIES (copies run at once, each on its own threads)"
             );
@@ -68,6 +70,10 @@ fn run(args: &[String]) -> Result<(), String> {
         Some(c) => c.parse().ok().filter(|&c| c > 0).ok_or(format!("{c:?} is not a step count"))?,
         None => 100,
     };
+    let lead: u64 = match rest.get(1) {
+        Some(c) => c.parse().map_err(|_| format!("{c:?} is not a step count"))?,
+        None => 10,
+    };
     let mut groups: Vec<Vec<Simulation>> = Vec::new();
     for e in &entries {
         let mut group = Vec::new();
@@ -80,32 +86,28 @@ fn run(args: &[String]) -> Result<(), String> {
         }
         groups.push(group);
     }
+    // Per entry: the seconds of its timed steps, and its (first copy's) force stage's times in
+    // them.
     let mut seconds = vec![0.0; groups.len()];
+    let mut stage_sums = vec![Timed::default(); groups.len()];
+    let mut timed_steps = 0;
     while !groups[0][0].finished() {
-        for (group, s) in groups.iter_mut().zip(&mut seconds) {
-            // Threads left idle during the other entries' turns fall asleep, and waking them
-            // takes milliseconds on some virtual machines; `grainflow run` keeps them busy.
-            // They are woken before the clock starts.
-            for sim in group.iter_mut().filter(|s| s.threads() > 1) {
-                sim.on_pool(|_| rayon::broadcast(|_| ()));
-            }
+        for (g, group) in groups.iter_mut().enumerate() {
+            advance_all(group, lead);
+            let (before, step) = (Timed::of(&group[0]), group[0].step_index());
             let t0 = Instant::now();
-            if let [sim] = group.as_mut_slice() {
-                sim.on_pool(|sim| sim.advance(chunk));
-            } else {
-                std::thread::scope(|scope| {
-                    for sim in group.iter_mut() {
-                        scope.spawn(move || sim.on_pool(|sim| sim.advance(chunk)));
-                    }
-                });
+            advance_all(group, chunk);
+            seconds[g] += t0.elapsed().as_secs_f64();
+            stage_sums[g].add_since(&before, &Timed::of(&group[0]));
+            if g == 0 {
+                timed_steps += group[0].step_index() - step;
             }
-            *s += t0.elapsed().as_secs_f64();
         }
     }
     let first = &groups[0][0];
-    let stages = |g: usize| groups[g][0].stage_times().unwrap_or_default();
-    let force = |g: usize| stages(g).walls + stages(g).pairs;
-    let particle_steps = first.particles().len() as f64 * first.step_index() as f64;
+    let stages = |g: usize| stage_sums[g];
+    let force = |g: usize| stages(g).force;
+    let particle_steps = first.particles().len() as f64 * timed_steps as f64;
     let speed = |g: usize| entries[g].copies as f64 * particle_steps / seconds[g];
     for (g, e) in entries.iter().enumerate() {
         let copies = if e.copies == 1 { String::new() } else { format!(" x {} copies at once", e.copies) };
@@ -118,14 +120,14 @@ fn run(args: &[String]) -> Result<(), String> {
             speed(g) / speed(0)
         );
         let st = stages(g);
-        if e.copies == 1 && st.threads_slowest > 0.0 {
+        if e.copies == 1 && st.slowest > 0.0 {
             let unit = force(0) / e.threads as f64;
             print!(
                 "; force stage in units of the first's ÷ {}: working {:.3}, waiting for the slowest thread {:.3}, handing over {:.3}",
                 e.threads,
-                st.threads_mean / unit,
-                (st.threads_slowest - st.threads_mean) / unit,
-                (force(g) - st.threads_slowest).max(0.0) / unit
+                st.mean / unit,
+                (st.slowest - st.mean) / unit,
+                (st.force - st.slowest).max(0.0) / unit
             );
         }
         println!();
@@ -138,4 +140,44 @@ fn run(args: &[String]) -> Result<(), String> {
     }
     println!("final positions bit-identical in every simulation");
     Ok(())
+}
+
+/// `steps` more steps for each simulation of a group, the copies at once, each on its own
+/// threads.
+fn advance_all(group: &mut [Simulation], steps: u64) {
+    if steps == 0 {
+        return;
+    }
+    if let [sim] = group {
+        sim.on_pool(|sim| sim.advance(steps));
+    } else {
+        std::thread::scope(|scope| {
+            for sim in group.iter_mut() {
+                scope.spawn(move || sim.on_pool(|sim| sim.advance(steps)));
+            }
+        });
+    }
+}
+
+/// The force stage's seconds so far: in all (walls and pairs), and the threads' mean and
+/// slowest work.
+#[derive(Clone, Copy, Default)]
+struct Timed {
+    force: f64,
+    mean: f64,
+    slowest: f64,
+}
+
+impl Timed {
+    fn of(sim: &Simulation) -> Self {
+        let st = sim.stage_times().unwrap_or_default();
+        Timed { force: st.walls + st.pairs, mean: st.threads_mean, slowest: st.threads_slowest }
+    }
+
+    /// Adds what was spent from `before` to `after`.
+    fn add_since(&mut self, before: &Timed, after: &Timed) {
+        self.force += after.force - before.force;
+        self.mean += after.mean - before.mean;
+        self.slowest += after.slowest - before.slowest;
+    }
 }
