@@ -79,9 +79,10 @@ pub struct Simulation {
     periodic: Periodic,
     /// Slots held fixed by prescribed motion (empty if none).
     held: Vec<bool>,
-    /// The mass all particles have, if they have the same; `None` inside when they differ,
-    /// `None` outside when not known (the particles were lent out for changes since).
-    common_mass: Option<Option<f64>>,
+    /// The mass all particles have and the moment of inertia all have, each if they have the
+    /// same (`None` inside when they differ); `None` outside when not known (the particles were
+    /// lent out for changes since).
+    common: Option<(Option<f64>, Option<f64>)>,
     /// Runs of slots that are integrated (every slot not under prescribed motion).
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
@@ -201,7 +202,7 @@ impl Simulation {
             motion,
             periodic,
             held,
-            common_mass: None,
+            common: None,
             free,
             history_started: false,
             forces_current: false,
@@ -220,7 +221,7 @@ impl Simulation {
     /// The particles, for user hooks that change the state between steps.
     pub fn particles_mut(&mut self) -> &mut Particles {
         self.forces_current = false;
-        self.common_mass = None;
+        self.common = None;
         &mut self.particles
     }
 
@@ -435,13 +436,22 @@ impl Simulation {
         match self.integrator {
             Integrator::Euler => {
                 self.compute_forces();
-                integrate::euler(&mut self.particles, &self.free, g, dt, thread_blocks(&self.plan, par, n));
+                let common = self.common_mass_and_inertia();
+                integrate::euler(
+                    &mut self.particles,
+                    &self.free,
+                    g,
+                    dt,
+                    thread_blocks(&self.plan, par, n),
+                    common,
+                );
             }
             Integrator::AdamsBashforth => {
                 self.compute_forces();
                 let first = !self.history_started;
+                let common = self.common_mass_and_inertia();
                 let blocks = thread_blocks(&self.plan, par, n);
-                integrate::adams_bashforth(&mut self.particles, &self.free, g, dt, first, blocks);
+                integrate::adams_bashforth(&mut self.particles, &self.free, g, dt, first, blocks, common);
             }
             Integrator::VelocityVerlet => {
                 if self.kick_pending && !self.forces_current {
@@ -454,20 +464,29 @@ impl Simulation {
                     // springs advance once per step, in the evaluation after the drift.
                     self.evaluate_forces(false);
                 }
+                let common = self.common_mass_and_inertia();
                 let blocks = thread_blocks(&self.plan, par, n);
                 if self.kick_pending {
                     let wrap = self.wrap();
-                    integrate::verlet_kick_kick_drift(&mut self.particles, &self.free, g, dt, blocks, wrap);
+                    integrate::verlet_kick_kick_drift(
+                        &mut self.particles,
+                        &self.free,
+                        g,
+                        dt,
+                        blocks,
+                        wrap,
+                        common,
+                    );
                     self.kick_pending = false;
                 } else {
-                    integrate::verlet_kick_drift(&mut self.particles, &self.free, g, dt, blocks);
+                    integrate::verlet_kick_drift(&mut self.particles, &self.free, g, dt, blocks, common);
                 }
                 self.compute_forces();
                 if defer {
                     self.kick_pending = true;
                 } else {
                     let blocks = thread_blocks(&self.plan, par, n);
-                    integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks, None);
+                    integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks, None, common);
                 }
             }
         }
@@ -496,9 +515,10 @@ impl Simulation {
     /// The pending second half kick and periodic wrap, on their own.
     fn finish_kick(&mut self, par: bool) {
         let n = self.particles.len();
+        let common = self.common_mass_and_inertia();
         let blocks = thread_blocks(&self.plan, par, n);
         let (g, dt, wrap) = (self.gravity, self.time_step.dt, self.wrap());
-        integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks, wrap);
+        integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks, wrap, common);
         self.kick_pending = false;
     }
 
@@ -547,14 +567,29 @@ impl Simulation {
         }
     }
 
+    /// The mass every particle has and the moment of inertia every particle has, each if all
+    /// have the same (to the bit); found once and kept until the particles are lent out for
+    /// changes.
+    fn common(&mut self) -> (Option<f64>, Option<f64>) {
+        let p = &self.particles;
+        *self.common.get_or_insert_with(|| {
+            let same =
+                |a: &[f64]| a.first().copied().filter(|x| a.iter().all(|y| y.to_bits() == x.to_bits()));
+            (same(&p.mass), same(&p.inertia))
+        })
+    }
+
+    /// The mass and moment of inertia of every particle, if all have the same.
+    fn common_mass_and_inertia(&mut self) -> Option<(f64, f64)> {
+        let (m, i) = self.common();
+        m.zip(i)
+    }
+
     /// The force stage for one law; with `par`, on the thread pool.
     fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool, par: bool) {
         let clock = self.timing.map(|_| std::time::Instant::now());
+        let common_mass = self.common().0;
         let p = &mut self.particles;
-        let common_mass = *self.common_mass.get_or_insert_with(|| {
-            let m = p.mass.first().copied();
-            m.filter(|m| p.mass.iter().all(|x| x.to_bits() == m.to_bits()))
-        });
         let build = self.neighbors.stats().builds;
         let (offsets, partners, pair_history, in_contact, wall_pairs, wall_history) =
             self.neighbors.split_mut();
