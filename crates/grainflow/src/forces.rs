@@ -82,9 +82,9 @@ pub(crate) struct ForceInputs<'a> {
     pub phase: &'a [u32],
     /// Slots held fixed (empty if none).
     pub held: &'a [bool],
-    /// The mass every particle has, if all have the same: a pair's effective mass is then
-    /// the same for every pair, formed once (see [`common_pair_mass`]).
-    pub common_mass: Option<f64>,
+    /// The mass every particle has, if all have the same, with the effective mass of two of
+    /// them ([`CommonMass::of`]): the same for every pair, formed once per evaluation.
+    pub common_mass: Option<CommonMass>,
     pub walls: &'a [Wall],
     pub coeffs: &'a CoeffTable,
     pub law: ContactLaw,
@@ -768,7 +768,7 @@ impl InputLanes {
         self.h.set(i, h);
         let m_eff = if !PER_MASS {
             0.0
-        } else if let Some((m, both)) = s.common_mass {
+        } else if let Some(CommonMass { m, both }) = s.common_mass {
             // No division per pair: 2-3 % of the chute's and box_hm's time, in one process
             // alternating both forms.
             common_pair_mass(m, both, HELD && s.held[a], HELD && s.held[b])
@@ -1177,8 +1177,8 @@ struct PairData<'a> {
     coeffs: &'a CoeffTable,
     /// The damping takes the contact's effective mass.
     per_mass: bool,
-    /// The particles' common mass m, if all have the same, and m·m/(m + m).
-    common_mass: Option<(f64, f64)>,
+    /// See [`ForceInputs::common_mass`].
+    common_mass: Option<CommonMass>,
     images: Images,
 }
 
@@ -1196,7 +1196,7 @@ impl<'a> PairData<'a> {
             phase: x.coeffs.uniform_pair().is_none().then(|| &x.phase[..n]),
             coeffs: x.coeffs,
             per_mass: x.law.damping.per_particle_mass(),
-            common_mass: x.common_mass.map(|m| (m, m * m / (m + m))),
+            common_mass: x.common_mass,
             images: x.images,
         }
     }
@@ -1310,6 +1310,19 @@ pub(crate) fn pair_mass(mass: &[f64], held: &[bool], i: usize, j: usize) -> f64 
         return both;
     }
     pick(held[i], mj, pick(held[j], mi, both))
+}
+
+/// The mass `m` every particle has and the effective mass `both` = m·m/(m + m) of two of them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct CommonMass {
+    pub m: f64,
+    pub both: f64,
+}
+
+impl CommonMass {
+    pub fn of(m: f64) -> Self {
+        CommonMass { m, both: m * m / (m + m) }
+    }
 }
 
 /// [`pair_mass`] of two particles of the same mass `m`, given `both` = m·m/(m + m): the same
@@ -1598,16 +1611,12 @@ mod tests {
         assert_eq!(cases, 3 * 3 * 4 * 3 * 8);
     }
 
-    /// Blocks share the estimated work, not the pairs: with every pair of the first half of the
-    /// rows touching, the first block ends where the work (a row: ROW_COST; a pair tested: 1;
-    /// touching: 1 + CONTACT_COST) is halved. A plan made with no contact known is made again
-    /// once the flags are set, and then kept.
     #[test]
     fn a_common_mass_gives_pair_mass_to_the_bit() {
         // Masses of the yardstick cases and awkward ones (m·m/(m + m) rounds differently
         // from m/2 for some of them); every combination of held particles.
         for m in [1.0, 1.909859 * std::f64::consts::PI / 6.0, 0.1, 3.0e-9, 7.77e-4, 1.0e300] {
-            let both = m * m / (m + m);
+            let CommonMass { both, .. } = CommonMass::of(m);
             for (hi, hj) in [(false, false), (true, false), (false, true), (true, true)] {
                 let want = pair_mass(&[m, m], &[hi, hj], 0, 1);
                 assert_eq!(
@@ -1620,6 +1629,10 @@ mod tests {
         }
     }
 
+    /// Blocks share the estimated work, not the pairs: with every pair of the first half of the
+    /// rows touching, the first block ends where the work (a row: ROW_COST; a pair tested: 1;
+    /// touching: 1 + CONTACT_COST) is halved. A plan made with no contact known is made again
+    /// once the flags are set, and then kept.
     #[test]
     fn blocks_share_the_work_of_touching_pairs() {
         let n = 100;

@@ -40,6 +40,23 @@ impl Integrator {
     }
 }
 
+/// What every integrator pass takes besides the particles.
+#[derive(Debug, Clone, Copy)]
+pub struct Pass<'a> {
+    /// Runs of slots to integrate (ascending, not overlapping).
+    pub runs: &'a [Range<usize>],
+    /// Gravity, m/s².
+    pub gravity: Vec3,
+    /// Time step, s.
+    pub dt: f64,
+    /// With two or more (consecutive ranges of slots from slot 0 to the last particle), the
+    /// slots of block i are integrated on thread i of the current rayon pool.
+    pub blocks: &'a [Range<usize>],
+    /// The mass and moment of inertia of every particle, if all have the same (see the module's
+    /// docs).
+    pub common: Option<(f64, f64)>,
+}
+
 /// The arrays of a run of particle slots that the integrators read and write. The
 /// Adams–Bashforth history is empty unless that integrator runs.
 struct Slots<'a> {
@@ -146,19 +163,12 @@ impl<'a> Slots<'a> {
     }
 }
 
-/// Applies `kernel` to the slots of `runs`, one run at a time, after bringing every slot's
-/// position into the periodic box if `wrap` is given (prescribed slots included). With more
-/// than one block in `blocks` (consecutive ranges of slots from slot 0 to the last particle),
-/// the slots of block i are handled on thread i of the current rayon pool; the result is the
-/// same, every particle being updated on its own.
-fn for_slots(
-    p: &mut Particles,
-    runs: &[Range<usize>],
-    blocks: &[Range<usize>],
-    wrap: Option<Periodic>,
-    common: Option<(f64, f64)>,
-    kernel: impl Fn(Slots) + Sync,
-) {
+/// Applies `kernel` to the slots of the pass's runs, one run at a time, after bringing every
+/// slot's position into the periodic box if `wrap` is given (prescribed slots included). With
+/// more than one of the pass's blocks, the slots of block i are handled on thread i of the
+/// current rayon pool; the result is the same, every particle being updated on its own.
+fn for_slots(p: &mut Particles, pass: &Pass, wrap: Option<Periodic>, kernel: impl Fn(Slots) + Sync) {
+    let Pass { runs, blocks, common, .. } = *pass;
     /// Wraps the positions of `s` (the slots of `block`), then applies the kernel to the parts
     /// of `runs` within `block`.
     fn in_block(
@@ -198,20 +208,14 @@ fn for_slots(
 
 /// Brings every position into the periodic box (`blocks` as for the integrators).
 pub fn wrap(p: &mut Particles, periodic: Periodic, blocks: &[Range<usize>]) {
-    for_slots(p, &[], blocks, Some(periodic), None, |_| {});
+    let pass = Pass { runs: &[], gravity: Vec3::ZERO, dt: 0.0, blocks, common: None };
+    for_slots(p, &pass, Some(periodic), |_| {});
 }
 
-/// MFIX's `EULER` step. `common`: the mass and moment of inertia of every particle, if they
-/// all have the same (see the module's docs).
-pub fn euler(
-    p: &mut Particles,
-    runs: &[Range<usize>],
-    gravity: Vec3,
-    dt: f64,
-    blocks: &[Range<usize>],
-    common: Option<(f64, f64)>,
-) {
-    for_slots(p, runs, blocks, None, common, |mut s| {
+/// MFIX's `EULER` step.
+pub fn euler(p: &mut Particles, pass: &Pass) {
+    let Pass { gravity, dt, .. } = *pass;
+    for_slots(p, pass, None, |mut s| {
         s.each(gravity, |s, i, a, alpha| {
             s.v[i] += dt * a;
             s.x[i] += dt * s.v[i];
@@ -221,18 +225,10 @@ pub fn euler(
 }
 
 /// MFIX's `ADAMS_BASHFORTH` step. `first` marks the first step of the run, where the previous
-/// accelerations are taken equal to the current ones; `common` as for [`euler`].
-pub fn adams_bashforth(
-    p: &mut Particles,
-    runs: &[Range<usize>],
-    gravity: Vec3,
-    dt: f64,
-    first: bool,
-    blocks: &[Range<usize>],
-    common: Option<(f64, f64)>,
-) {
-    let h = 0.5 * dt;
-    for_slots(p, runs, blocks, None, common, |mut s| {
+/// accelerations are taken equal to the current ones.
+pub fn adams_bashforth(p: &mut Particles, pass: &Pass, first: bool) {
+    let (gravity, h) = (pass.gravity, 0.5 * pass.dt);
+    for_slots(p, pass, None, |mut s| {
         s.each(gravity, |s, i, a, alpha| {
             let (a_prev, alpha_prev) = if first { (a, alpha) } else { (s.a_prev[i], s.alpha_prev[i]) };
             let v0 = s.v[i];
@@ -246,64 +242,36 @@ pub fn adams_bashforth(
     });
 }
 
-/// Velocity Verlet, first half: kick by Δt/2 with the current accelerations, then drift by Δt
-/// (`common` as for [`euler`]).
-pub fn verlet_kick_drift(
-    p: &mut Particles,
-    runs: &[Range<usize>],
-    gravity: Vec3,
-    dt: f64,
-    blocks: &[Range<usize>],
-    common: Option<(f64, f64)>,
-) {
-    verlet_pass::<1, true>(p, runs, gravity, dt, blocks, None, common);
+/// Velocity Verlet, first half: kick by Δt/2 with the current accelerations, then drift by Δt.
+pub fn verlet_kick_drift(p: &mut Particles, pass: &Pass) {
+    verlet_pass::<1, true>(p, pass, None);
 }
 
 /// Velocity Verlet, second half: kick by Δt/2 with the new accelerations; then, with `wrap`,
-/// every position brought into the periodic box (`common` as for [`euler`]).
-pub fn verlet_kick(
-    p: &mut Particles,
-    runs: &[Range<usize>],
-    gravity: Vec3,
-    dt: f64,
-    blocks: &[Range<usize>],
-    wrap: Option<Periodic>,
-    common: Option<(f64, f64)>,
-) {
-    verlet_pass::<1, false>(p, runs, gravity, dt, blocks, wrap, common);
+/// every position brought into the periodic box.
+pub fn verlet_kick(p: &mut Particles, pass: &Pass, wrap: Option<Periodic>) {
+    verlet_pass::<1, false>(p, pass, wrap);
 }
 
 /// The second half kick of one velocity-Verlet step and the first half kick and drift of the
 /// next, in one pass, both kicks with the accelerations of the forces in the accumulators:
 /// v += (Δt/2)·a twice (the same two roundings as [`verlet_kick`] then
 /// [`verlet_kick_drift`]), then x += Δt·v; with `wrap`, every position is brought into the
-/// periodic box before the drift, as the step between the two does (`common` as for
-/// [`euler`]).
-pub fn verlet_kick_kick_drift(
-    p: &mut Particles,
-    runs: &[Range<usize>],
-    gravity: Vec3,
-    dt: f64,
-    blocks: &[Range<usize>],
-    wrap: Option<Periodic>,
-    common: Option<(f64, f64)>,
-) {
-    verlet_pass::<2, true>(p, runs, gravity, dt, blocks, wrap, common);
+/// periodic box before the drift, as the step between the two does.
+pub fn verlet_kick_kick_drift(p: &mut Particles, pass: &Pass, wrap: Option<Periodic>) {
+    verlet_pass::<2, true>(p, pass, wrap);
 }
 
 /// `KICKS` half kicks by Δt/2 with the accelerations of the forces in the accumulators, each
 /// added on its own, then, with `DRIFT`, x += Δt·v (after the wrap, if any).
 fn verlet_pass<const KICKS: usize, const DRIFT: bool>(
     p: &mut Particles,
-    runs: &[Range<usize>],
-    gravity: Vec3,
-    dt: f64,
-    blocks: &[Range<usize>],
+    pass: &Pass,
     wrap: Option<Periodic>,
-    common: Option<(f64, f64)>,
 ) {
+    let Pass { gravity, dt, .. } = *pass;
     let h = 0.5 * dt;
-    for_slots(p, runs, blocks, wrap, common, |mut s| {
+    for_slots(p, pass, wrap, |mut s| {
         s.each(gravity, |s, i, a, alpha| {
             for _ in 0..KICKS {
                 s.v[i] += h * a;
@@ -347,8 +315,8 @@ mod tests {
         p
     }
 
-    /// One integrator step on the given blocks, with or without common mass and inertia.
-    type Step<'a> = &'a dyn Fn(&mut Particles, &[Range<usize>], Option<(f64, f64)>);
+    /// One integrator step.
+    type Step<'a> = &'a dyn Fn(&mut Particles, &Pass);
 
     fn bits(p: &Particles) -> Vec<u64> {
         [&p.position, &p.velocity, &p.omega, &p.accel_prev, &p.alpha_prev]
@@ -375,12 +343,12 @@ mod tests {
         };
         let runs = [0..11, 12..37];
         let steps: [Step; 6] = [
-            &|p, b, c| euler(p, &runs, g, dt, b, c),
-            &|p, b, c| adams_bashforth(p, &runs, g, dt, true, b, c),
-            &|p, b, c| adams_bashforth(p, &runs, g, dt, false, b, c),
-            &|p, b, c| verlet_kick_drift(p, &runs, g, dt, b, c),
-            &|p, b, c| verlet_kick(p, &runs, g, dt, b, Some(per), c),
-            &|p, b, c| verlet_kick_kick_drift(p, &runs, g, dt, b, Some(per), c),
+            &|p, pass| euler(p, pass),
+            &|p, pass| adams_bashforth(p, pass, true),
+            &|p, pass| adams_bashforth(p, pass, false),
+            &|p, pass| verlet_kick_drift(p, pass),
+            &|p, pass| verlet_kick(p, pass, Some(per)),
+            &|p, pass| verlet_kick_kick_drift(p, pass, Some(per)),
         ];
         for (k, step) in steps.iter().enumerate() {
             for blocks in [&[][..], &[0..20, 20..37][..]] {
@@ -397,8 +365,9 @@ mod tests {
                     b.accel_prev = a.accel_prev.clone();
                     b.alpha_prev = a.alpha_prev.clone();
                 }
-                step(&mut a, blocks, None);
-                step(&mut b, blocks, common);
+                let pass = |common| Pass { runs: &runs, gravity: g, dt, blocks, common };
+                step(&mut a, &pass(None));
+                step(&mut b, &pass(common));
                 assert_ne!(bits(&a), bits(&p0), "integrator {k} changed nothing");
                 assert_eq!(bits(&a), bits(&b), "integrator {k}, blocks {blocks:?}");
             }

@@ -437,21 +437,17 @@ impl Simulation {
             Integrator::Euler => {
                 self.compute_forces();
                 let common = self.common_mass_and_inertia();
-                integrate::euler(
-                    &mut self.particles,
-                    &self.free,
-                    g,
-                    dt,
-                    thread_blocks(&self.plan, par, n),
-                    common,
-                );
+                let blocks = thread_blocks(&self.plan, par, n);
+                let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
+                integrate::euler(&mut self.particles, &pass);
             }
             Integrator::AdamsBashforth => {
                 self.compute_forces();
                 let first = !self.history_started;
                 let common = self.common_mass_and_inertia();
                 let blocks = thread_blocks(&self.plan, par, n);
-                integrate::adams_bashforth(&mut self.particles, &self.free, g, dt, first, blocks, common);
+                let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
+                integrate::adams_bashforth(&mut self.particles, &pass, first);
             }
             Integrator::VelocityVerlet => {
                 if self.kick_pending && !self.forces_current {
@@ -466,27 +462,21 @@ impl Simulation {
                 }
                 let common = self.common_mass_and_inertia();
                 let blocks = thread_blocks(&self.plan, par, n);
+                let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
                 if self.kick_pending {
                     let wrap = self.wrap();
-                    integrate::verlet_kick_kick_drift(
-                        &mut self.particles,
-                        &self.free,
-                        g,
-                        dt,
-                        blocks,
-                        wrap,
-                        common,
-                    );
+                    integrate::verlet_kick_kick_drift(&mut self.particles, &pass, wrap);
                     self.kick_pending = false;
                 } else {
-                    integrate::verlet_kick_drift(&mut self.particles, &self.free, g, dt, blocks, common);
+                    integrate::verlet_kick_drift(&mut self.particles, &pass);
                 }
                 self.compute_forces();
                 if defer {
                     self.kick_pending = true;
                 } else {
                     let blocks = thread_blocks(&self.plan, par, n);
-                    integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks, None, common);
+                    let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
+                    integrate::verlet_kick(&mut self.particles, &pass, None);
                 }
             }
         }
@@ -517,8 +507,9 @@ impl Simulation {
         let n = self.particles.len();
         let common = self.common_mass_and_inertia();
         let blocks = thread_blocks(&self.plan, par, n);
-        let (g, dt, wrap) = (self.gravity, self.time_step.dt, self.wrap());
-        integrate::verlet_kick(&mut self.particles, &self.free, g, dt, blocks, wrap, common);
+        let (gravity, dt, wrap) = (self.gravity, self.time_step.dt, self.wrap());
+        let pass = integrate::Pass { runs: &self.free, gravity, dt, blocks, common };
+        integrate::verlet_kick(&mut self.particles, &pass, wrap);
         self.kick_pending = false;
     }
 
@@ -588,7 +579,7 @@ impl Simulation {
     /// The force stage for one law; with `par`, on the thread pool.
     fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool, par: bool) {
         let clock = self.timing.map(|_| std::time::Instant::now());
-        let common_mass = self.common().0;
+        let common_mass = self.common().0.map(forces::CommonMass::of);
         let p = &mut self.particles;
         let build = self.neighbors.stats().builds;
         let (offsets, partners, pair_history, in_contact, wall_pairs, wall_history) =
