@@ -123,6 +123,66 @@ impl Periodic {
         }
         Vec3::from_array(x)
     }
+
+    /// Brings every position of `xs` into the box: [`wrap`](Self::wrap) of each, to the bit.
+    pub fn wrap_all(&self, xs: &mut [Vec3]) {
+        self.wrap_flat(bytemuck::cast_slice_mut(xs));
+    }
+
+    /// [`wrap_all`](Self::wrap_all) of the positions as one flat array of coordinates (x, y, z
+    /// of the first, then of the next, ...), four particles at a time ([`FlatWrap`]).
+    pub(crate) fn wrap_flat(&self, coords: &mut [f64]) {
+        let flat = FlatWrap::of(self);
+        let mut fours = coords.chunks_exact_mut(12);
+        for four in &mut fours {
+            flat.wrap_four(four);
+        }
+        flat.wrap_each(fours.into_remainder());
+    }
+}
+
+/// [`Periodic::wrap`] for four particles' coordinates at a time, as one flat array of 12. Most
+/// positions lie in the box already: the 12 coordinates are tested against the box's bounds
+/// (−∞ and ∞ on the axes that are not periodic) in a few vector instructions, and only when one
+/// is out of bounds are the four particles wrapped one by one.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FlatWrap {
+    periodic: Periodic,
+    lo: [f64; 12],
+    hi: [f64; 12],
+}
+
+impl FlatWrap {
+    pub(crate) fn of(periodic: &Periodic) -> Self {
+        let bound = |b: Vec3, open: f64| -> [f64; 12] {
+            let b = b.to_array();
+            std::array::from_fn(|j| if periodic.axes[j % 3] { b[j % 3] } else { open })
+        };
+        FlatWrap {
+            periodic: *periodic,
+            lo: bound(periodic.lo, f64::NEG_INFINITY),
+            hi: bound(periodic.hi, f64::INFINITY),
+        }
+    }
+
+    /// Wraps the four particles of `four` (12 coordinates).
+    #[inline(always)]
+    pub(crate) fn wrap_four(&self, four: &mut [f64]) {
+        let four: &mut [f64; 12] = four.try_into().expect("four particles' coordinates");
+        let outside = (0..12).fold(false, |out, j| out | !((four[j] >= self.lo[j]) & (four[j] < self.hi[j])));
+        if outside {
+            self.wrap_each(four);
+        }
+    }
+
+    /// Wraps each particle of `coords` (whole triples) on its own.
+    #[cold]
+    pub(crate) fn wrap_each(&self, coords: &mut [f64]) {
+        for x in coords.chunks_exact_mut(3) {
+            let w = self.periodic.wrap(Vec3::new(x[0], x[1], x[2]));
+            x.copy_from_slice(&w.to_array());
+        }
+    }
 }
 
 /// [`Periodic::nearest`] without a branch on the separation, for the contact loops, where
@@ -210,6 +270,36 @@ mod tests {
                 } else {
                     prop_assert_eq!(fast[k].to_bits(), d.to_array()[k].to_bits());
                 }
+            }
+        }
+    }
+
+    proptest! {
+        /// Wrapping many positions at once, four at a time as flat coordinates, is wrapping
+        /// each on its own, to the bit: coordinates inside, outside on either side, far out,
+        /// not finite, on periodic axes and on the others, in lists whose length is no
+        /// multiple of four.
+        #[test]
+        fn wrapping_all_at_once_is_wrapping_each(
+            axes in prop::array::uniform3(any::<bool>()),
+            coords in prop::collection::vec(
+                prop_oneof![
+                    8 => -0.2f64..1.2,
+                    1 => -50.0f64..50.0,
+                    1 => prop::sample::select(vec![f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.0, 1.0]),
+                ],
+                0..40,
+            ),
+        ) {
+            let per = Periodic { lo: Vec3::new(0.0, -0.1, 0.2), hi: Vec3::new(1.0, 0.9, 0.7), axes };
+            let xs: Vec<Vec3> = coords.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+            let mut all = xs.clone();
+            per.wrap_all(&mut all);
+            // A NaN is compared as a NaN: Rust leaves the bits of a NaN made by an operation
+            // (here ∞ wrapped) to the instruction that makes it.
+            let bits = |v: Vec3| v.to_array().map(|c| if c.is_nan() { f64::NAN.to_bits() } else { c.to_bits() });
+            for (x, got) in xs.iter().zip(&all) {
+                prop_assert_eq!(bits(*got), bits(per.wrap(*x)), "{:?}", x);
             }
         }
     }
