@@ -401,6 +401,44 @@ fn simulation_rebuilds_exactly_after_half_a_skin() {
     }
 }
 
+/// The displacement test asks for a rebuild exactly when one particle, in whichever slot, moved
+/// more than skin/2 along any axis — by the nearest image on periodic axes, so that a particle
+/// wrapped across the box has not moved far — or has a position that is not a number.
+#[test]
+fn displacement_test_finds_the_one_particle_that_moved_too_far() {
+    use grainflow::Periodic;
+    let skin = 0.01;
+    let per = Periodic { lo: Vec3::ZERO, hi: Vec3::new(1.0, 1.0, 1.0), axes: [true, false, true] };
+    // 11 particles: two groups of four and three after them.
+    let positions: Vec<Vec3> = (0..11)
+        .map(|k| Vec3::new(0.05 + 0.08 * k as f64, 0.5 + 0.01 * k as f64, 0.3 + 0.05 * k as f64))
+        .collect();
+    let p = particles_from(&positions, &[0.01; 11]);
+    let mut nl = NeighborList::with_periodic(skin, per);
+    nl.build(&p, &[]);
+    assert!(!nl.needs_rebuild(&p.position, &[]), "nothing moved");
+    let half = 0.5 * skin;
+    for slot in 0..11 {
+        for axis in 0..3 {
+            for (step, far) in
+                [(half * (1.0 + 1e-9), true), (half * (1.0 - 1e-9), false), (-half * (1.0 + 1e-9), true)]
+            {
+                let mut xs = p.position.clone();
+                let mut x = xs[slot].to_array();
+                x[axis] += step;
+                xs[slot] = Vec3::from_array(x);
+                assert_eq!(nl.needs_rebuild(&xs, &[]), far, "slot {slot}, axis {axis}, moved {step}");
+            }
+        }
+        // Along a periodic axis, one box length away is the same place.
+        let mut xs = p.position.clone();
+        xs[slot].x += 1.0;
+        assert!(!nl.needs_rebuild(&xs, &[]), "slot {slot} wrapped along x");
+        xs[slot].y = f64::NAN;
+        assert!(nl.needs_rebuild(&xs, &[]), "slot {slot} not a number");
+    }
+}
+
 /// During a real run (a dense, frictional, polydisperse gas falling in a box) every contact
 /// at the positions where forces were evaluated is in the list the force loop used.
 #[test]
