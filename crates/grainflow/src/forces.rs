@@ -320,12 +320,12 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
     let crossing_busy = {
         let crossing = &plan.crossing;
         let shares = rayon::current_num_threads().max(1);
-        let cuts: Vec<usize> = (1..=shares).map(|t| crossing.len() * t / shares).collect();
+        let cuts: crate::threads::Parts<usize> = (1..=shares).map(|t| crossing.len() * t / shares).collect();
         let stretch_end = |c: usize| crossing.get(c).map_or(x.partners.len(), |&(_, k)| k);
         let hist = split_at_ends(&mut *out.pair_history, cuts.iter().map(|&c| stretch_end(c)));
         let flags = split_at_ends(&mut *out.in_contact, cuts.iter().map(|&c| stretch_end(c)));
         let loads = split_at_ends(&mut plan.loads[..], cuts.iter().copied());
-        let parts: Vec<_> = hist.into_iter().zip(flags).zip(loads).collect();
+        let parts = hist.into_iter().zip(flags).zip(loads);
         crate::threads::pinned(parts, |t, ((hist, flags), loads)| {
             let t0 = clock.then(std::time::Instant::now);
             let c0 = if t == 0 { 0 } else { cuts[t - 1] };
@@ -350,7 +350,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
         Incoming::Crossing { start: &plan.incoming_start, index: &plan.incoming, loads: &plan.loads };
     let crossing_start = &plan.crossing_start;
     let loads = &plan.loads;
-    let parts: Vec<_> = force.into_iter().zip(torque).zip(hist).zip(flags).zip(whist).collect();
+    let parts = force.into_iter().zip(torque).zip(hist).zip(flags).zip(whist);
     let block_times = crate::threads::pinned(parts, |t, ((((force, torque), hist), flags), whist)| {
         let rows = blocks[t].clone();
         let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };

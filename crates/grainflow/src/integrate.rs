@@ -210,7 +210,7 @@ fn for_slots(
         in_block(&mut Slots::of(p, 0..n, inverses), &(0..n), runs, wrap, &kernel);
         return;
     }
-    let mut parts = Vec::with_capacity(blocks.len());
+    let mut parts = crate::threads::Parts::new();
     let mut rest = Slots::of(p, 0..n, inverses);
     for block in blocks {
         let (head, tail) = rest.split_at(block.len());

@@ -337,9 +337,8 @@ impl NeighborList {
         if blocks.len() < 2 {
             moved(positions, &self.reference)
         } else {
-            let parts: Vec<_> = blocks.iter().collect();
             let refs = &self.reference;
-            crate::threads::pinned(parts, |_, b| moved(&positions[b.clone()], &refs[b.clone()]))
+            crate::threads::pinned(blocks, |_, b| moved(&positions[b.clone()], &refs[b.clone()]))
                 .contains(&true)
         }
     }

@@ -5,21 +5,34 @@
 //! integrators, the neighbour list's displacement check and the periodic wrap share the slots
 //! out by the same blocks, so each particle's state is read and written on one core.
 
+use smallvec::SmallVec;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+/// Parts of a stage and their results, held inline up to this many (the blocks of a pool of up
+/// to 8 threads): a step asks the allocator for nothing to share its stages out.
+pub(crate) type Parts<T> = SmallVec<[T; 8]>;
+
 /// Runs `work(i, part)` for each of `parts`, part i on thread i mod T of the current rayon pool
 /// of T threads (outside a pool, on the global one), and returns the results in part order.
-pub(crate) fn pinned<T: Send, R: Send>(parts: Vec<T>, work: impl Fn(usize, T) -> R + Sync) -> Vec<R> {
-    let n = parts.len();
-    let cells: Vec<Mutex<Option<T>>> = parts.into_iter().map(|p| Mutex::new(Some(p))).collect();
-    let take = |i: usize| {
-        let mut cell = cells[i].lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-        cell.take().expect("every part is taken by one thread only")
-    };
+/// Allocates nothing itself up to 8 parts (rayon's broadcast allocates once per call).
+pub(crate) fn pinned<T: Send, R: Send>(
+    parts: impl IntoIterator<Item = T>,
+    work: impl Fn(usize, T) -> R + Sync,
+) -> Parts<R> {
+    let cells: Parts<Mutex<Option<T>>> = parts.into_iter().map(|p| Mutex::new(Some(p))).collect();
+    let n = cells.len();
+    let results: Parts<Mutex<Option<R>>> = (0..n).map(|_| Mutex::new(None)).collect();
+    fn lock<X>(m: &Mutex<X>) -> std::sync::MutexGuard<'_, X> {
+        m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+    let take = |i: usize| lock(&cells[i]).take().expect("every part is taken by one thread only");
     let finished = AtomicUsize::new(0);
-    let per_thread: Vec<Vec<R>> = rayon::broadcast(|ctx| {
-        let results = (ctx.index()..n).step_by(ctx.num_threads()).map(|i| work(i, take(i))).collect();
+    rayon::broadcast(|ctx| {
+        for i in (ctx.index()..n).step_by(ctx.num_threads()) {
+            let r = work(i, take(i));
+            *lock(&results[i]) = Some(r);
+        }
         // Wait for the other threads here rather than in rayon's idle loop, which puts a thread
         // to sleep after a few tens of microseconds: the next stage, usually a few
         // microseconds away, would wait 40-80 µs for it to wake. The thread yields its core at
@@ -31,17 +44,18 @@ pub(crate) fn pinned<T: Send, R: Send>(parts: Vec<T>, work: impl Fn(usize, T) ->
         while finished.load(Ordering::Acquire) < ctx.num_threads() {
             std::thread::yield_now();
         }
-        results
     });
-    // Part i is the (i / T)-th result of thread i mod T.
-    let t = per_thread.len();
-    let mut results: Vec<_> = per_thread.into_iter().map(Vec::into_iter).collect();
-    (0..n).map(|i| results[i % t].next().expect("one result per part")).collect()
+    results
+        .into_iter()
+        .map(|r| {
+            r.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner()).expect("one result per part")
+        })
+        .collect()
 }
 
 /// Splits `s` at the given ends of consecutive parts (the last end must be `s.len()`).
-pub(crate) fn split_at_ends<T>(mut s: &mut [T], ends: impl ExactSizeIterator<Item = usize>) -> Vec<&mut [T]> {
-    let mut parts = Vec::with_capacity(ends.len());
+pub(crate) fn split_at_ends<T>(mut s: &mut [T], ends: impl Iterator<Item = usize>) -> Parts<&mut [T]> {
+    let mut parts = Parts::new();
     let mut at = 0;
     for end in ends {
         let (head, tail) = s.split_at_mut(end - at);
@@ -65,7 +79,7 @@ mod tests {
             let parts: Vec<usize> = (0..n).map(|i| 10 * i).collect();
             let out = pool.install(|| pinned(parts, |i, p| (i, p, rayon::current_thread_index())));
             let expected: Vec<_> = (0..n).map(|i| (i, 10 * i, Some(i % 3))).collect();
-            assert_eq!(out, expected);
+            assert_eq!(out.to_vec(), expected);
         }
     }
 }
