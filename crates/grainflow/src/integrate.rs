@@ -345,15 +345,15 @@ fn flat_verlet<const KICKS: usize, const DRIFT: bool>(
     for ((vc, xc), fc) in
         v_head.chunks_exact_mut(FLAT).zip(x_head.chunks_exact_mut(FLAT)).zip(f.chunks_exact(FLAT))
     {
-        if let Some(w) = &flat_wrap {
-            w.wrap_four(xc);
+        if let Some(fw) = &flat_wrap {
+            fw.wrap_four(xc);
         }
         for j in 0..FLAT {
             translate(&mut vc[j], &mut xc[j], fc[j], g12[j]);
         }
     }
-    if let Some(w) = &flat_wrap {
-        w.wrap_each(x_tail);
+    if let Some(fw) = &flat_wrap {
+        fw.wrap_each(x_tail);
     }
     for (j, (v, x)) in v_tail.iter_mut().zip(x_tail).enumerate() {
         translate(v, x, f[n + j], g[j % 3]);
