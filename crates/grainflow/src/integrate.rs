@@ -3,9 +3,10 @@
 //! a = F/m + g and α = T/I are formed from the accumulators filled by the contact stage
 //! (as products with 1/m and 1/I). When every particle has the same mass and moment of inertia
 //! (`common`), 1/m and 1/I are formed once for all: the same products to the bit, without two
-//! divisions and two loads per particle; velocity Verlet then works on the coordinates as flat
+//! divisions and two loads per particle. Velocity Verlet works on the coordinates as flat
 //! arrays, four particles' twelve at a time, in whole vector instructions (the same operations
-//! per coordinate, so the same bits). Each function integrates the particle slots of the given
+//! per coordinate as over 3-vectors, so the same bits). Each function integrates the particle
+//! slots of the given
 //! runs (ascending, not overlapping); the simulation passes the runs of slots that are not
 //! prescribed (prescribed particles are overwritten after the step, so integrating them would
 //! be wasted work). On threads, each thread integrates the slots of one block — the blocks of
@@ -284,39 +285,27 @@ fn verlet_pass<const KICKS: usize, const DRIFT: bool>(
     wrap: Option<Periodic>,
 ) {
     let Pass { gravity, dt, .. } = *pass;
-    let h = 0.5 * dt;
-    for_slots(p, pass, wrap, |mut s, wrap| {
-        if let Some((inv_m, inv_i)) = s.inverses {
-            flat_verlet::<KICKS, DRIFT>(&mut s, inv_m, inv_i, gravity, dt, wrap);
-            return;
+    for_slots(p, pass, wrap, |mut s, wrap| match s.inverses {
+        Some(common) => flat_verlet::<KICKS, DRIFT>(&mut s, |_| common, gravity, dt, wrap),
+        None => {
+            let (m, inertia) = (s.m, s.inertia);
+            flat_verlet::<KICKS, DRIFT>(&mut s, |k| (1.0 / m[k], 1.0 / inertia[k]), gravity, dt, wrap)
         }
-        if let Some(per) = wrap {
-            per.wrap_all(s.x);
-        }
-        s.each(gravity, |s, i, a, alpha| {
-            for _ in 0..KICKS {
-                s.v[i] += h * a;
-                s.w[i] += h * alpha;
-            }
-            if DRIFT {
-                s.x[i] += dt * s.v[i];
-            }
-        });
     });
 }
 
 /// Coordinates handled at once by the flat loops: four particles' three.
 const FLAT: usize = 12;
 
-/// [`verlet_pass`]'s kicks and drift where every particle has the same 1/m and 1/I, on the
-/// coordinates as one flat array each (x, y, z of slot 0, then of slot 1, ...): the same
-/// products and sums, coordinate by coordinate, in the same order, so the same bits; but in
-/// loops over four particles' coordinates at a time, which the compiler makes whole vector
-/// instructions of, where the loop over particles works on one 3-vector at a time.
+/// [`verlet_pass`]'s kicks and drift of the slots `s` (`inverses(k)`: 1/m and 1/I of its k-th
+/// slot), on the coordinates as one flat array each (x, y, z of the first slot, then of the
+/// next, ...): per slot, a = F·(1/m) + g and α = T·(1/I), the kicks v += (Δt/2)·a and
+/// ω += (Δt/2)·α, then x += Δt·v, after the wrap — the products and sums of a loop over
+/// 3-vectors, coordinate by coordinate, so the same bits; but in loops over four particles'
+/// coordinates at a time, which the compiler makes whole vector instructions of.
 fn flat_verlet<const KICKS: usize, const DRIFT: bool>(
     s: &mut Slots,
-    inv_m: f64,
-    inv_i: f64,
+    inverses: impl Fn(usize) -> (f64, f64),
     gravity: Vec3,
     dt: f64,
     wrap: Option<Periodic>,
@@ -329,7 +318,7 @@ fn flat_verlet<const KICKS: usize, const DRIFT: bool>(
     let w: &mut [f64] = bytemuck::cast_slice_mut(&mut *s.w);
     let x: &mut [f64] = bytemuck::cast_slice_mut(&mut *s.x);
     // Per coordinate: the kicks of the velocity, then the drift with the kicked velocity.
-    let translate = |v: &mut f64, x: &mut f64, f: f64, g: f64| {
+    let translate = |v: &mut f64, x: &mut f64, f: f64, inv_m: f64, g: f64| {
         let a = f * inv_m + g;
         for _ in 0..KICKS {
             *v += h * a;
@@ -342,27 +331,40 @@ fn flat_verlet<const KICKS: usize, const DRIFT: bool>(
     let n = v.len() / FLAT * FLAT;
     let (v_head, v_tail) = v.split_at_mut(n);
     let (x_head, x_tail) = x.split_at_mut(n);
-    for ((vc, xc), fc) in
-        v_head.chunks_exact_mut(FLAT).zip(x_head.chunks_exact_mut(FLAT)).zip(f.chunks_exact(FLAT))
+    // The inverses of the four slots of group c.
+    let four = |c: usize| -> [(f64, f64); 4] { std::array::from_fn(|k| inverses(4 * c + k)) };
+    for (c, ((vc, xc), fc)) in
+        v_head.chunks_exact_mut(FLAT).zip(x_head.chunks_exact_mut(FLAT)).zip(f.chunks_exact(FLAT)).enumerate()
     {
         if let Some(fw) = &flat_wrap {
             fw.wrap_four(xc);
         }
+        let inv = four(c);
         for j in 0..FLAT {
-            translate(&mut vc[j], &mut xc[j], fc[j], g12[j]);
+            translate(&mut vc[j], &mut xc[j], fc[j], inv[j / 3].0, g12[j]);
         }
     }
     if let Some(fw) = &flat_wrap {
         fw.wrap_each(x_tail);
     }
     for (j, (v, x)) in v_tail.iter_mut().zip(x_tail).enumerate() {
-        translate(v, x, f[n + j], g[j % 3]);
+        translate(v, x, f[n + j], inverses((n + j) / 3).0, g[j % 3]);
     }
-    for (w, t) in w.iter_mut().zip(t) {
+    let rotate = |w: &mut f64, t: f64, inv_i: f64| {
         let alpha = t * inv_i;
         for _ in 0..KICKS {
             *w += h * alpha;
         }
+    };
+    let (w_head, w_tail) = w.split_at_mut(n);
+    for (c, (wc, tc)) in w_head.chunks_exact_mut(FLAT).zip(t.chunks_exact(FLAT)).enumerate() {
+        let inv = four(c);
+        for j in 0..FLAT {
+            rotate(&mut wc[j], tc[j], inv[j / 3].1);
+        }
+    }
+    for (j, w) in w_tail.iter_mut().enumerate() {
+        rotate(w, t[n + j], inverses((n + j) / 3).1);
     }
 }
 
@@ -414,13 +416,83 @@ mod tests {
             .collect()
     }
 
+    /// Velocity Verlet written for one particle at a time over 3-vectors, as its equations
+    /// read: every position wrapped, then per slot of the runs a = F·(1/m) + g, α = T·(1/I),
+    /// `kicks` half kicks and, with `drift`, x += Δt·v. The reference for the flat loops.
+    fn verlet_reference(
+        p: &mut Particles,
+        runs: &[Range<usize>],
+        g: Vec3,
+        dt: f64,
+        kicks: usize,
+        drift: bool,
+        wrap: Option<Periodic>,
+    ) {
+        if let Some(per) = wrap {
+            p.position.iter_mut().for_each(|x| *x = per.wrap(*x));
+        }
+        for i in runs.iter().flat_map(|r| r.clone()) {
+            let (a, alpha) = (p.force[i] * (1.0 / p.mass[i]) + g, p.torque[i] * (1.0 / p.inertia[i]));
+            for _ in 0..kicks {
+                p.velocity[i] += 0.5 * dt * a;
+                p.omega[i] += 0.5 * dt * alpha;
+            }
+            if drift {
+                p.position[i] += dt * p.velocity[i];
+            }
+        }
+    }
+
+    /// The velocity-Verlet passes over flat coordinates give the bits of the reference over
+    /// 3-vectors: with a common mass and without (masses that differ from slot to slot), on
+    /// one block and on two, with and without the periodic wrap, for runs of slots whose
+    /// lengths are no multiple of four (the last few slots of a run go one by one).
+    #[test]
+    fn flat_verlet_gives_the_bits_of_one_particle_at_a_time() {
+        let mut p0 = particles();
+        let per = Periodic {
+            lo: Vec3::new(-0.02, 0.0, 0.0),
+            hi: Vec3::new(0.02, 0.2, 0.5),
+            axes: [true, false, false],
+        };
+        let runs = [0..11, 12..37];
+        let (g, dt) = (Vec3::new(0.3, 0.0, -9.81), 2e-6);
+        let common = Some((p0.mass[0], p0.inertia[0]));
+        let mut unequal = p0.clone();
+        for (k, (m, i)) in unequal.mass.iter_mut().zip(&mut unequal.inertia).enumerate() {
+            let s = 1.0 + 0.01 * k as f64;
+            (*m, *i) = (*m * s, *i * s * s);
+        }
+        for (p, common) in [(&mut p0, common), (&mut unequal, None)] {
+            for blocks in [&[][..], &[0..20, 20..37][..]] {
+                let pass = Pass { runs: &runs, gravity: g, dt, blocks, common };
+                for (kicks, drift, wrap) in
+                    [(1, true, None), (1, false, Some(per)), (2, true, Some(per)), (2, true, None)]
+                {
+                    let (mut flat, mut reference) = (p.clone(), p.clone());
+                    match (kicks, drift) {
+                        (1, true) => verlet_kick_drift(&mut flat, &pass),
+                        (1, false) => verlet_kick(&mut flat, &pass, wrap),
+                        _ => verlet_kick_kick_drift(&mut flat, &pass, wrap),
+                    }
+                    verlet_reference(&mut reference, &runs, g, dt, kicks, drift, wrap);
+                    let what = format!(
+                        "common {:?}, blocks {blocks:?}, {kicks} kicks, drift {drift}, wrap {}",
+                        common.is_some(),
+                        wrap.is_some()
+                    );
+                    assert_ne!(bits(&flat), bits(p), "{what}: nothing changed");
+                    assert_eq!(bits(&flat), bits(&reference), "{what}");
+                }
+            }
+        }
+    }
+
     /// With every particle's mass and moment of inertia the same, forming 1/m and 1/I once for
     /// all must give every integrator the bits of forming them per particle: the products are
-    /// the same numbers (F·(1/m) with the same 1/m), so any difference is a defect. For
-    /// velocity Verlet this compares the loops over flat coordinates with the loop over
-    /// particles. Runs of slots with a gap (a held particle) and two blocks, as on threads,
-    /// included; and positions outside the periodic box, which the passes with the wrap must
-    /// bring in.
+    /// the same numbers (F·(1/m) with the same 1/m), so any difference is a defect. Runs of
+    /// slots with a gap (a held particle) and two blocks, as on threads, included; and positions
+    /// outside the periodic box, which the passes with the wrap must bring in.
     #[test]
     fn common_inverses_give_the_bits_of_per_particle_ones() {
         let p0 = particles();
