@@ -10,7 +10,8 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Parts of a stage and their results, held inline up to this many (the blocks of a pool of up
-/// to 8 threads): a step asks the allocator for nothing to share its stages out.
+/// to 8 threads): sharing a step's stages out asks the allocator for nothing but what rayon's
+/// broadcast asks for (its list of jobs, once per call).
 pub(crate) type Parts<T> = SmallVec<[T; 8]>;
 
 /// Runs `work(i, part)` for each of `parts`, part i on thread i mod T of the current rayon pool
