@@ -105,8 +105,6 @@ fn run(args: &[String]) -> Result<(), String> {
         }
     }
     let first = &groups[0][0];
-    let stages = |g: usize| stage_sums[g];
-    let force = |g: usize| stages(g).force;
     let particle_steps = first.particles().len() as f64 * timed_steps as f64;
     let speed = |g: usize| entries[g].copies as f64 * particle_steps / seconds[g];
     for (g, e) in entries.iter().enumerate() {
@@ -119,9 +117,9 @@ fn run(args: &[String]) -> Result<(), String> {
             speed(g),
             speed(g) / speed(0)
         );
-        let st = stages(g);
+        let st = stage_sums[g];
         if e.copies == 1 && st.slowest > 0.0 {
-            let unit = force(0) / e.threads as f64;
+            let unit = stage_sums[0].force / e.threads as f64;
             print!(
                 "; force stage in units of the first's ÷ {}: working {:.3}, waiting for the slowest thread {:.3}, handing over {:.3}",
                 e.threads,

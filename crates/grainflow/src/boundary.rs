@@ -124,16 +124,11 @@ impl Periodic {
         Vec3::from_array(x)
     }
 
-    /// Brings every position of `xs` into the box: [`wrap`](Self::wrap) of each, to the bit.
+    /// Brings every position of `xs` into the box: [`wrap`](Self::wrap) of each, to the bit,
+    /// taken as one flat array of coordinates four particles at a time ([`FlatWrap`]).
     pub fn wrap_all(&self, xs: &mut [Vec3]) {
-        self.wrap_flat(bytemuck::cast_slice_mut(xs));
-    }
-
-    /// [`wrap_all`](Self::wrap_all) of the positions as one flat array of coordinates (x, y, z
-    /// of the first, then of the next, ...), four particles at a time ([`FlatWrap`]).
-    pub(crate) fn wrap_flat(&self, coords: &mut [f64]) {
         let flat = FlatWrap::of(self);
-        let mut fours = coords.chunks_exact_mut(12);
+        let mut fours = bytemuck::cast_slice_mut::<Vec3, f64>(xs).chunks_exact_mut(12);
         for four in &mut fours {
             flat.wrap_four(four);
         }

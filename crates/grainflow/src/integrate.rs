@@ -6,12 +6,12 @@
 //! divisions and two loads per particle. Velocity Verlet works on the coordinates as flat
 //! arrays, four particles' twelve at a time, in whole vector instructions (the same operations
 //! per coordinate as over 3-vectors, so the same bits). Each function integrates the particle
-//! slots of the given
-//! runs (ascending, not overlapping); the simulation passes the runs of slots that are not
-//! prescribed (prescribed particles are overwritten after the step, so integrating them would
-//! be wasted work). On threads, each thread integrates the slots of one block — the blocks of
-//! the force stage, pinned to the same threads (the `threads` module) — so a particle's state
-//! and accumulators stay in the cache of the core that computes its contacts.
+//! slots of the given runs (ascending, not overlapping); the simulation passes the runs of
+//! slots that are not prescribed (prescribed particles are overwritten after the step, so
+//! integrating them would be wasted work). On threads, each thread integrates the slots of one
+//! block — the blocks of the force stage, pinned to the same threads (the `threads` module) —
+//! so a particle's state and accumulators stay in the cache of the core that computes its
+//! contacts.
 
 use crate::boundary::{FlatWrap, Periodic};
 use crate::math::Vec3;
