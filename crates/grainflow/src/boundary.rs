@@ -124,8 +124,9 @@ impl Periodic {
         Vec3::from_array(x)
     }
 
-    /// Brings every position of `xs` into the box: [`wrap`](Self::wrap) of each, to the bit,
-    /// taken as one flat array of coordinates four particles at a time ([`FlatWrap`]).
+    /// Brings every position of `xs` into the box: [`wrap`](Self::wrap) of each, to the bit.
+    /// The coordinates are taken as one flat array, four particles at a time: most lie in the
+    /// box, and a test of 12 coordinates at once finds them.
     pub fn wrap_all(&self, xs: &mut [Vec3]) {
         let flat = FlatWrap::of(self);
         let mut fours = bytemuck::cast_slice_mut::<Vec3, f64>(xs).chunks_exact_mut(12);
