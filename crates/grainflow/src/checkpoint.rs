@@ -3,8 +3,10 @@
 //! histories, Adams–Bashforth history, neighbour list, prescribed-motion anchors, step count.
 //!
 //! Layout (little-endian): magic `GRAINFLW`, format version (u32), then a length-prefixed
-//! payload and its FNV-1a 64 checksum. The payload starts with the case hash given by the
-//! caller, so a checkpoint is never applied to another case by mistake. Writing the bytes to a
+//! payload and its FNV-1a 64 checksum, and nothing after it. The payload starts with the case
+//! hash given by the caller, so a checkpoint is never applied to another case by mistake, and
+//! the simulation's run id ([`Simulation::run_id`]), so that a restart can tell its own run's
+//! outputs from another's. Writing the bytes to a
 //! file (atomically) is the caller's business. Both ways the bytes stream: a checkpoint is
 //! written from the state and read into it without a second copy of it in memory.
 
@@ -15,8 +17,11 @@ use crate::state::Particles;
 use std::io::{self, Read, Write};
 use thiserror::Error;
 
-/// The checkpoint format this build writes and reads (2: pairs by slots, without id keys).
-pub const FORMAT_VERSION: u32 = 2;
+/// The checkpoint format this build writes (3: format 2 with the run id after the case hash;
+/// contact pairs by slots).
+pub const FORMAT_VERSION: u32 = 3;
+/// The oldest format this build still reads (2: without the run id).
+pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
 /// Bytes before the payload: signature, version, payload length.
 const HEADER: usize = 20;
@@ -27,17 +32,23 @@ pub enum CheckpointError {
     /// Not a grainflow checkpoint at all.
     #[error("not a grainflow checkpoint (the file does not start with the checkpoint signature)")]
     NotACheckpoint,
-    /// Written by a different format version.
-    #[error("checkpoint format version {found}; this grainflow reads version {expected}")]
+    /// Written by a format version this build does not read.
+    #[error("checkpoint format version {found}; this grainflow reads versions {oldest} to {newest}")]
     Version {
         /// Version in the file.
         found: u32,
-        /// Version this build reads.
-        expected: u32,
+        /// Oldest version this build reads.
+        oldest: u32,
+        /// Version this build writes.
+        newest: u32,
     },
     /// Shorter than its header says.
     #[error("the checkpoint is truncated ({0}); it was probably being written when the run stopped")]
     Truncated(&'static str),
+    /// Bytes after the checksum: the file is not one checkpoint as written (appended to, or
+    /// two files joined).
+    #[error("the checkpoint has {0} bytes after its end; it is not a checkpoint as grainflow wrote it")]
+    TrailingBytes(u64),
     /// Contents do not match their checksum.
     #[error("the checkpoint is corrupted (checksum mismatch)")]
     Corrupted,
@@ -220,6 +231,7 @@ fn le_f64(c: &[u8]) -> f64 {
 /// A checkpoint's payload, decoded.
 struct Payload {
     case_hash: String,
+    run_id: String,
     step: u64,
     timing: (f64, f64, f64),
     history_started: bool,
@@ -230,8 +242,13 @@ struct Payload {
 }
 
 impl Payload {
-    fn decode(d: &mut Dec<impl Read>) -> Result<Payload, CheckpointError> {
+    fn decode(d: &mut Dec<impl Read>, version: u32) -> Result<Payload, CheckpointError> {
         let case_hash = String::from_utf8_lossy(&d.bytes("case hash")?).into_owned();
+        let run_id = if version >= 3 {
+            String::from_utf8_lossy(&d.bytes("run id")?).into_owned()
+        } else {
+            String::new()
+        };
         let step = d.u64("step")?;
         let timing = (d.f64("time")?, d.f64("time step")?, d.f64("start time")?);
         let history_started = d.u64("flags")? != 0;
@@ -267,6 +284,7 @@ impl Payload {
         let anchors = d.vec3s("motion anchors")?;
         Ok(Payload {
             case_hash,
+            run_id,
             step,
             timing,
             history_started,
@@ -305,6 +323,8 @@ impl Simulation {
         let nl = self.neighbors();
         let (n, pairs, walls) = (p.len(), nl.pair_count(), nl.wall_pairs().len());
         8 + case_hash.len()
+            + 8
+            + self.run_id().len()
             + 6 * 8
             + 2 * (8 + 4 * n)
             + 3 * (8 + 8 * n)
@@ -330,6 +350,7 @@ impl Simulation {
         let p = self.particles();
         let nl = self.neighbors();
         e.bytes(case_hash.as_bytes())?;
+        e.bytes(self.run_id().as_bytes())?;
         let (step, history_started, forces_current) = self.counters();
         e.u64(step)?;
         let (time, dt, t_start) = self.timing();
@@ -401,17 +422,28 @@ impl Simulation {
         let mut word = [0u8; 4];
         read_exact(&mut r, &mut word, "version")?;
         let version = u32::from_le_bytes(word);
-        if version != FORMAT_VERSION {
-            return Err(CheckpointError::Version { found: version, expected: FORMAT_VERSION }.into());
+        if !(OLDEST_FORMAT_READ..=FORMAT_VERSION).contains(&version) {
+            return Err(CheckpointError::Version {
+                found: version,
+                oldest: OLDEST_FORMAT_READ,
+                newest: FORMAT_VERSION,
+            }
+            .into());
         }
         let mut long = [0u8; 8];
         read_exact(&mut r, &mut long, "length")?;
         let len = u64::from_le_bytes(long);
-        if len.checked_add((HEADER + 8) as u64).is_none_or(|total| total > size) {
+        let total = len.checked_add((HEADER + 8) as u64);
+        if total.is_none_or(|total| total > size) {
             return Err(CheckpointError::Truncated("payload").into());
         }
+        if let Some(total) = total
+            && total < size
+        {
+            return Err(CheckpointError::TrailingBytes(size - total).into());
+        }
         let mut d = Dec { r, left: len, sum: FNV_OFFSET, scratch: Vec::new() };
-        let payload = Payload::decode(&mut d);
+        let payload = Payload::decode(&mut d, version);
         // The checksum covers the whole payload: read what the decoding left (all of it if a
         // damaged count stopped it), so that damage is reported as such.
         match &payload {
@@ -432,9 +464,19 @@ impl Simulation {
                 CheckpointError::WrongCase { found: payload.case_hash, expected: expected.into() }.into()
             );
         }
-        let Payload { step, timing, history_started, forces_current, particles, neighbors, anchors, .. } =
-            payload;
+        let Payload {
+            step,
+            timing,
+            history_started,
+            forces_current,
+            particles,
+            neighbors,
+            anchors,
+            run_id,
+            ..
+        } = payload;
         let mut sim = Simulation::unbuilt(config, particles)?;
+        sim.set_run_id(run_id);
         sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
             .map_err(CheckpointError::Mismatch)?;
         Ok(sim)

@@ -87,6 +87,8 @@ pub struct Simulation {
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
     forces_current: bool,
+    /// The caller's name for the run this state belongs to, carried through checkpoints.
+    run_id: String,
     /// Velocity Verlet within [`advance`](Simulation::advance): the last step's second half
     /// kick (and periodic wrap) is left for the next step's first pass. Never true between
     /// calls of the public methods.
@@ -207,6 +209,7 @@ impl Simulation {
             history_started: false,
             forces_current: false,
             kick_pending: false,
+            run_id: String::new(),
             timing: None,
             pool: None,
             plan: ForcePlan::default(),
@@ -263,6 +266,18 @@ impl Simulation {
     /// Steps taken so far.
     pub fn step_index(&self) -> u64 {
         self.step
+    }
+
+    /// The caller's name for the run this state belongs to (empty unless set), written into
+    /// checkpoints and restored from them: a run continued from a checkpoint keeps it, so its
+    /// outputs can be told from another run's.
+    pub fn run_id(&self) -> &str {
+        &self.run_id
+    }
+
+    /// Names the run (see [`run_id`](Self::run_id)).
+    pub fn set_run_id(&mut self, id: impl Into<String>) {
+        self.run_id = id.into();
     }
 
     /// Steps of the whole run.

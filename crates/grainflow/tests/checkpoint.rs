@@ -81,9 +81,11 @@ fn restarted_runs_are_bit_identical_for_every_integrator_and_law() {
             for _ in 0..stop {
                 first.step();
             }
+            first.set_run_id("run-7");
             let bytes = first.checkpoint("case-hash");
             drop(first);
             let mut resumed = Simulation::restore(cfg, &bytes, Some("case-hash")).expect("restores");
+            assert_eq!(resumed.run_id(), "run-7", "{what}: the run id goes with the state");
             for _ in 0..end {
                 straight.step();
             }
@@ -128,8 +130,18 @@ fn broken_checkpoints_are_refused_with_a_clear_error() {
     version[8] = 99;
     assert_eq!(
         err(&version, "h1"),
-        CheckpointError::Version { found: 99, expected: grainflow::checkpoint::FORMAT_VERSION }
+        CheckpointError::Version {
+            found: 99,
+            oldest: grainflow::checkpoint::OLDEST_FORMAT_READ,
+            newest: grainflow::checkpoint::FORMAT_VERSION
+        }
     );
+    // Bytes after the checksum: two checkpoints joined, or one appended to.
+    let mut longer = good.clone();
+    longer.extend_from_slice(b"\n");
+    assert_eq!(err(&longer, "h1"), CheckpointError::TrailingBytes(1));
+    let twice = [good.as_slice(), good.as_slice()].concat();
+    assert_eq!(err(&twice, "h1"), CheckpointError::TrailingBytes(good.len() as u64));
     assert_eq!(err(b"PK\x03\x04 not a checkpoint", "h1"), CheckpointError::NotACheckpoint);
     assert!(matches!(err(&good, "h2"), CheckpointError::WrongCase { .. }));
     // Messages a user reads:
@@ -207,10 +219,10 @@ fn a_damaged_count_is_refused_as_corruption_without_allocating_it() {
     }
     let good = sim.checkpoint("h");
     // The payload starts (after the 20-byte header) with the case hash's length, then the
-    // hash, step, time, time step, start time and two flags (8 bytes each), then the count of
-    // ids. Claiming 2^61 ids (16 EiB) must be refused from the payload's length, before any
-    // memory is asked for.
-    let ids_count = 20 + 8 + "h".len() + 6 * 8;
+    // hash, the run id's length (the run id is empty), step, time, time step, start time and
+    // two flags (8 bytes each), then the count of ids. Claiming 2^61 ids (16 EiB) must be
+    // refused from the payload's length, before any memory is asked for.
+    let ids_count = 20 + 8 + "h".len() + 8 + 6 * 8;
     assert_eq!(
         u64::from_le_bytes(good[ids_count..ids_count + 8].try_into().unwrap()),
         init.len() as u64,
