@@ -2,15 +2,17 @@
 //! kinetic energy after 1 000 steps agrees with LAMMPS's to 4 significant digits (relative
 //! difference below 5e-4) on the three yardstick cases of ../shared/peers (box bed with the
 //! Hertz–Mindlin and the linear law, chute-like flow). LAMMPS writes the states with the peers'
-//! own inputs (shortened settling). Needs `lmp` (Debian package `lammps`; `.ci/run` installs
-//! it); without it the test says so and does nothing.
+//! own inputs (shortened settling), kept in `bench/lammps/`. Needs `lmp` (Debian package
+//! `lammps`), so it is ignored by default; `.ci/run` installs LAMMPS and runs it:
+//! `cargo test --release -p grainflow-cli --test lammps_match -- --ignored`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn lmp() -> Option<PathBuf> {
-    let out = Command::new("sh").args(["-c", "command -v lmp"]).output().ok()?;
-    out.status.success().then(|| PathBuf::from(String::from_utf8_lossy(&out.stdout).trim()))
+fn lmp() -> PathBuf {
+    let out = Command::new("sh").args(["-c", "command -v lmp"]).output().expect("sh runs");
+    assert!(out.status.success(), "lmp not found: install LAMMPS (Debian: apt-get install lammps)");
+    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
 }
 
 fn run_lmp(lmp: &Path, dir: &Path, args: &[&str]) {
@@ -59,15 +61,11 @@ fn grainflow_ke(case: &Path, data: &Path, dir: &Path, name: &str) -> f64 {
 }
 
 #[test]
-#[cfg_attr(debug_assertions, ignore = "expensive: run with --release")]
+#[ignore = "needs LAMMPS (lmp, Debian package lammps) and --release: see README"]
 fn kinetic_energy_after_1000_steps_matches_lammps_to_4_digits() {
-    let Some(lmp) = lmp() else {
-        eprintln!("lmp (Debian package lammps) not found: LAMMPS comparison not run (.ci/run installs it)");
-        return;
-    };
+    let lmp = lmp();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let peers = root.join("../shared/peers/lammps");
-    assert!(peers.exists(), "{} missing: the peers' inputs are needed", peers.display());
+    let peers = root.join("bench/lammps");
     let dir = tempfile::tempdir().expect("temp dir");
     let d = dir.path();
     let p = |f: &str| peers.join(f).display().to_string();
