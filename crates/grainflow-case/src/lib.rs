@@ -9,6 +9,7 @@ pub mod case;
 pub mod error;
 pub mod lammps;
 pub mod mfix;
+pub mod outdir;
 pub mod output;
 pub mod particles;
 pub mod raw;

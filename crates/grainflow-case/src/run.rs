@@ -1,6 +1,9 @@
 //! Running a case with its outputs: what `grainflow run` does, without the terminal.
 //!
-//! Besides the outputs, the loop keeps the run trustworthy:
+//! The output folder is held by the run ([`crate::outdir`]): locked, tied to the run by its run
+//! id, its files listed in `manifest.toml`, an earlier run's results never replaced unless
+//! asked (`RunOptions::overwrite`), and `run-info.toml` written when the run starts and again
+//! when it ends. Besides the outputs, the loop keeps the run trustworthy:
 //! - **checkpoints** (`RunOptions::checkpoint_every`) written atomically to
 //!   `out/checkpoint.gfc` (the previous one survives a crash mid-write), from which
 //!   [`RunOptions::restart`] continues bit for bit;
@@ -13,7 +16,8 @@
 //!   in progress finishes, a checkpoint is written and the outputs are closed properly.
 
 use crate::case::{Case, OutputSettings};
-use crate::output::{TIMESERIES_HEADER, TimeSeriesWriter, snapshot_csv, write_atomic, write_atomic_with};
+use crate::outdir::{FolderError, Intent, OutputFolder, RUN_INFO_FILE, TIMESERIES_FILE};
+use crate::output::{TimeSeriesWriter, snapshot_csv, write_atomic, write_atomic_with};
 use crate::vtk::VtkSeries;
 use grainflow::{Diagnostics, Simulation, Vec3};
 use std::path::{Path, PathBuf};
@@ -58,6 +62,21 @@ pub struct RunOptions {
     /// Largest state (bytes) kept in memory as the last good state; larger ones are kept in
     /// a file (None: [`LAST_GOOD_IN_MEMORY`]).
     pub last_good_in_memory: Option<usize>,
+    /// Replace an earlier run's results in the output folder instead of refusing to start.
+    pub overwrite: bool,
+    /// What `run-info.toml` records of the run's inputs.
+    pub provenance: Provenance,
+}
+
+/// The inputs of a run as the user gave them, recorded in `run-info.toml`.
+#[derive(Debug, Clone, Default)]
+pub struct Provenance {
+    /// The case file (or MFIX deck).
+    pub case_file: PathBuf,
+    /// MFIX `KEY=VALUE` overrides.
+    pub mfix_overrides: Vec<String>,
+    /// The `--motion` file of an MFIX deck.
+    pub motion_file: Option<PathBuf>,
 }
 
 /// What a finished (or interrupted) run reports.
@@ -102,6 +121,8 @@ pub struct RunSummary {
     pub neighbor_pairs: usize,
     /// Neighbour-list builds in this invocation.
     pub neighbor_builds: u64,
+    /// The run's id (kept across restarts).
+    pub run_id: String,
 }
 
 /// A file that could not be written.
@@ -131,6 +152,13 @@ pub enum RunError {
         /// Why.
         message: String,
     },
+    /// The output folder cannot take this run's outputs (another run holds it, or it holds an
+    /// earlier run's results); nothing in it was changed.
+    #[error("{0}")]
+    Folder(#[from] FolderError),
+    /// The run would write more output than any disk holds.
+    #[error("{0}")]
+    TooMuchOutput(String),
     /// The run went numerically wrong; the last good state was saved.
     #[error("{message}\nThe last good state (step {good_step}) is in {}; fix the case and continue from it with --restart {} --accept-changed-case.", saved.display(), saved.display())]
     Unhealthy {
@@ -152,10 +180,11 @@ pub fn output_every(interval: Option<f64>, dt: f64, total_steps: u64) -> u64 {
     }
 }
 
-/// Runs `case` to its end (or until `options.stop` is raised), writing `out/timeseries.csv`,
-/// if enabled `out/snapshots/particles_<step>.csv` at every output (including the first and
-/// last step), and if `vtk_interval` is set a VTK series in `out/vtk/`. `on_progress` is
-/// called about a thousand times over the run, and after the last step, with the simulation.
+/// Runs `case` to its end (or until `options.stop` is raised), writing into the folder `out`
+/// (see [`crate::outdir`]) `timeseries.csv`, if enabled `snapshots/particles_<step>.csv` at
+/// every output (including the first and last step), and if `vtk_interval` is set a VTK
+/// series in `vtk/`. `on_progress` is called after every few steps (at most
+/// `MAX_STEPS_UNSEEN`), and after the last step, with the simulation: it should be cheap.
 pub fn run_case(
     case: Case,
     out: &Path,
@@ -163,57 +192,218 @@ pub fn run_case(
     mut on_progress: impl FnMut(&Simulation) + Send,
 ) -> Result<RunSummary, RunError> {
     let (output, domain, hash) = (case.output, case.domain, case.hash.clone());
+    let max_overlap = HEALTH_MAX_OVERLAP;
     let mut sim = match &options.restart {
         None => Simulation::new(case.config, case.particles)?,
         Some(path) => {
+            let case_particles = options.accept_changed_case.then(|| particle_keys(&case.particles));
             // The checkpoint holds the particles: the case's initial ones go before it is read
             // (on a large bed they would hold a second copy of the state meanwhile).
             drop(case.particles);
-            let restart_err = |message: String| RunError::Restart { path: path.clone(), message };
-            let file = std::fs::File::open(path).map_err(|e| restart_err(e.to_string()))?;
-            let size = file.metadata().map_err(|e| restart_err(e.to_string()))?.len();
-            let expected = (!options.accept_changed_case).then_some(hash.as_str());
-            let reader = std::io::BufReader::with_capacity(1 << 20, file);
-            Simulation::restore_from(case.config, reader, size, expected).map_err(|e| {
-                let hint = if matches!(
-                    e,
-                    grainflow::checkpoint::RestoreError::Checkpoint(
-                        grainflow::checkpoint::CheckpointError::WrongCase { .. }
-                    )
-                ) {
-                    " (if you changed the case on purpose, add --accept-changed-case)"
-                } else {
-                    ""
-                };
-                restart_err(format!("{e}{hint}"))
-            })?
+            let sim = restore(case.config, path, options.accept_changed_case, &hash)?;
+            if let Some(keys) = case_particles {
+                same_particles(&keys, &particle_keys(sim.particles()))
+                    .map_err(|message| RunError::Restart { path: path.clone(), message })?;
+            }
+            sim
         }
     };
+    check_output_volume(&sim, &output)?;
+    let intent = match &options.restart {
+        None => Intent::Fresh,
+        Some(path) => Intent::Continue { run_id: sim.run_id(), checkpoint: path, step: sim.step_index() },
+    };
+    let case_file = options.provenance.case_file.display().to_string();
+    let mut folder = OutputFolder::claim(out, &intent, options.overwrite, &case_file, &hash)?;
+    sim.set_run_id(folder.run_id());
     sim.enable_stage_timing();
     if let Some(t) = options.threads {
         sim.set_threads(t)?;
     }
+    let info = RunInfo {
+        options,
+        hash: &hash,
+        run_id: folder.run_id().to_string(),
+        started: crate::outdir::utc_now(),
+    };
+    info.write(out, &sim, "running", None)?;
     // The whole run on the simulation's threads: handing each step over to them on its own
     // costs several microseconds a step.
-    sim.on_pool(|sim| run_simulation(sim, output, domain, &hash, out, options, &mut on_progress))
+    let health = Health { domain, max_overlap };
+    let result =
+        sim.on_pool(|sim| run_simulation(sim, output, health, &hash, &mut folder, options, &mut on_progress));
+    let status = match &result {
+        Ok(s) if s.interrupted => "interrupted",
+        Ok(_) => "completed",
+        Err(RunError::Unhealthy { .. }) => "failed: numerical health check",
+        Err(_) => "failed",
+    };
+    let written = info
+        .write(out, &sim, status, result.as_ref().ok())
+        .and_then(|()| folder.sync().map_err(RunError::from));
+    // The run's own error comes first; a failure to record it only if the run went well.
+    let summary = result?;
+    written?;
+    Ok(summary)
+}
+
+/// Reads the checkpoint at `path` for `config`: for the case `hash`, or any case.
+fn restore(
+    config: grainflow::SimulationConfig,
+    path: &Path,
+    any_case: bool,
+    hash: &str,
+) -> Result<Simulation, RunError> {
+    let restart_err = |message: String| RunError::Restart { path: path.to_path_buf(), message };
+    let meta = std::fs::metadata(path).map_err(|e| restart_err(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(restart_err("not a regular file (a checkpoint is a file grainflow wrote)".into()));
+    }
+    let file = std::fs::File::open(path).map_err(|e| restart_err(e.to_string()))?;
+    let expected = (!any_case).then_some(hash);
+    let reader = std::io::BufReader::with_capacity(1 << 20, file);
+    Simulation::restore_from(config, reader, meta.len(), expected).map_err(|e| {
+        let hint = if matches!(
+            e,
+            grainflow::checkpoint::RestoreError::Checkpoint(
+                grainflow::checkpoint::CheckpointError::WrongCase { .. }
+            )
+        ) {
+            " (if you changed the case on purpose, add --accept-changed-case)"
+        } else {
+            ""
+        };
+        restart_err(format!("{e}{hint}"))
+    })
+}
+
+/// Each particle's id, phase and radius, by id: what must not change when a changed case
+/// continues from a checkpoint.
+fn particle_keys(p: &grainflow::Particles) -> Vec<(u32, u32, u64)> {
+    let mut keys: Vec<_> = (0..p.len()).map(|i| (p.id[i], p.phase[i], p.radius[i].to_bits())).collect();
+    keys.sort_unstable();
+    keys
+}
+
+/// Why the case's particles and the checkpoint's differ, if they do.
+fn same_particles(case: &[(u32, u32, u64)], checkpoint: &[(u32, u32, u64)]) -> Result<(), String> {
+    let advice = "--accept-changed-case accepts changed settings (time step, stiffness, outputs), not other particles: restore the case's particle file, or start a fresh run";
+    if case.len() != checkpoint.len() {
+        return Err(format!(
+            "the checkpoint holds {} particles and the case {}; {advice}",
+            checkpoint.len(),
+            case.len()
+        ));
+    }
+    for (c, k) in case.iter().zip(checkpoint) {
+        if c.0 != k.0 {
+            let (missing, id) = if c.0 < k.0 { ("the checkpoint", c.0) } else { ("the case", k.0) };
+            return Err(format!("particle {id} is missing from {missing}; {advice}"));
+        }
+        if c.1 != k.1 || c.2 != k.2 {
+            return Err(format!(
+                "particle {} is of phase {} with radius {:e} m in the case but of phase {} with radius {:e} m in the checkpoint; {advice}",
+                c.0,
+                c.1 + 1,
+                f64::from_bits(c.2),
+                k.1 + 1,
+                f64::from_bits(k.2)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Largest output a run may plan to write, bytes.
+pub const MAX_OUTPUT_BYTES: f64 = 1e12;
+/// Most files a run may plan to write.
+pub const MAX_OUTPUT_FILES: f64 = 1e6;
+
+/// Refuses a run whose outputs would fill any disk, estimated from the steps left, the
+/// output intervals and the particles (time-series row about 150 bytes, snapshot row about
+/// 160, VTK particle about 150 and contact about 100 bytes at two contacts a particle).
+fn check_output_volume(sim: &Simulation, output: &OutputSettings) -> Result<(), RunError> {
+    let left = sim.total_steps().saturating_sub(sim.step_index()) as f64;
+    let n = sim.particles().len() as f64;
+    let rows = left / output_every(output.interval, sim.dt(), sim.total_steps()) as f64 + 1.0;
+    let frames = output
+        .vtk_interval
+        .map_or(0.0, |iv| left / output_every(Some(iv), sim.dt(), sim.total_steps()) as f64 + 1.0);
+    let snapshot_rows = if output.snapshots { rows } else { 0.0 };
+    let bytes = rows * 150.0 + snapshot_rows * n * 160.0 + frames * n * 350.0;
+    let files = snapshot_rows + 2.0 * frames;
+    let gib = bytes / f64::from(1u32 << 30);
+    if bytes > MAX_OUTPUT_BYTES || files > MAX_OUTPUT_FILES {
+        return Err(RunError::TooMuchOutput(format!(
+            "the run would write about {gib:.3e} GiB in {files:.3e} files ({rows:.3e} time-series rows{}{}, {n} particles, {left:.3e} steps); the limits are {:.0} GiB and {MAX_OUTPUT_FILES:.0e} files. Fix: a longer [output] interval{}, or snapshots = false",
+            if output.snapshots { " and as many snapshots" } else { "" },
+            if frames > 0.0 { format!(", {frames:.3e} VTK frames") } else { String::new() },
+            MAX_OUTPUT_BYTES / f64::from(1u32 << 30),
+            if frames > 0.0 { " or vtk_interval" } else { "" },
+        )));
+    }
+    Ok(())
+}
+
+/// `run-info.toml`: what produced the outputs, so that a result can be traced and reproduced:
+/// program version, run id, case file and the hash of everything it read, thread count, time
+/// step, steps, and how the run ended.
+struct RunInfo<'a> {
+    options: &'a RunOptions,
+    hash: &'a str,
+    run_id: String,
+    started: String,
+}
+
+impl RunInfo<'_> {
+    fn write(
+        &self,
+        out: &Path,
+        sim: &Simulation,
+        status: &str,
+        summary: Option<&RunSummary>,
+    ) -> Result<(), RunError> {
+        let q = |s: &str| toml::Value::String(s.to_string()).to_string();
+        let p = &self.options.provenance;
+        let mut s = format!(
+            "# Written by grainflow run; describes the outputs in this folder (their list: manifest.toml).\ngrainflow_version = \"{}\"\nrun_id = {}\ncase_file = {}\ncase_sha256 = {}\nthreads = {}\nstatus = {}\nstarted = {}\n",
+            env!("CARGO_PKG_VERSION"),
+            q(&self.run_id),
+            q(&p.case_file.display().to_string()),
+            q(self.hash),
+            sim.threads(),
+            q(status),
+            q(&self.started),
+        );
+        if status != "running" {
+            s.push_str(&format!("ended = {}\n", q(&crate::outdir::utc_now())));
+        }
+        if let Some(r) = &self.options.restart {
+            s.push_str(&format!("restarted_from = {}\n", q(&r.display().to_string())));
+        }
+        if !p.mfix_overrides.is_empty() {
+            let list: Vec<String> = p.mfix_overrides.iter().map(|o| q(o)).collect();
+            s.push_str(&format!("mfix_overrides = [{}]\n", list.join(", ")));
+        }
+        if let Some(m) = &p.motion_file {
+            s.push_str(&format!("motion_file = {}\n", q(&m.display().to_string())));
+        }
+        s.push_str(&format!("dt = {:e}\ntotal_steps = {}\n", sim.dt(), sim.total_steps()));
+        if let Some(x) = summary {
+            s.push_str(&format!(
+                "first_step = {}\nlast_step = {}\nwall_seconds = {:.3}\n",
+                x.start_step,
+                x.start_step + x.steps,
+                x.wall_seconds
+            ));
+        }
+        let path = out.join(RUN_INFO_FILE);
+        write_atomic(&path, s.as_bytes()).map_err(|source| RunError::Output(OutputError { path, source }))
+    }
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
     move |source| OutputError { path: path.to_path_buf(), source }
-}
-
-/// The rows of an earlier time series up to and including `step`, so that a restarted run
-/// keeps them.
-fn earlier_rows(path: &Path, step: u64) -> Vec<String> {
-    let Ok(text) = std::fs::read_to_string(path) else { return Vec::new() };
-    let mut lines = text.lines();
-    if lines.next() != Some(TIMESERIES_HEADER) {
-        return Vec::new();
-    }
-    lines
-        .take_while(|l| l.split(',').next().and_then(|s| s.parse::<u64>().ok()).is_some_and(|s| s < step))
-        .map(str::to_string)
-        .collect()
 }
 
 /// States up to this size (bytes) are kept in memory as the last good state; larger ones
@@ -283,9 +473,18 @@ impl Drop for LastGood<'_> {
     }
 }
 
+/// What the run-time health check holds a state to.
+#[derive(Debug, Clone, Copy)]
+pub struct Health {
+    /// The domain box (lower, upper corner), m: no particle may leave it.
+    pub domain: (Vec3, Vec3),
+    /// The largest overlap, as a fraction of the smaller radius (`[particles] max_overlap`).
+    pub max_overlap: f64,
+}
+
 /// The first problem of the current state, if any: non-finite values, a particle outside
-/// the domain box, an overlap beyond [`HEALTH_MAX_OVERLAP`].
-pub fn health_problem(sim: &Simulation, domain: (Vec3, Vec3)) -> Option<String> {
+/// the domain box, an overlap beyond `health.max_overlap`.
+pub fn health_problem(sim: &Simulation, health: Health) -> Option<String> {
     let p = sim.particles();
     let step = sim.step_index();
     for i in 0..p.len() {
@@ -296,7 +495,7 @@ pub fn health_problem(sim: &Simulation, domain: (Vec3, Vec3)) -> Option<String> 
                 p.id[i]
             ));
         }
-        let (lo, hi) = domain;
+        let (lo, hi) = health.domain;
         if x.cmplt(lo).any() || x.cmpgt(hi).any() {
             return Some(format!(
                 "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.",
@@ -309,10 +508,10 @@ pub fn health_problem(sim: &Simulation, domain: (Vec3, Vec3)) -> Option<String> 
         }
     }
     let d = sim.diagnostics();
-    if d.max_overlap_ratio > HEALTH_MAX_OVERLAP {
+    if d.max_overlap_ratio > health.max_overlap {
         return Some(format!(
-            "step {step}: an overlap reached {:.2} of the particle radius (limit {HEALTH_MAX_OVERLAP}). Likely cause: the contact stiffness is too low for the loads and speeds (or dt too large). Fix: raise k_n (or E), or reduce the impact speeds; check that dt resolves the collision time (t_c/dt ≥ 20).",
-            d.max_overlap_ratio
+            "step {step}: an overlap reached {:.3} of the smaller radius, above the limit [particles] max_overlap = {}. Likely cause: the contact stiffness is too low for the loads and speeds (or dt too large). Fix: raise k_n (or E), or reduce the impact speeds; check that dt resolves the collision time (t_c/dt ≥ 20). If such overlaps are expected, raise [particles] max_overlap.",
+            d.max_overlap_ratio, health.max_overlap
         ));
     }
     None
@@ -326,62 +525,102 @@ fn checkpoint_steps(options: &RunOptions) -> Option<u64> {
     }
 }
 
+/// The step in an output file's name (`particles_000001200.csv`, `contacts_000001200.vtp`).
+fn step_of(name: &str) -> Option<u64> {
+    name.rsplit('_').next()?.split('.').next()?.parse().ok()
+}
+
+/// Removes the snapshots and VTK frames after `step` that an earlier attempt of the run being
+/// continued left: the continued run writes its own.
+fn drop_later_frames(folder: &OutputFolder, step: u64) -> Result<(), OutputError> {
+    for sub in ["snapshots", "vtk"] {
+        let dir = folder.dir().join(sub);
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if step_of(&name).is_some_and(|s| s > step) && entry.file_type().is_ok_and(|t| t.is_file()) {
+                let path = entry.path();
+                std::fs::remove_file(&path).map_err(io_err(&path))?;
+            }
+        }
+    }
+    Ok(())
+}
+
 fn run_simulation(
     sim: &mut Simulation,
     output: OutputSettings,
-    domain: (Vec3, Vec3),
+    health: Health,
     hash: &str,
-    out: &Path,
+    folder: &mut OutputFolder,
     options: &RunOptions,
     on_progress: &mut (dyn FnMut(&Simulation) + Send),
 ) -> Result<RunSummary, RunError> {
     let OutputSettings { interval, snapshots, vtk_interval } = output;
+    let out = folder.dir().to_path_buf();
     let mut output_seconds = 0.0;
-    std::fs::create_dir_all(out).map_err(io_err(out))?;
     let snap_dir = out.join("snapshots");
     if snapshots {
         std::fs::create_dir_all(&snap_dir).map_err(io_err(&snap_dir))?;
     }
     let start_step = sim.step_index();
-    let ts_path = out.join("timeseries.csv");
-    let kept = if start_step > 0 { earlier_rows(&ts_path, start_step) } else { Vec::new() };
-    let mut ts = TimeSeriesWriter::create(&ts_path).map_err(io_err(&ts_path))?;
-    ts.write_raw_rows(&kept).map_err(io_err(&ts_path))?;
+    let ts_path = out.join(TIMESERIES_FILE);
+    folder.record(Path::new(TIMESERIES_FILE))?;
+    let mut ts = if folder.continues() {
+        drop_later_frames(folder, start_step)?;
+        TimeSeriesWriter::resume(&ts_path, start_step)
+    } else {
+        TimeSeriesWriter::create(&ts_path)
+    }
+    .map_err(io_err(&ts_path))?;
+    folder.record(Path::new(crate::outdir::RUN_INFO_FILE))?;
     let every = output_every(interval, sim.dt(), sim.total_steps());
     let mut files = vec![ts_path.clone()];
     let vtk_dir = out.join("vtk");
     let mut vtk = match vtk_interval {
-        Some(iv) => Some((
-            VtkSeries::resume(&vtk_dir, sim.walls(), domain.0, domain.1, start_step)
-                .map_err(io_err(&vtk_dir))?,
-            output_every(Some(iv), sim.dt(), sim.total_steps()),
-        )),
+        Some(iv) => {
+            for f in ["walls.vtp", "particles.pvd", "contacts.pvd"] {
+                folder.record(&Path::new("vtk").join(f))?;
+            }
+            // A series of another run is not continued (its frames were removed).
+            let from = if folder.continues() { start_step } else { 0 };
+            Some((
+                VtkSeries::resume(&vtk_dir, sim.walls(), health.domain.0, health.domain.1, from)
+                    .map_err(io_err(&vtk_dir))?,
+                output_every(Some(iv), sim.dt(), sim.total_steps()),
+            ))
+        }
         None => None,
     };
     let vtk_every = vtk.as_ref().map(|(_, k)| *k);
     let checkpoint_path = out.join(CHECKPOINT_FILE);
-    let write_checkpoint = |sim: &Simulation| -> Result<(), OutputError> {
-        write_atomic_with(&checkpoint_path, |w| sim.write_checkpoint(hash, w))
-            .map_err(io_err(&checkpoint_path))
-    };
-    let progress_every = sim.total_steps().div_ceil(1000).max(1);
     let emit = |sim: &Simulation,
                 ts: &mut TimeSeriesWriter,
+                folder: &mut OutputFolder,
                 files: &mut Vec<PathBuf>|
-     -> Result<Diagnostics, OutputError> {
+     -> Result<Diagnostics, RunError> {
         let d = sim.diagnostics();
         ts.write(&d).map_err(io_err(&ts_path))?;
         if snapshots {
-            let path = snap_dir.join(format!("particles_{:09}.csv", sim.step_index()));
+            let name = format!("particles_{:09}.csv", sim.step_index());
+            folder.record(&Path::new("snapshots").join(&name))?;
+            let path = snap_dir.join(name);
             write_atomic(&path, snapshot_csv(sim.particles()).as_bytes()).map_err(io_err(&path))?;
             files.push(path);
         }
         Ok(d)
     };
-    let mut write_vtk = |sim: &Simulation, force: bool| -> Result<(), OutputError> {
+    let write_vtk = |sim: &Simulation,
+                     vtk: &mut Option<(VtkSeries, u64)>,
+                     folder: &mut OutputFolder,
+                     force: bool|
+     -> Result<(), RunError> {
         if let Some((series, k)) = vtk.as_mut()
             && (force || sim.step_index().is_multiple_of(*k))
         {
+            for kind in ["particles", "contacts"] {
+                folder.record(&Path::new("vtk").join(format!("{kind}_{:09}.vtp", sim.step_index())))?;
+            }
             series
                 .write(sim.step_index(), sim.time(), sim.particles(), &sim.contacts())
                 .map_err(io_err(&vtk_dir))?;
@@ -389,20 +628,20 @@ fn run_simulation(
         Ok(())
     };
 
-    if let Some(problem) = health_problem(sim, domain) {
+    if let Some(problem) = health_problem(sim, health) {
         return Err(RunError::Engine(grainflow::EngineError::BadReference(problem)));
     }
     let mut last_good =
-        LastGood::new(sim, hash, out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
+        LastGood::new(sim, hash, &out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
     let (first, mut outputs) = if start_step == 0 || start_step.is_multiple_of(every) {
-        (emit(sim, &mut ts, &mut files)?, 1)
+        (emit(sim, &mut ts, folder, &mut files)?, 1)
     } else {
         (sim.diagnostics(), 0)
     };
-    write_vtk(sim, start_step == 0 || start_step.is_multiple_of(every))?;
+    write_vtk(sim, &mut vtk, folder, start_step == 0 || start_step.is_multiple_of(every))?;
     on_progress(sim);
     let builds_before = sim.neighbors().stats().builds;
     let start = Instant::now();
@@ -417,7 +656,6 @@ fn run_simulation(
     let periods = [Some(every), Some(HEALTH_EVERY), vtk_every, checkpoint_steps(options)];
     while !sim.finished() {
         let step = sim.step_index();
-        let progress_before = step / progress_every;
         let ahead =
             periods.iter().flatten().filter(|&&p| p > 0).fold(MAX_STEPS_UNSEEN, |k, &p| k.min(p - step % p));
         sim.advance(ahead);
@@ -425,7 +663,8 @@ fn run_simulation(
         let end = sim.finished();
         let output_now = step.is_multiple_of(every) || end;
         if step.is_multiple_of(HEALTH_EVERY) || output_now {
-            if let Some(message) = health_problem(sim, domain) {
+            if let Some(message) = health_problem(sim, health) {
+                folder.record(Path::new(LAST_GOOD_FILE))?;
                 let (good_step, saved) = last_good.save()?;
                 ts.finish().map_err(io_err(&ts_path))?;
                 return Err(RunError::Unhealthy { message, good_step, saved });
@@ -438,30 +677,35 @@ fn run_simulation(
         }
         let t_out = Instant::now();
         if output_now {
-            last = emit(sim, &mut ts, &mut files)?;
+            last = emit(sim, &mut ts, folder, &mut files)?;
             outputs += 1;
         }
-        write_vtk(sim, end)?;
+        write_vtk(sim, &mut vtk, folder, end)?;
         output_seconds += t_out.elapsed().as_secs_f64();
-        if step / progress_every != progress_before || end {
-            on_progress(sim);
-        }
+        on_progress(sim);
         let due = match options.checkpoint_every {
             Some(CheckpointEvery::Steps(n)) => n > 0 && step.is_multiple_of(n),
             Some(CheckpointEvery::WallTime(d)) => last_checkpoint.elapsed() >= d,
             None => false,
         };
         let stop = options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
+        if stop && !end && !output_now {
+            // The rows of an interrupted run end at the step it stopped at.
+            last = emit(sim, &mut ts, folder, &mut files)?;
+            outputs += 1;
+        }
         if (due || stop) && !end {
-            write_checkpoint(sim)?;
+            // The rows and the list of files up to the checkpoint are on the disk before it is:
+            // a restart from it finds them all.
+            ts.sync().map_err(io_err(&ts_path))?;
+            folder.record(Path::new(CHECKPOINT_FILE))?;
+            folder.sync()?;
+            write_atomic_with(&checkpoint_path, |w| sim.write_checkpoint(hash, w))
+                .map_err(io_err(&checkpoint_path))?;
             checkpoint = Some(checkpoint_path.clone());
             last_checkpoint = Instant::now();
         }
         if stop && !end {
-            if !output_now {
-                last = emit(sim, &mut ts, &mut files)?;
-                outputs += 1;
-            }
             interrupted = true;
             on_progress(sim);
             break;
@@ -502,5 +746,6 @@ fn run_simulation(
         files,
         neighbor_pairs: sim.neighbors().pair_count(),
         neighbor_builds: sim.neighbors().stats().builds - builds_before,
+        run_id: sim.run_id().to_string(),
     })
 }

@@ -4,7 +4,7 @@ use crate::EXIT_BAD_INPUT;
 use clap::Args;
 use grainflow::Simulation;
 use grainflow_case::CaseError;
-use grainflow_case::run::{CheckpointEvery, RunError, RunOptions, RunSummary, run_case};
+use grainflow_case::run::{CheckpointEvery, Provenance, RunError, RunOptions, run_case};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::Path;
@@ -95,9 +95,16 @@ pub struct RunArgs {
     /// user-defined functions prescribing particle motion (CALL_USR = .TRUE.).
     #[arg(long, value_name = "FILE")]
     motion: Option<PathBuf>,
-    /// Output folder: timeseries.csv, snapshots/ and vtk/ are written there.
-    #[arg(long, default_value = "out")]
-    out: PathBuf,
+    /// Output folder: timeseries.csv, snapshots/, vtk/, run-info.toml and manifest.toml are
+    /// written there (default: ./out; with --restart, the checkpoint's own folder). A folder
+    /// that holds an earlier run's results is refused unless --overwrite is given; one that
+    /// another run is writing into is always refused.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Replace the results of an earlier run in the output folder (only the files grainflow
+    /// wrote; nothing else in the folder is touched).
+    #[arg(long)]
+    overwrite: bool,
     /// No progress bar or progress lines (the summary is still printed).
     #[arg(long, short)]
     quiet: bool,
@@ -105,8 +112,9 @@ pub struct RunArgs {
     /// ("90s", "15min", "2h"); written atomically, the previous one survives a crash.
     #[arg(long, value_name = "STEPS|TIME", value_parser = parse_checkpoint_every)]
     checkpoint_every: Option<CheckpointEvery>,
-    /// Continue from a checkpoint of this case (bit-identical to an uninterrupted run); the
-    /// time series written so far in OUT is kept.
+    /// Continue from a checkpoint of this case (bit-identical to an uninterrupted run), in the
+    /// checkpoint's folder unless --out says otherwise; the time series of the same run is
+    /// kept up to the checkpoint's step.
     #[arg(long, value_name = "FILE")]
     restart: Option<PathBuf>,
     /// With --restart: accept a checkpoint written before the case file was changed (e.g.
@@ -201,7 +209,22 @@ pub fn main(args: RunArgs) -> ExitCode {
             );
         }
     }
+    // A restart continues in its checkpoint's folder unless told otherwise.
+    let out = match (&args.out, &args.restart) {
+        (Some(out), _) => out.clone(),
+        (None, Some(ckpt)) => match ckpt.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        },
+        (None, None) => PathBuf::from("out"),
+    };
     let options = RunOptions {
+        overwrite: args.overwrite,
+        provenance: Provenance {
+            case_file: args.case.clone(),
+            mfix_overrides: args.overrides.clone(),
+            motion_file: args.motion.clone(),
+        },
         checkpoint_every: args.checkpoint_every,
         restart: args.restart.clone(),
         accept_changed_case: args.accept_changed_case,
@@ -213,25 +236,9 @@ pub fn main(args: RunArgs) -> ExitCode {
         ),
         last_good_in_memory: None,
     };
-    let info = RunInfo {
-        case: &args.case,
-        hash: case.hash.clone(),
-        restart: args.restart.as_deref(),
-        overrides: &args.overrides,
-        motion: args.motion.as_deref(),
-    };
     let mut progress = Progress::new(args.quiet);
-    let result = run_case(case, &args.out, &options, |sim| progress.update(sim));
+    let result = run_case(case, &out, &options, |sim| progress.update(sim));
     progress.finish();
-    let status = match &result {
-        Ok(s) if s.interrupted => "interrupted",
-        Ok(_) => "completed",
-        Err(RunError::Unhealthy { .. }) => "failed: numerical health check",
-        Err(_) => "failed",
-    };
-    if let Err(e) = info.write(&args.out, status, result.as_ref().ok()) {
-        eprintln!("warning: cannot write {}: {e}", args.out.join("run-info.toml").display());
-    }
     match result {
         Ok(s) => {
             println!("{}", s.time_step_explanation);
@@ -243,7 +250,7 @@ pub fn main(args: RunArgs) -> ExitCode {
                 s.last.time,
                 s.outputs,
                 s.output_every,
-                args.out.display()
+                out.display()
             );
             println!(
                 "kinetic energy {:.6e} J -> {:.6e} J (translational), {:.6e} J -> {:.6e} J (rotational); {} contacts at the end, max overlap/radius {:.3e}",
@@ -312,7 +319,7 @@ pub fn main(args: RunArgs) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        Err(e @ RunError::Restart { .. }) => {
+        Err(e @ (RunError::Restart { .. } | RunError::Folder(_) | RunError::TooMuchOutput(_))) => {
             eprintln!("error: {e}");
             ExitCode::from(EXIT_BAD_INPUT)
         }
@@ -328,47 +335,5 @@ pub fn main(args: RunArgs) -> ExitCode {
             eprintln!("error: {e}");
             ExitCode::FAILURE
         }
-    }
-}
-
-/// `OUT/run-info.toml`: what produced the outputs, so that a result can be traced and
-/// reproduced: program version, case file and the hash of everything it read, thread count,
-/// time step, steps, and how the run ended.
-struct RunInfo<'a> {
-    case: &'a Path,
-    hash: String,
-    restart: Option<&'a Path>,
-    overrides: &'a [String],
-    motion: Option<&'a Path>,
-}
-
-impl RunInfo<'_> {
-    fn write(&self, out: &Path, status: &str, summary: Option<&RunSummary>) -> std::io::Result<()> {
-        let mut s = format!(
-            "# Written by grainflow run; describes the outputs in this folder.\ngrainflow_version = \"{}\"\ncase_file = {:?}\ncase_sha256 = \"{}\"\nthreads = 1\nstatus = \"{status}\"\n",
-            env!("CARGO_PKG_VERSION"),
-            self.case.display().to_string(),
-            self.hash
-        );
-        if let Some(r) = self.restart {
-            s.push_str(&format!("restarted_from = {:?}\n", r.display().to_string()));
-        }
-        if !self.overrides.is_empty() {
-            s.push_str(&format!("mfix_overrides = {:?}\n", self.overrides));
-        }
-        if let Some(m) = self.motion {
-            s.push_str(&format!("motion_file = {:?}\n", m.display().to_string()));
-        }
-        if let Some(x) = summary {
-            s.push_str(&format!(
-                "dt = {:e}\nfirst_step = {}\nlast_step = {}\nwall_seconds = {:.3}\n",
-                x.dt,
-                x.start_step,
-                x.start_step + x.steps,
-                x.wall_seconds
-            ));
-        }
-        std::fs::create_dir_all(out)?;
-        grainflow_case::output::write_atomic(&out.join("run-info.toml"), s.as_bytes())
     }
 }

@@ -70,7 +70,7 @@ fn progress_is_plain_lines_off_a_terminal_and_silent_with_quiet() {
     let dir = tempfile::tempdir().expect("temp dir");
     let run = |quiet: bool| {
         let mut cmd = grainflow();
-        cmd.args(["run", case, "--out"]).arg(dir.path());
+        cmd.args(["run", case, "--out"]).arg(dir.path().join(if quiet { "quiet" } else { "loud" }));
         if quiet {
             cmd.arg("--quiet");
         }
@@ -231,18 +231,23 @@ fn unstable_run_stops_with_a_diagnosis_and_saves_the_last_good_state() {
 fn runs_are_reproducible_to_the_byte() {
     let case = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/bouncing-ball/case.toml");
     let dir = tempfile::tempdir().expect("temp dir");
-    for out in ["a", "b"] {
-        let r =
-            grainflow().args(["run", case, "-q", "--out"]).arg(dir.path().join(out)).output().expect("runs");
+    // On 1 and on 2 threads: the same bytes, and run-info.toml records the threads used.
+    for (out, threads) in [("a", "1"), ("b", "2")] {
+        let r = grainflow()
+            .args(["run", case, "-q", "-j", threads, "--out"])
+            .arg(dir.path().join(out))
+            .output()
+            .expect("runs");
         assert!(r.status.success());
+        let info = std::fs::read_to_string(dir.path().join(out).join("run-info.toml")).expect("run info");
+        assert!(
+            info.contains(&format!("threads = {threads}\n"))
+                && info.contains("grainflow_version")
+                && info.contains("case_sha256 = \"")
+                && info.contains("status = \"completed\""),
+            "{info}"
+        );
     }
     let read = |p: &str| std::fs::read(dir.path().join(p)).expect("file");
     assert_eq!(read("a/timeseries.csv"), read("b/timeseries.csv"));
-    let info = String::from_utf8(read("a/run-info.toml")).expect("utf-8");
-    assert!(
-        info.contains("threads = 1")
-            && info.contains("grainflow_version")
-            && info.contains("case_sha256 = \""),
-        "{info}"
-    );
 }

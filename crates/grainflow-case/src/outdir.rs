@@ -1,0 +1,510 @@
+//! The output folder of a run: held by one run at a time, tied to the run that wrote it, and
+//! never emptied by accident.
+//!
+//! - **A lock.** A run holds `.grainflow.lock` locked (an advisory lock the operating system
+//!   releases when the process ends, however it ends); a second run into the same folder is
+//!   refused, naming the first.
+//! - **A run id.** A fresh run draws an id; a run continued from a checkpoint keeps the
+//!   checkpoint's ([`grainflow::Simulation::run_id`]). `run-info.toml` and `manifest.toml`
+//!   record it, so a restart can tell its own run's outputs from another's.
+//! - **A manifest.** `manifest.toml` lists every file the run writes, each entry appended before
+//!   the file is created: after a crash it names every file of the run.
+//! - **No silent reuse.** A fresh run into a folder that holds an earlier run's results is
+//!   refused unless the caller asks to overwrite them; overwriting removes only the files
+//!   grainflow writes (those its manifest lists and those with its names), never others.
+
+use sha2::{Digest, Sha256};
+use std::fs::{File, OpenOptions};
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+use std::time::{SystemTime, UNIX_EPOCH};
+
+/// The lock file a running run holds.
+pub const LOCK_FILE: &str = ".grainflow.lock";
+/// The list of the files a run wrote.
+pub const MANIFEST_FILE: &str = "manifest.toml";
+/// What produced the outputs.
+pub const RUN_INFO_FILE: &str = "run-info.toml";
+/// The time series.
+pub const TIMESERIES_FILE: &str = "timeseries.csv";
+/// Files and folders grainflow writes into an output folder besides those its manifest lists
+/// (an earlier version wrote no manifest). Folders hold only grainflow's files.
+const KNOWN_FILES: [&str; 5] =
+    [TIMESERIES_FILE, RUN_INFO_FILE, MANIFEST_FILE, "checkpoint.gfc", "checkpoint-last-good.gfc"];
+const KNOWN_FOLDERS: [&str; 2] = ["snapshots", "vtk"];
+
+/// Why a folder cannot take a run's outputs.
+#[derive(Debug, thiserror::Error)]
+pub enum FolderError {
+    /// Another run is writing into the folder.
+    #[error(
+        "{dir} is in use by another grainflow run ({holder}); wait for it to end or choose another --out"
+    )]
+    Busy {
+        /// The folder.
+        dir: PathBuf,
+        /// What the lock file says of the run holding it.
+        holder: String,
+    },
+    /// The folder holds an earlier run's results, which this run would destroy.
+    #[error("{dir} holds the results of an earlier run ({earlier}); they are kept. {advice}")]
+    Occupied {
+        /// The folder.
+        dir: PathBuf,
+        /// The earlier run, in words.
+        earlier: String,
+        /// What the user can do.
+        advice: String,
+    },
+    /// The folder cannot be created, locked or written.
+    #[error("cannot use {path} as the output folder: {source}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// Why.
+        source: io::Error,
+    },
+}
+
+fn io_err(path: &Path) -> impl FnOnce(io::Error) -> FolderError + '_ {
+    move |source| FolderError::Io { path: path.to_path_buf(), source }
+}
+
+/// What a run is about to do with its folder.
+#[derive(Debug, Clone)]
+pub enum Intent<'a> {
+    /// Start a new run.
+    Fresh,
+    /// Continue the run `run_id` (empty: unknown, a checkpoint older than run ids) from the
+    /// checkpoint at `checkpoint`, taken at `step`.
+    Continue {
+        /// The checkpoint's run id.
+        run_id: &'a str,
+        /// The checkpoint file.
+        checkpoint: &'a Path,
+        /// Its step.
+        step: u64,
+    },
+}
+
+/// An earlier run's traces in a folder.
+#[derive(Debug, Clone, Default)]
+struct Earlier {
+    /// Its run id, if it recorded one.
+    run_id: Option<String>,
+    /// Its status, if it recorded one.
+    status: Option<String>,
+    /// Its case file, if it recorded one.
+    case: Option<String>,
+    /// Files of it that are there (relative paths).
+    files: Vec<PathBuf>,
+}
+
+impl Earlier {
+    fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some(c) = &self.case {
+            parts.push(format!("case {c}"));
+        }
+        match self.status.as_deref() {
+            Some("running") => {
+                parts.push("status \"running\": it stopped without closing its outputs".into())
+            }
+            Some(s) => parts.push(format!("status \"{s}\"")),
+            None => {}
+        }
+        if let Some(id) = &self.run_id {
+            parts.push(format!("run id {id}"));
+        }
+        parts.push(format!("{} file{}", self.files.len(), if self.files.len() == 1 { "" } else { "s" }));
+        parts.join(", ")
+    }
+}
+
+/// Reads a small text file of the folder's own (run-info, manifest): at most 64 MiB, a regular
+/// file only; anything else counts as absent.
+fn read_small(path: &Path) -> Option<String> {
+    let meta = std::fs::symlink_metadata(path).ok()?;
+    if !meta.is_file() || meta.len() > 64 << 20 {
+        return None;
+    }
+    std::fs::read_to_string(path).ok()
+}
+
+/// The value of a top-level `key = "value"` line of a TOML file we wrote.
+fn toml_string(text: &str, key: &str) -> Option<String> {
+    text.lines().find_map(|l| {
+        let rest = l.strip_prefix(key)?.trim_start().strip_prefix('=')?.trim();
+        toml::from_str::<toml::Value>(&format!("v = {rest}")).ok()?.get("v")?.as_str().map(str::to_string)
+    })
+}
+
+/// The files an earlier run left in `dir`: those its manifest lists, those with grainflow's
+/// names, and everything in the folders only grainflow writes, that exist.
+fn earlier_run(dir: &Path) -> Earlier {
+    let mut e = Earlier::default();
+    let mut files: Vec<PathBuf> = Vec::new();
+    if let Some(info) = read_small(&dir.join(RUN_INFO_FILE)) {
+        e.run_id = toml_string(&info, "run_id");
+        e.status = toml_string(&info, "status");
+        e.case = toml_string(&info, "case_file");
+    }
+    if let Some(manifest) = read_small(&dir.join(MANIFEST_FILE)) {
+        if e.run_id.is_none() {
+            e.run_id = toml_string(&manifest, "run_id");
+        }
+        files.extend(manifest_paths(&manifest));
+    }
+    files.extend(KNOWN_FILES.iter().map(PathBuf::from));
+    for folder in KNOWN_FOLDERS {
+        if let Ok(entries) = std::fs::read_dir(dir.join(folder)) {
+            for entry in entries.flatten() {
+                if entry.file_type().is_ok_and(|t| t.is_file()) {
+                    files.push(Path::new(folder).join(entry.file_name()));
+                }
+            }
+        }
+    }
+    files.sort();
+    files.dedup();
+    files.retain(|f| is_inside(f) && std::fs::symlink_metadata(dir.join(f)).is_ok());
+    e.files = files;
+    e
+}
+
+/// A relative path that stays inside the folder (no `..`, not absolute).
+fn is_inside(p: &Path) -> bool {
+    p.components().all(|c| matches!(c, std::path::Component::Normal(_)))
+}
+
+/// The `path = "…"` entries of a manifest.
+fn manifest_paths(text: &str) -> Vec<PathBuf> {
+    text.lines()
+        .filter_map(|l| toml_string(l.trim_start(), "path"))
+        .map(PathBuf::from)
+        .filter(|p| is_inside(p))
+        .collect()
+}
+
+/// A new run id: 16 hex digits from the clock, the process and the case.
+pub fn new_run_id(case_hash: &str) -> String {
+    let nanos = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    let mut h = Sha256::new();
+    h.update(nanos.to_le_bytes());
+    h.update(std::process::id().to_le_bytes());
+    h.update(case_hash.as_bytes());
+    h.finalize().iter().take(8).map(|b| format!("{b:02x}")).collect()
+}
+
+/// The time now as `YYYY-MM-DDTHH:MM:SSZ` (UTC).
+pub fn utc_now() -> String {
+    utc(SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs()))
+}
+
+/// `secs` after 1970-01-01T00:00:00Z as `YYYY-MM-DDTHH:MM:SSZ`.
+fn utc(secs: u64) -> String {
+    let (days, rest) = (secs / 86_400, secs % 86_400);
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!("{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z", rest / 3600, rest % 3600 / 60, rest % 60)
+}
+
+/// A folder held by a run (released when dropped).
+#[derive(Debug)]
+pub struct OutputFolder {
+    dir: PathBuf,
+    run_id: String,
+    /// Whether the earlier rows of the time series and the earlier frames belong to this run.
+    continues: bool,
+    manifest: File,
+    listed: std::collections::HashSet<PathBuf>,
+    /// Held for the run: the lock goes with it.
+    _lock: File,
+}
+
+impl OutputFolder {
+    /// Takes `dir` for a run (creating it), as [`Intent`] says, or says why not. A fresh run
+    /// gets a new id drawn from `case_hash`. With `overwrite`, an earlier run's files are
+    /// removed first (a checkpoint being continued from is kept).
+    pub fn claim(
+        dir: &Path,
+        intent: &Intent,
+        overwrite: bool,
+        case: &str,
+        case_hash: &str,
+    ) -> Result<OutputFolder, FolderError> {
+        if dir.exists() && !dir.is_dir() {
+            return Err(FolderError::Io {
+                path: dir.to_path_buf(),
+                source: io::Error::other("it exists and is not a folder"),
+            });
+        }
+        std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+        let lock_path = dir.join(LOCK_FILE);
+        let lock = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&lock_path)
+            .map_err(io_err(&lock_path))?;
+        match lock.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let holder = read_small(&lock_path)
+                    .map(|t| t.trim().replace('\n', ", "))
+                    .filter(|t| !t.is_empty())
+                    .unwrap_or_else(|| "it is starting".into());
+                return Err(FolderError::Busy { dir: dir.to_path_buf(), holder });
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(io_err(&lock_path)(e)),
+        }
+        remove_temporaries(dir)?;
+        let earlier = earlier_run(dir);
+        let (run_id, continues, keep) = match intent {
+            Intent::Fresh => (new_run_id(case_hash), false, None),
+            Intent::Continue { run_id, checkpoint, .. } => {
+                let same_run = match (&earlier.run_id, run_id.is_empty()) {
+                    (Some(id), false) => id == run_id,
+                    // A checkpoint older than run ids: its rows can be told apart only by
+                    // where it lives.
+                    (None, true) => same_folder(checkpoint, dir),
+                    _ => false,
+                };
+                let id = if run_id.is_empty() { new_run_id(case_hash) } else { run_id.to_string() };
+                (id, same_run, Some(*checkpoint))
+            }
+        };
+        if !continues && !earlier.files.is_empty() {
+            if !overwrite {
+                let advice = match intent {
+                    Intent::Fresh => {
+                        let checkpoint = dir.join("checkpoint.gfc");
+                        let unfinished =
+                            earlier.status.as_deref() != Some("completed") && checkpoint.is_file();
+                        if unfinished {
+                            format!(
+                                "Choose another --out, add --overwrite to replace them, or continue that run with --restart {}",
+                                checkpoint.display()
+                            )
+                        } else {
+                            "Choose another --out, or add --overwrite to replace them".to_string()
+                        }
+                    }
+                    Intent::Continue { .. } => format!(
+                        "The checkpoint belongs to another run{}. Continue in the checkpoint's own folder (the default without --out) or an empty one, or add --overwrite to replace them",
+                        match intent {
+                            Intent::Continue { run_id, .. } if !run_id.is_empty() =>
+                                format!(" (run id {run_id})"),
+                            _ => String::new(),
+                        }
+                    ),
+                };
+                return Err(FolderError::Occupied {
+                    dir: dir.to_path_buf(),
+                    earlier: earlier.describe(),
+                    advice,
+                });
+            }
+            remove_files(dir, &earlier.files, keep)?;
+        }
+        let manifest_path = dir.join(MANIFEST_FILE);
+        let mut listed = std::collections::HashSet::new();
+        let manifest = if continues && manifest_path.exists() {
+            if let Some(text) = read_small(&manifest_path) {
+                listed.extend(manifest_paths(&text));
+            }
+            OpenOptions::new().append(true).open(&manifest_path).map_err(io_err(&manifest_path))?
+        } else {
+            let mut f = File::create(&manifest_path).map_err(io_err(&manifest_path))?;
+            writeln!(
+                f,
+                "# The files grainflow run wrote into this folder (paths relative to it), each listed\n# before it was first written.\nrun_id = \"{run_id}\""
+            )
+            .map_err(io_err(&manifest_path))?;
+            f
+        };
+        let mut lock = lock;
+        // Who holds the folder, for a second run's message.
+        let _ = lock.set_len(0);
+        let _ =
+            write!(lock, "pid {}\nrun id {run_id}\ncase {case}\nstarted {}\n", std::process::id(), utc_now());
+        let mut folder =
+            OutputFolder { dir: dir.to_path_buf(), run_id, continues, manifest, listed, _lock: lock };
+        folder.record(Path::new(MANIFEST_FILE))?;
+        Ok(folder)
+    }
+
+    /// The folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The run's id.
+    pub fn run_id(&self) -> &str {
+        &self.run_id
+    }
+
+    /// True when the folder's earlier outputs belong to the run being continued, so the rows
+    /// and frames before the checkpoint are kept.
+    pub fn continues(&self) -> bool {
+        self.continues
+    }
+
+    /// Lists `file` (relative to the folder) in the manifest, once; call before writing it.
+    pub fn record(&mut self, file: &Path) -> Result<(), FolderError> {
+        if self.listed.contains(file) {
+            return Ok(());
+        }
+        let path = self.dir.join(MANIFEST_FILE);
+        // One write per entry: a crash leaves whole entries.
+        let entry = format!("[[file]]\npath = {}\n", toml::Value::String(file.display().to_string()));
+        self.manifest.write_all(entry.as_bytes()).map_err(io_err(&path))?;
+        self.listed.insert(file.to_path_buf());
+        Ok(())
+    }
+
+    /// Makes the manifest durable (at checkpoints and at the end).
+    pub fn sync(&self) -> Result<(), FolderError> {
+        self.manifest.sync_data().map_err(io_err(&self.dir.join(MANIFEST_FILE)))
+    }
+}
+
+/// A temporary file of an atomic write (`NAME.partial-PID`) or the rolling copy of the last
+/// good state: a run that holds the folder owns them, and one that died left them.
+fn is_temporary(name: &str) -> bool {
+    name.contains(".partial-") || (name.starts_with('.') && name.ends_with(".rolling"))
+}
+
+/// Removes the temporary files a run that died left in the folder (the lock is held: no
+/// living run is writing them).
+fn remove_temporaries(dir: &Path) -> Result<(), FolderError> {
+    for sub in ["", KNOWN_FOLDERS[0], KNOWN_FOLDERS[1]] {
+        let Ok(entries) = std::fs::read_dir(dir.join(sub)) else { continue };
+        for entry in entries.flatten() {
+            if is_temporary(&entry.file_name().to_string_lossy())
+                && entry.file_type().is_ok_and(|t| t.is_file())
+            {
+                let path = entry.path();
+                std::fs::remove_file(&path).map_err(io_err(&path))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// True when `file` lies in `dir`.
+fn same_folder(file: &Path, dir: &Path) -> bool {
+    let parent = file.parent().map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
+    match (parent.and_then(|p| p.canonicalize().ok()), dir.canonicalize().ok()) {
+        (Some(a), Some(b)) => a == b,
+        _ => false,
+    }
+}
+
+/// Removes an earlier run's files (all but `keep`), then the folders only grainflow writes if
+/// they are left empty.
+fn remove_files(dir: &Path, files: &[PathBuf], keep: Option<&Path>) -> Result<(), FolderError> {
+    let keep = keep.and_then(|k| k.canonicalize().ok());
+    for f in files {
+        let path = dir.join(f);
+        if keep.is_some() && path.canonicalize().ok() == keep {
+            continue;
+        }
+        match std::fs::remove_file(&path) {
+            Ok(()) => {}
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io_err(&path)(e)),
+        }
+    }
+    for folder in KNOWN_FOLDERS {
+        let _ = std::fs::remove_dir(dir.join(folder));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn claim(dir: &Path, intent: &Intent, overwrite: bool) -> Result<OutputFolder, FolderError> {
+        OutputFolder::claim(dir, intent, overwrite, "case.toml", "hash")
+    }
+
+    #[test]
+    fn a_second_run_is_refused_while_the_first_holds_the_folder() {
+        let d = tempfile::tempdir().unwrap();
+        let first = claim(d.path(), &Intent::Fresh, false).expect("empty folder");
+        let e = claim(d.path(), &Intent::Fresh, true).expect_err("held");
+        let msg = e.to_string();
+        assert!(matches!(e, FolderError::Busy { .. }), "{msg}");
+        assert!(msg.contains(&format!("pid {}", std::process::id())), "{msg}");
+        assert!(msg.contains(first.run_id()), "{msg}");
+        drop(first);
+        // Released with the run; the folder now holds that run's manifest.
+        claim(d.path(), &Intent::Fresh, true).expect("free again");
+    }
+
+    #[test]
+    fn an_earlier_run_is_kept_unless_overwriting_removes_only_its_files() {
+        let d = tempfile::tempdir().unwrap();
+        let dir = d.path();
+        let mut run = claim(dir, &Intent::Fresh, false).unwrap();
+        run.record(Path::new("timeseries.csv")).unwrap();
+        run.record(Path::new("snapshots/particles_000000000.csv")).unwrap();
+        drop(run);
+        std::fs::create_dir(dir.join("snapshots")).unwrap();
+        for f in ["timeseries.csv", "snapshots/particles_000000000.csv", "notes.txt", "checkpoint.gfc"] {
+            std::fs::write(dir.join(f), "x").unwrap();
+        }
+        let e = claim(dir, &Intent::Fresh, false).expect_err("earlier results");
+        assert!(matches!(e, FolderError::Occupied { .. }), "{e}");
+        assert!(dir.join("timeseries.csv").exists());
+        let _new = claim(dir, &Intent::Fresh, true).expect("overwrite");
+        for gone in ["timeseries.csv", "snapshots", "checkpoint.gfc"] {
+            assert!(!dir.join(gone).exists(), "{gone} left behind");
+        }
+        assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "x", "a user's file removed");
+    }
+
+    #[test]
+    fn a_restart_continues_only_its_own_run() {
+        let d = tempfile::tempdir().unwrap();
+        let dir = d.path();
+        let run = claim(dir, &Intent::Fresh, false).unwrap();
+        let id = run.run_id().to_string();
+        drop(run);
+        std::fs::write(dir.join("timeseries.csv"), "rows").unwrap();
+        let ckpt = dir.join("checkpoint.gfc");
+        std::fs::write(&ckpt, "state").unwrap();
+        let own = Intent::Continue { run_id: &id, checkpoint: &ckpt, step: 10 };
+        let cont = claim(dir, &own, false).expect("its own run");
+        assert!(cont.continues());
+        assert_eq!(cont.run_id(), id);
+        drop(cont);
+        let other = Intent::Continue { run_id: "0123456789abcdef", checkpoint: &ckpt, step: 10 };
+        let e = claim(dir, &other, false).expect_err("another run's folder");
+        assert!(e.to_string().contains("another run (run id 0123456789abcdef)"), "{e}");
+        // Overwriting keeps the checkpoint continued from.
+        let over = claim(dir, &other, true).expect("overwrite");
+        assert!(!over.continues());
+        assert!(ckpt.exists() && !dir.join("timeseries.csv").exists());
+    }
+
+    #[test]
+    fn utc_dates_are_civil_dates() {
+        // Reference values from `date -u -d @SECS`.
+        assert_eq!(utc(0), "1970-01-01T00:00:00Z");
+        assert_eq!(utc(951_782_400), "2000-02-29T00:00:00Z");
+        assert_eq!(utc(1_700_000_000), "2023-11-14T22:13:20Z");
+        assert_eq!(utc(4_107_542_399), "2100-02-28T23:59:59Z");
+    }
+}
