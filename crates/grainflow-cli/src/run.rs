@@ -16,69 +16,131 @@ use std::time::Duration;
 use std::time::Instant;
 
 /// Progress of a run: a bar with particle-steps per second, simulated time and ETA on a
-/// terminal; a plain line every 10 % of the run otherwise (logs, batch jobs); nothing with
-/// `--quiet`.
-enum Progress {
-    Quiet,
-    Bar { bar: ProgressBar, start: Instant },
-    Lines { start: Instant, next_percent: u64 },
+/// terminal; off a terminal (logs, batch jobs) a plain line at every tenth of the run and at
+/// least every [`LINE_EVERY`]; nothing with `--quiet`. Rates and ETAs count only the steps of
+/// this invocation (a restart's first steps are not the whole run's), over the last
+/// [`RATE_WINDOW`], and are shown once there are [`RATE_MIN`] of measurements (and at the end).
+struct Progress {
+    kind: Kind,
+    /// (when, step) samples, about a second apart, over the last `RATE_WINDOW`.
+    samples: std::collections::VecDeque<(Instant, u64)>,
+    last_draw: Option<Instant>,
 }
+
+enum Kind {
+    Quiet,
+    Bar(ProgressBar),
+    Lines { next_tenth: u64, last_line: Instant },
+}
+
+/// Longest time between two progress lines off a terminal.
+const LINE_EVERY: Duration = Duration::from_secs(60);
+/// The span of steps the rate is measured over.
+const RATE_WINDOW: Duration = Duration::from_secs(30);
+/// The shortest span a rate is given for.
+const RATE_MIN: Duration = Duration::from_secs(1);
 
 impl Progress {
     fn new(quiet: bool) -> Self {
-        if quiet {
-            Progress::Quiet
+        let kind = if quiet {
+            Kind::Quiet
         } else if std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(0);
-            let style =
-                ProgressStyle::with_template("{bar:40.cyan/blue} {pos}/{len} steps  {msg}  ETA {eta}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar());
+            let style = ProgressStyle::with_template("{bar:40.cyan/blue} {pos}/{len} steps  {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar());
             bar.set_style(style);
-            Progress::Bar { bar, start: Instant::now() }
+            Kind::Bar(bar)
         } else {
-            Progress::Lines { start: Instant::now(), next_percent: 10 }
+            Kind::Lines { next_tenth: 1, last_line: Instant::now() }
+        };
+        Progress { kind, samples: Default::default(), last_draw: None }
+    }
+
+    /// Steps per second over the window, if it spans long enough (any span at the end).
+    fn step_rate(&self, finished: bool) -> Option<f64> {
+        let (&(t0, s0), &(t1, s1)) = (self.samples.front()?, self.samples.back()?);
+        let secs = (t1 - t0).as_secs_f64();
+        (t1 - t0 >= RATE_MIN || (finished && secs > 0.0)).then(|| (s1 - s0) as f64 / secs)
+    }
+
+    /// Rate and ETA in words.
+    fn rate_and_eta(&self, sim: &Simulation) -> String {
+        match self.step_rate(sim.finished()) {
+            Some(r) if r > 0.0 => {
+                let left = sim.total_steps().saturating_sub(sim.step_index()) as f64 / r;
+                format!(
+                    "{:.3e} particle-steps/s  ETA {}",
+                    r * sim.particles().len() as f64,
+                    human_duration(left)
+                )
+            }
+            _ => "measuring speed".into(),
         }
     }
 
-    fn rate(start: &Instant, sim: &Simulation) -> f64 {
-        let secs = start.elapsed().as_secs_f64();
-        if secs > 0.0 { sim.step_index() as f64 * sim.particles().len() as f64 / secs } else { 0.0 }
-    }
-
     fn update(&mut self, sim: &Simulation) {
-        match self {
-            Progress::Quiet => {}
-            Progress::Bar { bar, start } => {
-                bar.set_length(sim.total_steps());
-                bar.set_position(sim.step_index());
-                bar.set_message(format!(
-                    "t = {:.4e} s  {:.3e} particle-steps/s",
-                    sim.time(),
-                    Self::rate(start, sim)
-                ));
+        if matches!(self.kind, Kind::Quiet) {
+            return;
+        }
+        let now = Instant::now();
+        let step = sim.step_index();
+        if self.samples.back().is_none_or(|&(t, _)| now - t >= RATE_MIN) || sim.finished() {
+            self.samples.push_back((now, step));
+            while self.samples.len() > 2 && self.samples.front().is_some_and(|&(t, _)| now - t > RATE_WINDOW)
+            {
+                self.samples.pop_front();
             }
-            Progress::Lines { start, next_percent } => {
-                let percent = 100 * sim.step_index() / sim.total_steps().max(1);
-                if percent >= *next_percent {
-                    let secs = start.elapsed().as_secs_f64();
-                    let eta = secs * (100 - percent) as f64 / percent.max(1) as f64;
+        }
+        // The bar is redrawn ten times a second at most.
+        if matches!(self.kind, Kind::Bar(_)) {
+            if self.last_draw.is_some_and(|t| now - t < Duration::from_millis(100)) && !sim.finished() {
+                return;
+            }
+            self.last_draw = Some(now);
+        }
+        let total = sim.total_steps().max(1);
+        let text = format!("t = {:.4e} s  {}", sim.time(), self.rate_and_eta(sim));
+        match &mut self.kind {
+            Kind::Quiet => {}
+            Kind::Bar(bar) => {
+                bar.set_length(sim.total_steps());
+                bar.set_position(step);
+                bar.set_message(text);
+            }
+            Kind::Lines { next_tenth, last_line } => {
+                let tenth = 10 * step / total;
+                if tenth >= *next_tenth || now - *last_line >= LINE_EVERY {
                     eprintln!(
-                        "{percent:3}%  step {}/{}  t = {:.4e} s  {:.3e} particle-steps/s  ETA {eta:.0} s",
-                        sim.step_index(),
-                        sim.total_steps(),
-                        sim.time(),
-                        Self::rate(start, sim)
+                        "{:5.1}%  step {step}/{}  {text}",
+                        100.0 * step as f64 / total as f64,
+                        sim.total_steps()
                     );
-                    *next_percent = percent / 10 * 10 + 10;
+                    *next_tenth = tenth + 1;
+                    *last_line = now;
                 }
             }
         }
     }
 
     fn finish(&self) {
-        if let Progress::Bar { bar, .. } = self {
+        if let Kind::Bar(bar) = &self.kind {
             bar.finish_and_clear();
         }
+    }
+}
+
+/// A duration in the largest units that keep it readable: "42 s", "3 min 20 s", "5 h 12 min",
+/// "2 d 3 h".
+fn human_duration(secs: f64) -> String {
+    if !secs.is_finite() || secs >= 1e9 {
+        return "more than 30 years".into();
+    }
+    let s = secs.round() as u64;
+    match s {
+        0..60 => format!("{s} s"),
+        60..3600 => format!("{} min {} s", s / 60, s % 60),
+        3600..86_400 => format!("{} h {} min", s / 3600, s % 3600 / 60),
+        _ => format!("{} d {} h", s / 86_400, s % 86_400 / 3600),
     }
 }
 
