@@ -1,6 +1,7 @@
 """Reads a grainflow VTK series back with VTK's own XML reader and checks every array
 against what the engine wrote (the CSV snapshot of the same step), the contact bookkeeping,
-the wall polygons against the domain box, and that a rendered PNG shows a settled bed.
+the wall polygons against the domain box, and that a rendered PNG shows a settled bed at the
+bottom of its box with a labelled colour bar beside it.
 
     python check_vtk.py RUN_DIR XMIN YMIN ZMIN XMAX YMAX ZMAX [image.png]
 
@@ -15,6 +16,9 @@ import vtk
 from vtk.util.numpy_support import vtk_to_numpy
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from render_snapshot import SCENE_FRACTION  # noqa: E402  the image layout both scripts share
 
 
 def fail(msg):
@@ -119,13 +123,35 @@ def main():
         img = vtk_to_numpy(r.GetOutput().GetPointData().GetScalars())
         nx, ny, _ = r.GetOutput().GetDimensions()
         img = img.reshape(ny, nx, -1)[::-1]  # row 0 at the top
-        # Sphere pixels are saturated colours; walls, edges and background are grey.
         rgb = img[:, :, :3].astype(int)
+        # Sphere and colour-bar pixels are saturated colours (the darkest viridis colour,
+        # (68, 1, 84), has a channel spread of 83); walls, edges, text and background are grey.
         coloured = (rgb.max(axis=2) - rgb.min(axis=2)) > 60
-        top, bottom = coloured[: ny // 3].mean(), coloured[2 * ny // 3 :].mean()
-        if not (bottom > 0.05 and top < 0.01):
-            fail(f"rendered bed not at the bottom: coloured fraction top {top:.3f}, bottom {bottom:.3f}")
-        print(f"image: coloured fraction top {top:.4f}, bottom {bottom:.4f}")
+        split = int(SCENE_FRACTION * nx)
+        scene, legend = coloured[:, :split], coloured[:, split:]
+        # The bed (about 11 mm deep in the 200 mm tall box: 486 beads of 33.5 mm³ at a packing
+        # fraction near 0.6 over 50 × 50 mm) is visible, and at least 99 % of it lies in the
+        # bottom third of the image: nothing floats higher up.
+        visible = scene.mean()
+        low = scene[2 * ny // 3 :].sum() / max(scene.sum(), 1)
+        if not (visible > 0.005 and low > 0.99):
+            fail(f"rendered bed not at the bottom: {visible:.4f} of the scene coloured, {low:.4f} of that in the bottom third")
+        # The colour bar: a coloured column over at least half the height, running from one
+        # end of the colour map to the other (top and bottom rows differ by more than 100 in
+        # some channel: viridis goes from (68, 1, 84) to (253, 231, 37)).
+        rows = np.flatnonzero(legend.any(axis=1))
+        if len(rows) == 0 or rows[-1] - rows[0] < ny // 2:
+            fail("no colour bar beside the scene")
+        bar = rgb[:, split:][legend.any(axis=1)]
+        mask = legend[legend.any(axis=1)]
+        ends = [bar[k][mask[k]].mean(axis=0) for k in (0, -1)]
+        if np.abs(ends[0] - ends[1]).max() < 100:
+            fail(f"colour bar shows one colour only: top {ends[0]}, bottom {ends[1]}")
+        # Its title and labels: dark grey text pixels beside the bar.
+        dark = (rgb[:, split:].max(axis=2) < 100) & ~legend
+        if dark.sum() < 200:
+            fail(f"colour bar has no labels ({dark.sum()} text pixels)")
+        print(f"image: {visible:.4f} of the scene coloured, {low:.4f} of it in the bottom third; colour bar over rows {rows[0]}-{rows[-1]}")
     print(f"OK: {checked} frames compared with snapshots, walls and contacts consistent")
 
 

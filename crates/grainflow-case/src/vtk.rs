@@ -244,13 +244,45 @@ pub fn walls_vtp(walls: &[Wall], lo: Vec3, hi: Vec3) -> String {
     )
 }
 
-/// A `.pvd` collection: frames (time in s, file relative to the collection's folder).
+/// Significant digits of a frame time in a `.pvd` file: a time is step·Δt with rounding
+/// error in the last digits (0.6 arrives as 0.6000000000000001); 12 digits drop that error
+/// and still tell apart frames up to 10¹¹ steps apart in the same run.
+const TIME_DIGITS: usize = 12;
+
+/// `t` rounded to [`TIME_DIGITS`] significant digits, written as briefly as that rounded value
+/// allows: positional from 1e-3 s up ("0.6", "0.0025", "12.5"), with an exponent below
+/// ("2.5e-5"). A value that does not differ in 12 digits is written in full instead (see
+/// [`pvd`]).
+fn time_text(t: f64) -> String {
+    let rounded: f64 = format!("{t:.prec$e}", prec = TIME_DIGITS - 1).parse().unwrap_or(t);
+    shortest(rounded)
+}
+
+/// The shortest text that reads back as `t` exactly.
+fn shortest(t: f64) -> String {
+    if t == 0.0 || (1e-3..1e15).contains(&t.abs()) { format!("{t}") } else { format!("{t:e}") }
+}
+
+/// A `.pvd` collection: frames (time in s, file relative to the collection's folder). Times
+/// are written to 12 significant digits; should two successive frames round to the same text
+/// (or out of order), the later one is written in full, so the order of the times never
+/// changes.
 pub fn pvd(frames: &[(f64, String)]) -> String {
     let mut s = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n<Collection>\n",
     );
+    let mut previous: Option<(f64, f64)> = None; // (exact time, time as written)
     for (t, file) in frames {
-        let _ = writeln!(s, r#"<DataSet timestep="{t:e}" group="" part="0" file="{file}"/>"#);
+        let mut text = time_text(*t);
+        let written: f64 = text.parse().unwrap_or(*t);
+        if let Some((exact, shown)) = previous
+            && *t > exact
+            && written <= shown
+        {
+            text = shortest(*t);
+        }
+        previous = Some((*t, text.parse().unwrap_or(*t)));
+        let _ = writeln!(s, r#"<DataSet timestep="{text}" group="" part="0" file="{file}"/>"#);
     }
     s.push_str("</Collection>\n</VTKFile>\n");
     s
@@ -312,5 +344,81 @@ impl VtkSeries {
     /// The folder.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn times(pvd_text: &str) -> Vec<String> {
+        pvd_text
+            .lines()
+            .filter_map(|l| l.split("timestep=\"").nth(1)?.split('"').next().map(str::to_string))
+            .collect()
+    }
+
+    /// Frame times are step·Δt with rounding error; the collection shows the intended value.
+    #[test]
+    fn pvd_times_read_cleanly() {
+        let dt = 0.1;
+        let frames: Vec<(f64, String)> =
+            [0u32, 1, 3, 6, 25, 100].iter().map(|&k| (f64::from(k) * dt, format!("p_{k}.vtp"))).collect();
+        // In binary floating point 3 · 0.1 is 0.30000000000000004 and 6 · 0.1 is
+        // 0.6000000000000001.
+        assert_eq!(
+            (frames[2].0.to_string(), frames[3].0.to_string()),
+            ("0.30000000000000004".into(), "0.6000000000000001".into())
+        );
+        assert_eq!(times(&pvd(&frames)), ["0", "0.1", "0.3", "0.6", "2.5", "10"]);
+        // Short runs (DEM05-like steps of 1.7e-7 s): below 1 ms an exponent.
+        let dt = 1.733345e-7;
+        assert_eq!(
+            times(&pvd(&[(3.0 * dt, "a".into()), (14_423.0 * dt, "b".into())])),
+            ["5.200035e-7", "0.0025000034935"]
+        );
+    }
+
+    /// Two frames 1e-13 s apart at 1 s round to the same 12 digits: the later one is written
+    /// in full, so the collection keeps them apart and in order; every time reads back within
+    /// 12 digits of its exact value.
+    #[test]
+    fn pvd_times_keep_their_order() {
+        let a = 1.0;
+        let b = 1.0 + 1e-13;
+        let c = 2.0;
+        let t = times(&pvd(&[(a, "a".into()), (b, "b".into()), (c, "c".into())]));
+        assert_eq!(t[0], "1");
+        assert_eq!(t[1].parse::<f64>().unwrap(), b);
+        assert_eq!(t[2], "2");
+        let back: Vec<f64> = t.iter().map(|s| s.parse().unwrap()).collect();
+        assert!(back[0] < back[1] && back[1] < back[2], "{t:?}");
+    }
+
+    /// A restart reads the collection of the earlier run, whether it was written in the old
+    /// full exponent form (`6.000000000000001e-1`) or in the new one, keeps the frames before
+    /// the restart step and continues the series.
+    #[test]
+    fn resume_reads_old_and_new_collections() {
+        let dir = tempfile::tempdir().unwrap();
+        let lo = Vec3::new(0.0, 0.0, 0.0);
+        let hi = Vec3::new(1.0, 1.0, 1.0);
+        // The format of earlier versions: `{:e}` of the exact f64.
+        let old = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n<Collection>\n\
+<DataSet timestep=\"0e0\" group=\"\" part=\"0\" file=\"particles_000000000.vtp\"/>\n\
+<DataSet timestep=\"6.000000000000001e-1\" group=\"\" part=\"0\" file=\"particles_000000060.vtp\"/>\n\
+<DataSet timestep=\"1.2e0\" group=\"\" part=\"0\" file=\"particles_000000120.vtp\"/>\n\
+</Collection>\n</VTKFile>\n";
+        std::fs::write(dir.path().join("particles.pvd"), old).unwrap();
+        // Restart at step 100: the frame of step 120 is dropped (the run writes it again).
+        let mut series = VtkSeries::resume(dir.path(), &[], lo, hi, 100).unwrap();
+        let p = Particles::default();
+        series.write(100, 100.0 * 0.01, &p, &[]).unwrap();
+        let text = std::fs::read_to_string(dir.path().join("particles.pvd")).unwrap();
+        assert_eq!(times(&text), ["0", "0.6", "1"]);
+        assert!(text.contains("particles_000000060.vtp") && !text.contains("particles_000000120.vtp"));
+        // And a second restart reads what this one wrote.
+        let series = VtkSeries::resume(dir.path(), &[], lo, hi, 200).unwrap();
+        assert_eq!(series.particles.iter().map(|f| f.0).collect::<Vec<_>>(), [0.0, 0.6, 1.0]);
     }
 }

@@ -134,7 +134,7 @@ pub const TEST7_SPINS: [f64; 7] = [0.175, 0.5, 1.0, 2.0, 5.0, 10.0, 21.0];
 /// Number of spins in the sweeps of tests 6 and 8 (log-spaced from 0.175 to 21 rad/s).
 pub const SPIN_SWEEP_POINTS: usize = 41;
 
-/// Values printed in the reference (verification-cases.md, from Chung & Ooi): material,
+/// Values printed by Chung & Ooi (2011), tests 1 and 2 (also in docs/verification.md): material,
 /// F_max (N), δ_max (µm), t_c (µs), and half a unit of the last printed digit of each.
 const PRINTED: [(&str, [f64; 3], [f64; 3]); 4] = [
     ("glass", [10_697.0, 274.11, 40.34], [0.5, 0.005, 0.005]),

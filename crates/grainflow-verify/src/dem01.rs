@@ -1,6 +1,6 @@
 //! MFIX verification case DEM01: freely falling particle with wall collision (linear
-//! spring–dashpot). Source: MFIX verification manual, case DEM01; set-up and closed form in
-//! `reference/verification-cases.md`.
+//! spring–dashpot). Source: MFIX's verification manual, case DEM01 (MFIX's `tests/dem/DEM01`); set-up and
+//! closed form in docs/verification.md.
 //!
 //! A ball (d = 0.2 m, ρ = 2600 kg/m³, m = 10.890855 kg) is released at rest from h₀ = 0.5 m,
 //! falls onto the floor y = 0, bounces once and flies until t = 0.5 s. Both of MFIX's
@@ -68,7 +68,7 @@ pub const GRAVITY: f64 = 9.80665;
 pub const H0: f64 = 0.5;
 /// Ball radius, m.
 pub const RADIUS: f64 = 0.1;
-/// MFIX's DTSOLID for k_n = 1e4 N/m, e_n = 0.9 (verification-cases.md), s.
+/// MFIX's DTSOLID for k_n = 1e4 N/m, e_n = 0.9 (docs/verification.md, DEM01), s.
 pub const MFIX_DT_1E4_09: f64 = 1.4670332e-3;
 /// The (k_n, e_n) grid of the case, N/m: 19 runs per integrator.
 pub const GRID: [(f64, &[f64]); 4] = [

@@ -1,5 +1,5 @@
-//! MFIX verification case DEM02: bouncing particle height (linear spring–dashpot). Source: MFIX
-//! verification manual, case DEM02; set-up in `reference/verification-cases.md`.
+//! MFIX verification case DEM02: bouncing particle height (linear spring–dashpot). Source: MFIX's
+//! verification manual, case DEM02 (MFIX's `tests/dem/DEM02`); set-up in docs/verification.md.
 //!
 //! The DEM01 ball (d = 0.2 m, m = 10.890855 kg) is released at rest from h₀ = 0.5 m and bounces
 //! on the floor for 10 s with Adams–Bashforth and MFIX's time step, for k_n = k_n,w ∈ {5e4, 5e5,

@@ -1,6 +1,6 @@
 //! MFIX verification case DEM03: two stacked, compressed particles between walls (linear
-//! spring–dashpot). Source: MFIX verification manual, case DEM03; set-up in
-//! `reference/verification-cases.md`.
+//! spring–dashpot). Source: MFIX's verification manual, case DEM03 (MFIX's
+//! `tests/dem/DEM03`); set-up in docs/verification.md.
 //!
 //! In a box 1 × 0.0018 × 1 m, a 1 mm sphere of density 2e4 kg/m³ sits on the floor (centre
 //! y = 0.45 mm) under a 1 mm sphere of density 1e4 kg/m³ (y = 1.35 mm) that touches the ceiling

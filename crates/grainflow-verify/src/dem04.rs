@@ -1,5 +1,5 @@
 //! MFIX verification case DEM04: ball slipping on a rough surface. Source: MFIX verification
-//! manual, case DEM04; set-up in `reference/verification-cases.md`.
+//! manual, case DEM04 (MFIX's `tests/dem/DEM04`); set-up in docs/verification.md.
 //!
 //! A sphere (d = 1 mm, ρ = 1e4 kg/m³) rests on the floor y = 0 with its centre at y = R (no
 //! overlap) and is given u₀ = 0.1 m/s along +x and no spin. k_n = k_n,w = 1e4 N/m,

@@ -1,4 +1,5 @@
-//! MFIX verification case DEM05: oblique particle collision (see `reference/dem05.md`).
+//! MFIX verification case DEM05: oblique particle collision (MFIX's verification manual, case DEM05, and
+//! `tests/dem/DEM05` of MFIX's source; set-up and theory in docs/verification.md).
 //!
 //! 31 impactors hit the wall y = 0 and 31 hit anvil spheres held under them (prescribed
 //! motion), at 3.9 m/s and impact angles 0–65°. Outputs per impactor: rebound angle,
@@ -40,7 +41,7 @@ pub const RADIUS: f64 = 0.0025;
 pub const K_INERTIA: f64 = 0.4;
 /// KT_FAC of the LSD case (k_t/k_n = 1.48/1.72).
 pub const LSD_KAPPA: f64 = 1.48 / 1.72;
-/// MFIX's DTSOLID of each model (MFIX-DEM model §5).
+/// MFIX's DTSOLID of each model and its step count (docs/verification.md, DEM05).
 pub const MFIX_DT: [(Model, f64, u64); 2] =
     [(Model::Lsd, 1.733345e-7, 14_423), (Model::Hertz, 7.392195e-9, 338_195)];
 /// Time step of the converged runs, s: about 5 000 steps over the shortest contact
@@ -51,7 +52,7 @@ pub const CONVERGED_DT: f64 = 2.5e-9;
 /// contact slips for a fraction of the impact proportional to tan θ/μ; at 0.05° that still
 /// shifts e_t by 5e-4, at 0.01° by about 1e-4.)
 pub const TINY_ANGLE_DEG: f64 = 0.01;
-/// The θ → 0 limit of e_t for LSD with κ = 1.48/1.72 (dem05.md).
+/// The θ → 0 limit of e_t for LSD with κ = 1.48/1.72 (docs/verification.md, DEM05).
 pub const LSD_SMALL_ANGLE_ET: f64 = 0.906843;
 /// Gross sliding holds for every model at and above this angle, degrees (thresholds 28.24°
 /// LSD, 29.80° MFIX Hertz).
@@ -629,7 +630,7 @@ fn checks(mfix: &[ModelRun], converged: &[ModelRun], lever_r: &[ModelRun]) -> Ve
         if let Some((e, p)) = max_by(data(Quantity::AngularVelocity).iter().filter(|p| p.0 >= 10.0), |p| {
             rel(interpolate(&omega, p.0), p.1)
         }) {
-            out.push(Check::assert(format!("{m} wall: ω vs Kharaz, θ ≥ 10°"), e, 0.12, format!("relative, worst at θ = {:.1}° (measured {:.0} rad/s); below 10° the models' e_t is known to be high (dem05.md)", p.0, p.1)));
+            out.push(Check::assert(format!("{m} wall: ω vs Kharaz, θ ≥ 10°"), e, 0.12, format!("relative, worst at θ = {:.1}° (measured {:.0} rad/s); below 10° both models' e_t is known to be high (MFIX's own results too)", p.0, p.1)));
         }
         if let Some((e, p)) = worst_abs(&data(Quantity::TangentialRestitution), &et, 0.0) {
             out.push(Check::report(format!("{m} wall: e_t vs Kharaz (reported, not asserted)"), e, format!("absolute, worst at θ = {:.1}° (measured {:.3}); both models over-predict e_t near normal impact", p.0, p.1)));
@@ -666,7 +667,7 @@ fn checks(mfix: &[ModelRun], converged: &[ModelRun], lever_r: &[ModelRun]) -> Ve
             ));
         }
     }
-    // MFIX's total-displacement Hertz spring is not conservative (dem05.md, known weaknesses):
+    // MFIX's total-displacement Hertz spring is not conservative (docs/verification.md, DEM05, known differences):
     // report how close the small-angle tangential restitution comes to 1, or beyond.
     for run in converged.iter().chain(lever_r).filter(|r| r.spec.model == Model::Hertz) {
         let lever = if run.spec.lever == LeverArm::Radius { "lever R" } else { "MFIX lever" };
@@ -714,7 +715,7 @@ pub fn run_case(dir: &Path, options: &SuiteOptions) -> Result<CaseOutcome, Verif
     let files = write(&report, dir)?;
     let figures = files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
     let mut notes = vec![
-        "62 impactors per model at MFIX's 31 impact angles, against the wall y = 0 and against anvil spheres held under them by prescribed motion. Every rebound angle, tangential restitution and spin equals MFIX 21.3's printed output to its 4 decimals; above 30° (gross sliding) they follow the closed forms. Below about 10° both models over-predict e_t compared with Kharaz et al. (as the MFIX seed reports).".to_string(),
+        "62 impactors per model at MFIX's 31 impact angles, against the wall y = 0 and against anvil spheres held under them by prescribed motion. Every rebound angle, tangential restitution and spin equals MFIX 21.3's printed output to its 4 decimals; above 30° (gross sliding) they follow the closed forms. Below about 10° both models over-predict e_t compared with Kharaz et al. (as MFIX 21.3's own DEM05 results do).".to_string(),
     ];
     if report.converged.is_empty() {
         notes.push("Run with --converged to separate the model from MFIX's coarse time step (visible below about 5°) and to run the exact-identity and θ → 0 checks.".into());
@@ -859,7 +860,7 @@ fn figure(report: &Report, c: Collision) -> Figure {
             let color = if run.spec.model == Model::Lsd { Color::BLUE } else { Color::RED };
             series.push(Series {
                 label: format!(
-                    "{} (MFIX dt)",
+                    "{}, MFIX's Δt",
                     run.spec.model.name().to_uppercase().replace("HERTZ", "Hertz")
                 ),
                 points: run.of(c).filter_map(|i| get(i).map(|v| (i.impact_angle_deg, v))).collect(),
@@ -871,7 +872,7 @@ fn figure(report: &Report, c: Collision) -> Figure {
             let color = if run.spec.model == Model::Lsd { Color::GREEN } else { Color::ORANGE };
             series.push(Series {
                 label: format!(
-                    "{} (dt = {:.1e} s)",
+                    "{}, Δt = {:.1e} s",
                     run.spec.model.name().to_uppercase().replace("HERTZ", "Hertz"),
                     run.dt
                 ),
@@ -889,7 +890,10 @@ fn figure(report: &Report, c: Collision) -> Figure {
             style: line(LineStyle::Thin, Color::GREY),
         });
         series.push(Series {
-            label: "Kharaz et al. 2001 (MFIX digitization)".into(),
+            label: match c {
+                Collision::Wall => "Kharaz et al. 2001 (experiment)".into(),
+                Collision::Particle => "Kharaz et al. 2001 (flat anvil)".into(),
+            },
             points: kharaz::points(q, Source::Mfix).unwrap_or_default(),
             style: SeriesStyle::Markers { shape: MarkerShape::Circle, color: Color::BLACK },
         });
@@ -905,6 +909,9 @@ fn figure(report: &Report, c: Collision) -> Figure {
     Figure {
         title: format!("DEM05 oblique impact, particle–{}: 5 mm alumina sphere at 3.9 m/s, μ = 0.092", c.name()),
         panels,
-        note: Some("Experiment: Kharaz, Gorham & Salman (2001), sphere on a flat glass anvil, MFIX's digitization of the published figures.".into()),
+        note: Some(match c {
+            Collision::Wall => "Experiment: Kharaz, Gorham & Salman (2001), alumina sphere on a flat glass anvil (MFIX's digitization of the published figures). Grey: rigid sphere, sticking, then gross sliding above 32.8°.".into(),
+            Collision::Particle => "The impactor hits an anvil sphere held in place. The experiment (Kharaz et al. 2001) is on a flat anvil: drawn for comparison only. Grey: rigid sphere, sticking, then gross sliding above 32.8°.".into(),
+        }),
     }
 }

@@ -5,7 +5,7 @@
 /// Which digitization.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Source {
-    /// MFIX's DEM05 post-processing (the seed's own).
+    /// MFIX's DEM05 post-processing (MFIX's `tests/dem/DEM05`).
     Mfix,
     /// Lethe's oblique-wall-impact example.
     Lethe,

@@ -76,7 +76,7 @@ fn dem05_converged_all_checks_pass_and_files_are_complete() {
 #[test]
 #[cfg_attr(debug_assertions, ignore = "expensive: run with --release")]
 fn converged_lsd_small_angles_show_what_mfix_time_step_adds() {
-    // dem05.md: MFIX's coarse AB2 step gives e_t ≈ 0.88 at 0.5° where the converged model gives
+    // docs/verification.md (DEM05, θ → 0): MFIX's coarse AB2 step gives e_t ≈ 0.88 at 0.5° where the converged model gives
     // more (towards 0.906843 as θ → 0); the difference must be visible (> 0.01) and the coarse
     // value within 0.01 of 0.88.
     let coarse = dem05::run_model(dem05::RunSpec::mfix(Model::Lsd)).expect("runs");
