@@ -3,7 +3,6 @@
 use crate::EXIT_BAD_INPUT;
 use clap::{Args, ValueEnum};
 use grainflow::Integrator;
-use grainflow_verify::check::markdown_table;
 use grainflow_verify::suite::{self, SuiteOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -63,10 +62,6 @@ pub fn main(args: VerifyArgs) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    for o in &outcomes {
-        println!("== {}: {} ({:.2} s)\n", o.name, o.title, o.wall_seconds);
-        println!("{}", markdown_table(&o.checks));
-    }
     let report = match suite::write_report(&outcomes, &args.out) {
         Ok(p) => p,
         Err(e) => {
@@ -74,9 +69,10 @@ pub fn main(args: VerifyArgs) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let total: usize = outcomes.iter().map(|o| o.checks.len()).sum();
+    // One line per case (and each failed check); every check's table is in the report.
+    print!("{}", suite::console_summary(&outcomes));
     let failed: Vec<&str> = outcomes.iter().filter(|o| !o.passed()).map(|o| o.name).collect();
-    println!("{} case(s), {total} checks; report: {}", outcomes.len(), report.display());
+    println!("report, with every check's table and the figures: {}", report.display());
     if failed.is_empty() {
         ExitCode::SUCCESS
     } else {
