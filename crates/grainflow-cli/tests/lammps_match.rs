@@ -1,6 +1,6 @@
 //! The LAMMPS parameterisations reproduce LAMMPS: from the same LAMMPS state, grainflow's
 //! kinetic energy after 1 000 steps agrees with LAMMPS's to 4 significant digits (relative
-//! difference below 5e-4) on the three yardstick cases of ../shared/peers (box bed with the
+//! difference below 5e-4) on the three yardstick cases of the peers (box bed with the
 //! Hertz–Mindlin and the linear law, chute-like flow). LAMMPS writes the states with the peers'
 //! own inputs (shortened settling), kept in `bench/lammps/`. Needs `lmp` (Debian package
 //! `lammps`), so it is ignored by default; `.ci/run` installs LAMMPS and runs it:

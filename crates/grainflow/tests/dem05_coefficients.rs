@@ -1,5 +1,5 @@
-//! DEM05's derived contact coefficients and MFIX's time step, from the case set-up in dem05.md,
-//! against the values printed in mfix-dem-model.md §3 and §5 (at their printed precision) and
+//! DEM05's derived contact coefficients and MFIX's time step, from MFIX's DEM05 set-up, against
+//! the values MFIX 21.3 derives for it (docs/verification.md, DEM05; at their printed precision) and
 //! against the closed-form formulas written out here independently of the engine (to 1e-12,
 //! a few hundred ulps: each formula is a handful of roundings).
 
@@ -14,7 +14,7 @@ use std::f64::consts::PI;
 /// Relative agreement of two evaluations of the same closed form (different operation order).
 const FORMULA_TOL: f64 = 1e-12;
 
-/// DEM05 as dem05.md describes it, with two particles: one impactor (phase 1) and one anvil
+/// DEM05 as MFIX's deck sets it up (docs/verification.md), with two particles: one impactor (phase 1) and one anvil
 /// (phase 2).
 fn dem05(normal: NormalModel) -> Simulation {
     let (phases, wall_materials, pair, wall) = match normal {
@@ -82,7 +82,7 @@ fn g_star(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
     1.0 / ((2.0 - nu1) / g1 + (2.0 - nu2) / g2)
 }
 
-/// Hertz K_n, K_t of DEM05 for pairs 1-1, 1-2 and phase 1–wall: mfix-dem-model.md §3 prints
+/// Hertz K_n, K_t of DEM05 for pairs 1-1, 1-2 and phase 1–wall: MFIX derives (docs/verification.md, DEM05)
 /// 9.45696e9, 1.23421e10; 2.96757e9, 3.82435e9; 4.19677e9, 5.40844e9 (N/m^1.5). With
 /// e_n = e_t = 1 all damping is zero; the effective masses are m₁/2, m₁m₂/(m₁+m₂) and m₁.
 #[test]
@@ -167,7 +167,7 @@ fn dem05_lsd_stiffnesses() {
     }
 }
 
-/// MFIX's DTSOLID and step counts (mfix-dem-model.md §5): LSD 1.733345e-7 s and 14 423 steps,
+/// MFIX's DTSOLID and step counts (docs/models.md, time step; docs/verification.md, DEM05): LSD 1.733345e-7 s and 14 423 steps,
 /// Hertz 7.392195e-9 s and 338 195 steps; TCOLL is the 1-1 pair's (the lightest m_eff and, for
 /// Hertz, the stiffest K_n), π/√(K/m_eff) without damping.
 #[test]
@@ -216,7 +216,7 @@ fn damping_coefficient_inverts_restitution() {
     assert_rel("critical", damping_coefficient(4.0, 9.0, 0.0), 12.0, 1e-15);
 }
 
-/// MFIX's rule with damping and unequal phases (mfix-dem-model.md §5): TCOLL is the minimum
+/// MFIX's rule with damping and unequal phases (docs/models.md, time step; docs/verification.md, DEM05): TCOLL is the minimum
 /// over the *phase pairs* of π/√(k_n/m_eff − (η_n/m_eff)²/4) — the wall contacts, made much
 /// stiffer here, are not included — and DTSOLID = TCOLL/DTSOLID_FACTOR; factors below 10 are
 /// rejected. Expected values from the formulas written out here (η from the model document).

@@ -290,7 +290,7 @@ fn lsd_normal_impact_matches_damped_oscillator() {
 }
 
 /// DEM05 "normal impact, undamped": LSD against the wall, t_c = π√(m/k_n) = 12.257 µs,
-/// δ_max = v√(m/k_n) = 15.215 µm, F_max = 261.7 N (dem05.md), at the printed precision.
+/// δ_max = v√(m/k_n) = 15.215 µm, F_max = 261.7 N (docs/verification.md, DEM05), at the printed precision.
 #[test]
 fn dem05_lsd_wall_normal_impact_numbers() {
     let s = dem05_lsd(1.0);
@@ -310,7 +310,7 @@ fn dem05_lsd_wall_normal_impact_numbers() {
 }
 
 /// DEM05 Hertz normal impact against the wall: δ_max = 16.968 µm, F_max = 293.3 N,
-/// t_c = 12.806 µs (dem05.md), and the closed forms they come from; plus the particle–particle
+/// t_c = 12.806 µs (docs/verification.md, DEM05), and the closed forms they come from; plus the particle–particle
 /// impacts 1-1 and 1-2 (unequal E, ν and mass) against the closed forms.
 #[test]
 fn dem05_hertz_normal_impact_numbers() {
@@ -364,7 +364,7 @@ fn chung_ooi_setup(r: f64, rho: f64, e: f64, nu: f64) -> Setup {
 
 /// Chung & Ooi (2011) test 1: two identical spheres, R = 10 mm, ±10 m/s head-on, elastic.
 /// Glass: F_max = 10 697 N, δ_max = 274.11 µm, t_c = 40.34 µs; limestone: 7 108 N, 368.30 µm,
-/// 54.20 µs (verification-cases.md), and the closed forms.
+/// 54.20 µs (docs/verification.md), and the closed forms.
 #[test]
 fn chung_ooi_test1_two_identical_spheres() {
     let r = 0.01;
@@ -395,7 +395,7 @@ fn chung_ooi_test1_two_identical_spheres() {
 
 /// Chung & Ooi (2011) test 2: sphere R = 0.1 m on a rigid plane at 0.2 m/s, μ = 0.
 /// Al alloy: F_max = 11 370 N, δ_max = 49.717 µm, t_c = 731.7 µs; Mg alloy: 7 233 N,
-/// 52.123 µm, 767.1 µs (verification-cases.md), and the closed forms.
+/// 52.123 µm, 767.1 µs (docs/verification.md), and the closed forms.
 #[test]
 fn chung_ooi_test2_sphere_on_rigid_plane() {
     let r = 0.1;

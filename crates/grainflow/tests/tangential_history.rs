@@ -1,5 +1,5 @@
 //! The stored tangential displacement integrates the slip velocity once per time step:
-//! after k steps of a sticking contact it is s = Σ Δt·v_t ≈ k·Δt·v_t (mfix-dem-model.md §4:
+//! after k steps of a sticking contact it is s = Σ Δt·v_t ≈ k·Δt·v_t (docs/models.md, tangential spring:
 //! "trial s = h + Δt·v_t", one visit per pair per step), whatever the integrator and whether or
 //! not a user hook looked at the particles between steps.
 //!
@@ -112,7 +112,7 @@ fn verlet_noop_hook_changes_nothing() {
 
 /// Oblique frictional impacts, particle–wall and particle–particle: while in contact the
 /// stored displacement is loaded (non-zero); once the contact has ended — the pair still in
-/// the neighbour list, within the skin — it is exactly zero again (mfix-dem-model.md §1–2:
+/// the neighbour list, within the skin — it is exactly zero again (docs/models.md, tangential spring:
 /// "reset to zero when contact ends"), so a later contact starts from zero.
 #[test]
 fn history_is_reset_when_contact_ends() {
@@ -178,7 +178,7 @@ fn history_is_reset_when_contact_ends() {
 
 /// A pair that touches again after a contact, with no rebuild of the neighbour list between the
 /// two (so the spring of the first contact is still stored beside the pair), starts the second
-/// contact from a zero spring (mfix-dem-model.md §1–2: "reset to zero when contact ends"): the
+/// contact from a zero spring (docs/models.md, tangential spring: "reset to zero when contact ends"): the
 /// run is bit-identical to one started afresh, with no stored spring, from the state between
 /// the two contacts. Set-up: a sphere (R = 1 mm, ρ = 2500 kg/m³) falling under gravity onto a
 /// held one right below it and bouncing on it, drifting sideways at 5 mm/s (so each contact
