@@ -76,14 +76,12 @@ pub enum Intent<'a> {
     /// Start a new run.
     Fresh,
     /// Continue the run `run_id` (empty: unknown, a checkpoint older than run ids) from the
-    /// checkpoint at `checkpoint`, taken at `step`.
+    /// checkpoint at `checkpoint`.
     Continue {
         /// The checkpoint's run id.
         run_id: &'a str,
         /// The checkpoint file.
         checkpoint: &'a Path,
-        /// Its step.
-        step: u64,
     },
 }
 
@@ -387,7 +385,7 @@ fn is_temporary(name: &str) -> bool {
 /// Removes the temporary files a run that died left in the folder (the lock is held: no
 /// living run is writing them).
 fn remove_temporaries(dir: &Path) -> Result<(), FolderError> {
-    for sub in ["", KNOWN_FOLDERS[0], KNOWN_FOLDERS[1]] {
+    for sub in std::iter::once("").chain(KNOWN_FOLDERS) {
         let Ok(entries) = std::fs::read_dir(dir.join(sub)) else { continue };
         for entry in entries.flatten() {
             if is_temporary(&entry.file_name().to_string_lossy())
@@ -485,12 +483,12 @@ mod tests {
         std::fs::write(dir.join("timeseries.csv"), "rows").unwrap();
         let ckpt = dir.join("checkpoint.gfc");
         std::fs::write(&ckpt, "state").unwrap();
-        let own = Intent::Continue { run_id: &id, checkpoint: &ckpt, step: 10 };
+        let own = Intent::Continue { run_id: &id, checkpoint: &ckpt };
         let cont = claim(dir, &own, false).expect("its own run");
         assert!(cont.continues());
         assert_eq!(cont.run_id(), id);
         drop(cont);
-        let other = Intent::Continue { run_id: "0123456789abcdef", checkpoint: &ckpt, step: 10 };
+        let other = Intent::Continue { run_id: "0123456789abcdef", checkpoint: &ckpt };
         let e = claim(dir, &other, false).expect_err("another run's folder");
         assert!(e.to_string().contains("another run (run id 0123456789abcdef)"), "{e}");
         // Overwriting keeps the checkpoint continued from.

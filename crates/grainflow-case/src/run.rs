@@ -211,7 +211,7 @@ pub fn run_case(
     check_output_volume(&sim, &output)?;
     let intent = match &options.restart {
         None => Intent::Fresh,
-        Some(path) => Intent::Continue { run_id: sim.run_id(), checkpoint: path, step: sim.step_index() },
+        Some(path) => Intent::Continue { run_id: sim.run_id(), checkpoint: path },
     };
     let case_file = options.provenance.case_file.display().to_string();
     let mut folder = OutputFolder::claim(out, &intent, options.overwrite, &case_file, &hash)?;
