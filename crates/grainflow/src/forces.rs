@@ -59,8 +59,8 @@ use crate::wall::Wall;
 pub const MIN_PARALLEL_PARTICLES: usize = 2048;
 
 /// Blocks per thread. More blocks would let the threads balance uneven work, at the price of
-/// more crossing pairs; on the yardstick cases 4 per thread gained nothing and raised the
-/// crossing pairs of the chute to ~20 %, so each thread takes one block.
+/// more crossing pairs; on the yardstick cases more gained nothing (measurements:
+/// bench/results/2026-12-01-design-history.md), so each thread takes one block.
 pub const BLOCKS_PER_THREAD: usize = 1;
 
 /// What one contact adds: the force on the lower slot a (b gets its opposite) and the torques
@@ -140,10 +140,9 @@ pub(crate) struct ForcePlan {
 /// The work of a touching pair (gathering its inputs, the law, adding its load) in units of a
 /// pair that is only tested for contact, and the work of a row (a particle: its accumulators,
 /// its walk through the list, its arriving crossing pairs). Fitted to the time each block of
-/// the force stage took on one core: with 7 and 0 (the share of a contact in profiles, rows
-/// not counted), the chute's upper block, which holds more particles and fewer contacts per
-/// particle, took 16-19 % longer than the lower one (4 runs); with 4 and 5, 1.4 % longer. The
-/// box beds' blocks took within 3 % of each other with either.
+/// the force stage took on one core, so that blocks of more particles and fewer contacts per
+/// particle (the chute's upper block) take as long as the others (measurements:
+/// bench/results/2026-12-01-design-history.md).
 const CONTACT_COST: usize = 4;
 /// The work of a row, in the same units (see [`CONTACT_COST`]).
 const ROW_COST: usize = 5;
@@ -461,8 +460,7 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
 /// From this many particles on, the contact test asks for the data ahead of it
 /// ([`prefetch_ahead`]): their arrays no longer fit the processor's last-level cache, and the
 /// data entering the stretch the pairs reach comes from memory. With fewer, the requests only
-/// cost time: the 10 000-particle beds ran 6-10 % slower with them, the 1 000 000-particle bed
-/// 5-18 % faster.
+/// cost time (measurements: bench/results/2026-12-01-design-history.md).
 const PREFETCH_MIN_PARTICLES: usize = 200_000;
 
 /// Rows ahead of the contact test whose farthest partner's data [`prefetch_ahead`] asks for.
@@ -769,8 +767,7 @@ impl InputLanes {
         let m_eff = if !PER_MASS {
             0.0
         } else if let Some(CommonMass { m, both }) = s.common_mass {
-            // No division per pair: 2-3 % of the chute's and box_hm's time, in one process
-            // alternating both forms.
+            // No division per pair.
             common_pair_mass(m, both, HELD && s.held[a], HELD && s.held[b])
         } else if HELD {
             pair_mass(s.mass, s.held, a, b)

@@ -36,11 +36,10 @@ pub(crate) fn pinned<T: Send, R: Send>(
         }
         // Wait for the other threads here rather than in rayon's idle loop, which puts a thread
         // to sleep after a few tens of microseconds: the next stage, usually a few
-        // microseconds away, would wait 40-80 µs for it to wake. The thread yields its core at
+        // microseconds away, would wait tens of microseconds for it to wake. The thread yields its core at
         // each look instead of spinning on it: a spinning thread slowed the other thread's
-        // work on the development machine (2-thread runs took 1-18 % longer: medians per case
-        // of three series of 6-10 alternated runs), and with more threads than cores a yield
-        // lets the others run.
+        // work (bench/results/2026-12-01-design-history.md), and with more threads than cores
+        // a yield lets the others run.
         finished.fetch_add(1, Ordering::AcqRel);
         while finished.load(Ordering::Acquire) < ctx.num_threads() {
             std::thread::yield_now();
