@@ -40,8 +40,8 @@ gf_speed() { awk '/particle-steps\/s/{for(k=1;k<=NF;k++) if($k=="particle-steps/
 lmp_speed() { awk -v n="$2" -v s="$3" '/^Loop time of/{print n*s/$4/1e6; exit}' "$1"; }
 cd "$W"
 for i in $(seq "$RUNS"); do
-  "$GF" run box_hm_periodic.toml -j 1 -q --out gf10k | gf_speed >> gf10k.speeds
-  /usr/bin/time -f "%M" -o rss.$i "$GF" run box_hm_1m.toml -j 1 -q --out gf1m | gf_speed >> gf1m.speeds
+  "$GF" run box_hm_periodic.toml -j 1 -q --overwrite --out gf10k | gf_speed >> gf10k.speeds
+  /usr/bin/time -f "%M" -o rss.$i "$GF" run box_hm_1m.toml -j 1 -q --overwrite --out gf1m | gf_speed >> gf1m.speeds
   cat rss.$i >> gf1m.rss
   lmp -in "$ROOT/bench/lammps/in.box_periodic_run.lmp" -var data "$DATA/box_hm_settled.data" -var nrun "$NRUN10K" -log l10k.$i -screen none
   lmp_speed l10k.$i 10000 "$NRUN10K" >> l10k.speeds
