@@ -43,13 +43,14 @@
 
 use std::ops::Range;
 
-use crate::boundary::{Images, Periodic};
-use crate::contact::geometry::{
-    ContactGeometry, pair_contact_separation, pair_geometry, pair_geometry_without_levers, pair_touching,
-    relative_velocity_of_centres, wall_contact,
+use crate::boundary::Images;
+use crate::contact::geometry::{pair_touching, wall_contact};
+use crate::contact::law::parts;
+pub(crate) use crate::contact::pair::CommonMass;
+use crate::contact::pair::{
+    PairInput, PairLoad, common_pair_mass, kept_or_zero, pair_law, pair_mass, wall_geometry, wall_law,
 };
-use crate::contact::law::{ContactForce, contact_force_for, parts, rolling_torque};
-use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
+use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw};
 use crate::math::Vec3;
 use crate::threads::split_at_ends;
 use crate::wall::Wall;
@@ -62,15 +63,6 @@ pub const MIN_PARALLEL_PARTICLES: usize = 2048;
 /// more crossing pairs; on the yardstick cases more gained nothing (measurements:
 /// bench/results/2026-12-01-design-history.md), so each thread takes one block.
 pub const BLOCKS_PER_THREAD: usize = 1;
-
-/// What one contact adds: the force on the lower slot a (b gets its opposite) and the torques
-/// on a and b.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct PairLoad {
-    f: Vec3,
-    ta: Vec3,
-    tb: Vec3,
-}
 
 /// Read-only inputs of the force stage.
 pub(crate) struct ForceInputs<'a> {
@@ -629,25 +621,6 @@ fn find_contacts_in<const PERIODIC: bool>(
 /// a handful of vector passes.
 const LANES: usize = 16;
 
-/// What the force law needs of one touching pair (a, b), gathered from the particle arrays.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct PairInput {
-    /// x_b − x_a, the nearest image on periodic axes, m.
-    d: Vec3,
-    ra: f64,
-    rb: f64,
-    /// v_a − v_b: what the law needs of the velocities (one vector instead of two in the batch
-    /// lanes: 0.93-0.99 of the chute's time, in one process alternating both forms).
-    dv: Vec3,
-    wa: Vec3,
-    wb: Vec3,
-    /// The stored tangential history.
-    h: Vec3,
-    c: ContactCoeffs,
-    /// The contact's effective mass (0 if the damping does not use it).
-    m_eff: f64,
-}
-
 /// Lists, as indices into `wall_pairs`, the wall pairs from `at` on that touch, until the list
 /// ends or `found` is full; clears the histories of the others and returns how many it listed.
 /// Like [`find_contacts`], without a branch on the test's outcome.
@@ -1205,206 +1178,40 @@ impl<'a> PairData<'a> {
     }
 }
 
-/// The load of a touching pair and its advanced tangential history. Branch-free (see
-/// [`contact_force`]).
-#[inline(always)]
-fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
-    law: &ContactLaw,
-    dt: f64,
-    p: &PairInput,
-) -> (PairLoad, Vec3) {
-    debug_assert!(PARTS & parts::RADICAL != 0 || law.lever != LeverArm::RadicalPlane);
-    let mut g = if PARTS & parts::RADICAL != 0 {
-        pair_geometry(p.d, p.ra, p.rb)
-    } else {
-        // The radical plane's lever arms (a division) are never picked.
-        pair_geometry_without_levers(p.d, p.ra, p.rb)
-    };
-    let radical = law.lever == LeverArm::RadicalPlane;
-    g.lever_i = if radical { g.lever_i } else { p.ra };
-    g.lever_j = if radical { g.lever_j } else { p.rb };
-    let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, p.wb);
-    let (f, h) = law_force::<HERTZ, INCREMENTAL, PARTS>(law, dt, p, &g, v_r);
-    let load = PairLoad {
-        f: f.total(),
-        ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
-            + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wa),
-        tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
-            + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wb),
-    };
-    (load, h)
-}
-
-/// The rolling torque, or zero where no contact has rolling friction (`PARTS` without
-/// [`parts::ROLLING`]): [`rolling_torque`] is zero then, and adding a zero keeps the bits of
-/// the sum as they are with it.
-#[inline(always)]
-fn rolling<const PARTS: u8>(mu_roll: f64, elastic_normal: f64, omega: Vec3) -> Vec3 {
-    debug_assert!(PARTS & parts::ROLLING != 0 || mu_roll == 0.0);
-    if PARTS & parts::ROLLING != 0 { rolling_torque(mu_roll, elastic_normal, omega) } else { Vec3::ZERO }
-}
-
-/// The law's force for a contact of geometry `g` and relative velocity `v_r`, with the
-/// input's coefficients and its damping scaled by the effective mass as the law asks; and the
-/// advanced history.
-#[inline(always)]
-fn law_force<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
-    law: &ContactLaw,
-    dt: f64,
-    p: &PairInput,
-    g: &ContactGeometry,
-    v_r: Vec3,
-) -> (ContactForce, Vec3) {
-    let c = scaled_damping_for::<PARTS>(&p.c, law.damping, p.m_eff);
-    let mut h = p.h;
-    let f = contact_force_for::<HERTZ, INCREMENTAL, PARTS>(
-        law.history,
-        law.clip_attraction,
-        law.coulomb,
-        &c,
-        g,
-        v_r,
-        &mut h,
-        dt,
-    );
-    (f, h)
-}
-
-/// The load of a particle touching a wall (its force in `f`, its torque in `ta`) and the
-/// advanced history, from a [`PairInput`] that holds the wall geometry: the normal in `d`, the
-/// overlap in `ra`, the lever arm in `rb`, the particle's velocity and spin in `dv`, `wa`, its
-/// mass in `m_eff`. Branch-free.
-#[inline(always)]
-fn wall_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
-    law: &ContactLaw,
-    dt: f64,
-    p: &PairInput,
-) -> (PairLoad, Vec3) {
-    let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb, lever_j: 0.0 };
-    // v − 0 = v: the same bits as the pair form with the wall at rest.
-    let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, Vec3::ZERO);
-    let (f, h) = law_force::<HERTZ, INCREMENTAL, PARTS>(law, dt, p, &g, v_r);
-    let torque = f.torque(g.lever_i, g.normal) + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wa);
-    (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
-}
-
-/// `h` if `keep`, else zero: a history kept or cleared by a bit mask (a select here compiles
-/// to a branch, which would mispredict as often as the contact test it follows).
-#[inline(always)]
-fn kept_or_zero(h: Vec3, keep: bool) -> Vec3 {
-    let mask = (keep as u64).wrapping_neg();
-    let masked = |v: f64| f64::from_bits(v.to_bits() & mask);
-    Vec3::new(masked(h.x), masked(h.y), masked(h.z))
-}
-
-/// Effective mass of the particles in slots i and j: m_i m_j/(m_i + m_j), or the other one's
-/// mass if one of them is held fixed (as LAMMPS does for frozen particles).
-#[inline(always)]
-pub(crate) fn pair_mass(mass: &[f64], held: &[bool], i: usize, j: usize) -> f64 {
-    let (mi, mj) = (mass[i], mass[j]);
-    let both = mi * mj / (mi + mj);
-    if held.is_empty() {
-        return both;
-    }
-    pick(held[i], mj, pick(held[j], mi, both))
-}
-
-/// The mass `m` every particle has and the effective mass `both` = m·m/(m + m) of two of them.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct CommonMass {
-    pub m: f64,
-    pub both: f64,
-}
-
-impl CommonMass {
-    pub fn of(m: f64) -> Self {
-        CommonMass { m, both: m * m / (m + m) }
-    }
-}
-
-/// [`pair_mass`] of two particles of the same mass `m`, given `both` = m·m/(m + m): the same
-/// bits, without a division.
-#[inline(always)]
-fn common_pair_mass(m: f64, both: f64, held_i: bool, held_j: bool) -> f64 {
-    pick(held_i | held_j, m, both)
-}
-
-/// `a` if `c`, else `b`: picked, not branched on (contacts with held particles come and go
-/// unpredictably).
-#[inline(always)]
-fn pick(c: bool, a: f64, b: f64) -> f64 {
-    f64::from_bits((a.to_bits() & (c as u64).wrapping_neg()) | (b.to_bits() & (!c as u64).wrapping_neg()))
-}
-
-/// The coefficients with damping that depends on the contact's masses applied: ×m_eff
-/// (`MassVelocity`), ×√m_eff (`Tsuji`); unchanged otherwise.
-#[inline(always)]
-pub(crate) fn scaled_damping(c: &ContactCoeffs, damping: NormalDamping, m_eff: f64) -> ContactCoeffs {
-    scaled_damping_for::<{ parts::ALL }>(c, damping, m_eff)
-}
-
-/// [`scaled_damping`] with the square root formed only if `PARTS` has [`parts::TSUJI`].
-#[inline(always)]
-fn scaled_damping_for<const PARTS: u8>(
-    c: &ContactCoeffs,
-    damping: NormalDamping,
-    m_eff: f64,
-) -> ContactCoeffs {
-    debug_assert!(PARTS & parts::TSUJI != 0 || damping != NormalDamping::Tsuji);
-    // Both scales are formed and one picked (×1 is exact): no branch in a contact loop.
-    let root = if PARTS & parts::TSUJI != 0 { m_eff.sqrt() } else { 1.0 };
-    let s = if damping == NormalDamping::MassVelocity {
-        m_eff
-    } else if damping == NormalDamping::Tsuji {
-        root
-    } else {
-        1.0
-    };
-    ContactCoeffs { eta_n: c.eta_n * s, eta_t: c.eta_t * s, ..*c }
-}
-
-/// Pair geometry of slots i, j with lever arm `lever`, if they touch.
-#[inline(always)]
-pub(crate) fn pair_geometry_of(
-    position: &[Vec3],
-    radius: &[f64],
-    i: usize,
-    j: usize,
-    lever: LeverArm,
-    per: &Periodic,
-) -> Option<ContactGeometry> {
-    let d = position[j] - position[i];
-    let d = per.nearest(d);
-    let mut g = pair_contact_separation(d, radius[i], radius[j])?;
-    if lever != LeverArm::RadicalPlane {
-        (g.lever_i, g.lever_j) = (radius[i], radius[j]);
-    }
-    Some(g)
-}
-
-/// The lever of the tangential force's torque: the geometry's lever, less half the overlap
-/// for LAMMPS's `pair granular` convention.
-#[inline(always)]
-pub(crate) fn torque_lever(lever: LeverArm, geometric: f64, overlap: f64) -> f64 {
-    let shortened = geometric - 0.5 * overlap;
-    if lever == LeverArm::LammpsGranular { shortened } else { geometric }
-}
-
-/// Geometry of a particle at `x` with radius `r` against a wall with the law's lever arm, if
-/// they touch.
-#[inline(always)]
-pub(crate) fn wall_geometry(x: Vec3, r: f64, wall: &Wall, lever: LeverArm) -> Option<ContactGeometry> {
-    let mut g = wall_contact(x, r, wall.point, wall.normal)?;
-    if lever != LeverArm::RadicalPlane {
-        g.lever_i = r;
-    }
-    Some(g)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::{CoulombCap, HistoryFrame, NormalModel, TangentialModel};
+    use crate::contact::{CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel};
+
+    /// Blocks share the estimated work, not the pairs: with every pair of the first half of the
+    /// rows touching, the first block ends where the work (a row: ROW_COST; a pair tested: 1;
+    /// touching: 1 + CONTACT_COST) is halved. A plan made with no contact known is made again
+    /// once the flags are set, and then kept.
+    #[test]
+    fn blocks_share_the_work_of_touching_pairs() {
+        let n = 100;
+        // Two pairs per row (the last two rows have fewer partners).
+        let mut offsets = vec![0];
+        let mut partners = Vec::new();
+        for a in 0..n {
+            partners.extend(((a + 1)..n.min(a + 3)).map(|b| b as u32));
+            offsets.push(partners.len());
+        }
+        let mut touching = vec![false; partners.len()];
+        let mut plan = ForcePlan::default();
+        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
+        // 100 rows and 197 pairs: work 5 + 2 = 7 per row but for the last two, 697 in all; the
+        // first block ends at the first row with 348 before it.
+        assert_eq!(plan.blocks, [0..50, 50..n], "by rows and pairs while no contact is known");
+        touching[..offsets[n / 2]].fill(true);
+        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
+        // Work of the first 50 rows: 50 × (5 + 2 × 5) = 750; of the last 50: 50 × 5 + 97 pairs
+        // = 347. Half of 1097: 548, reached after 37 rows of 15.
+        assert_eq!(plan.blocks, [0..37, 37..n]);
+        touching.fill(false);
+        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
+        assert_eq!(plan.blocks, [0..37, 37..n], "kept until the next build");
+    }
 
     /// A small deterministic generator (xorshift64*), enough to spread inputs over their ranges.
     struct Rng(u64);
@@ -1606,54 +1413,6 @@ mod tests {
             }
         }
         assert_eq!(cases, 3 * 3 * 4 * 3 * 8);
-    }
-
-    #[test]
-    fn a_common_mass_gives_pair_mass_to_the_bit() {
-        // Masses of the yardstick cases and awkward ones (m·m/(m + m) rounds differently
-        // from m/2 for some of them); every combination of held particles.
-        for m in [1.0, 1.909859 * std::f64::consts::PI / 6.0, 0.1, 3.0e-9, 7.77e-4, 1.0e300] {
-            let CommonMass { both, .. } = CommonMass::of(m);
-            for (hi, hj) in [(false, false), (true, false), (false, true), (true, true)] {
-                let want = pair_mass(&[m, m], &[hi, hj], 0, 1);
-                assert_eq!(
-                    common_pair_mass(m, both, hi, hj).to_bits(),
-                    want.to_bits(),
-                    "m = {m}, held {hi} {hj}"
-                );
-            }
-            assert_eq!(pair_mass(&[m, m], &[], 0, 1).to_bits(), both.to_bits());
-        }
-    }
-
-    /// Blocks share the estimated work, not the pairs: with every pair of the first half of the
-    /// rows touching, the first block ends where the work (a row: ROW_COST; a pair tested: 1;
-    /// touching: 1 + CONTACT_COST) is halved. A plan made with no contact known is made again
-    /// once the flags are set, and then kept.
-    #[test]
-    fn blocks_share_the_work_of_touching_pairs() {
-        let n = 100;
-        // Two pairs per row (the last two rows have fewer partners).
-        let mut offsets = vec![0];
-        let mut partners = Vec::new();
-        for a in 0..n {
-            partners.extend(((a + 1)..n.min(a + 3)).map(|b| b as u32));
-            offsets.push(partners.len());
-        }
-        let mut touching = vec![false; partners.len()];
-        let mut plan = ForcePlan::default();
-        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
-        // 100 rows and 197 pairs: work 5 + 2 = 7 per row but for the last two, 697 in all; the
-        // first block ends at the first row with 348 before it.
-        assert_eq!(plan.blocks, [0..50, 50..n], "by rows and pairs while no contact is known");
-        touching[..offsets[n / 2]].fill(true);
-        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
-        // Work of the first 50 rows: 50 × (5 + 2 × 5) = 750; of the last 50: 50 × 5 + 97 pairs
-        // = 347. Half of 1097: 548, reached after 37 rows of 15.
-        assert_eq!(plan.blocks, [0..37, 37..n]);
-        touching.fill(false);
-        plan.prepare(1, 2, &offsets, &partners, &touching, &[], &[]);
-        assert_eq!(plan.blocks, [0..37, 37..n], "kept until the next build");
     }
 
     #[test]
