@@ -46,7 +46,7 @@ pub(crate) struct PairInput {
 }
 
 /// The load of a touching pair and its advanced tangential history. Branch-free (see
-/// [`contact_force`]).
+/// [`contact_force`](crate::contact::law::contact_force)).
 #[inline(always)]
 pub(crate) fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
     law: &ContactLaw,
