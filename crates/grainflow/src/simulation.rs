@@ -3,9 +3,10 @@
 use crate::boundary::Periodic;
 use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
 use crate::contact::law::{contact_force_dyn, normal_spring_energy};
+use crate::contact::pair::{pair_geometry_of, pair_mass, scaled_damping, wall_geometry};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, ContactParams, NormalModel, TangentialModel};
 use crate::error::EngineError;
-use crate::forces::{self, ForcePlan, pair_geometry_of, pair_mass, scaled_damping, wall_geometry};
+use crate::forces::{self, ForcePlan};
 use crate::integrate::{self, Integrator};
 use crate::material::{Phase, WallMaterial};
 use crate::math::Vec3;

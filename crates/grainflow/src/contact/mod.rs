@@ -4,6 +4,8 @@
 //! - [`coefficients`]: stiffness and damping derived from the inputs, per phase pair and per
 //!   phase–wall-material pair (MFIX's formulas).
 //! - [`law`]: normal force, tangential spring with the Coulomb cap, torques.
+//! - `pair`: the law applied to one pair or wall contact as the force stage gathers it, and the
+//!   effective masses, scaled damping and lever-arm geometry it and the diagnostics share.
 //!
 //! A contact law is chosen once, at set-up, as a [`ContactLaw`]; the force loop is then
 //! monomorphised for it (no dynamic dispatch per contact).
@@ -13,6 +15,7 @@ pub mod damping;
 pub mod geometry;
 pub mod law;
 pub mod limits;
+pub(crate) mod pair;
 
 pub use coefficients::{CoeffTable, ContactCoeffs, ContactParams, damping_coefficient, tsuji_alpha};
 
