@@ -63,6 +63,55 @@ pub fn fixed_step_count(span: f64, dt: f64) -> u64 {
     if (q - r).abs() <= 1e-9 * q { r as u64 } else { q.ceil() as u64 }
 }
 
+/// The most steps a run may take: 10¹⁰. At the engine's fastest, some 10⁷ particle-steps a
+/// second on one core, that is a quarter of an hour for a single particle and four months for
+/// a bed of 10 000; a count above it comes from a mistyped time, time step or stiffness
+/// (`dt = 1e-300`, `t_stop = 1e300`, `kn = 1e300`), and is refused before the run.
+pub const MAX_STEPS: f64 = 1e10;
+
+/// Fraction of the Rayleigh time that is the default step of a Hertz case without `dt`:
+/// 0.2, the largest step LIGGGHTS accepts without a warning (`check_timestep/gran`) and the
+/// low end of EDEM's 20-40 % guidance; the explicit schemes are stable up to about 0.3·T_R
+/// ([`stability_limit`]).
+pub const HERTZ_DEFAULT_RAYLEIGH_FRACTION: f64 = 0.2;
+
+/// The Rayleigh time T_R = πR√(ρ/G)/(0.1631ν + 0.8766) of the phase with the smallest one,
+/// s, with that phase's index; `None` if no phase has E and ν.
+pub fn rayleigh_time(phases: &[Phase]) -> Option<(f64, usize)> {
+    let mut best: Option<(f64, usize)> = None;
+    for (k, ph) in phases.iter().enumerate() {
+        if let (Some(e), Some(nu)) = (ph.youngs_modulus, ph.poisson_ratio) {
+            let g = e / (2.0 * (1.0 + nu));
+            let t = std::f64::consts::PI * ph.radius() * (ph.density / g).sqrt() / (0.1631 * nu + 0.8766);
+            if best.is_none_or(|b| t < b.0) {
+                best = Some((t, k));
+            }
+        }
+    }
+    best
+}
+
+/// The default Δt of a Hertz case that gives none: [`HERTZ_DEFAULT_RAYLEIGH_FRACTION`] of the
+/// smallest Rayleigh time. `None` if no phase has E and ν or the result is not a positive
+/// finite time.
+pub fn hertz_default_dt(phases: &[Phase]) -> Option<f64> {
+    let (t, _) = rayleigh_time(phases)?;
+    let dt = HERTZ_DEFAULT_RAYLEIGH_FRACTION * t;
+    (dt.is_finite() && dt > 0.0).then_some(dt)
+}
+
+/// Refuses a run whose step count is absurd or cannot be formed (see [`MAX_STEPS`]).
+pub fn check_step_count(span: f64, dt: f64) -> Result<(), EngineError> {
+    let q = span / dt;
+    let advice = "check t_stop, t_start and dt, and the stiffness (kn, youngs_modulus) and masses that set the time step";
+    if !q.is_finite() || q > MAX_STEPS {
+        return Err(EngineError::BadReference(format!(
+            "the run would take {q:.3e} steps (t_stop - t_start = {span:e} s at dt = {dt:e} s), more than the limit of {MAX_STEPS:e} steps; {advice}"
+        )));
+    }
+    Ok(())
+}
+
 /// Applies the rule.
 pub fn choose(
     rule: TimeStepRule,
@@ -75,6 +124,9 @@ pub fn choose(
         NormalModel::LinearSpringDashpot => "linear spring-dashpot k_n",
         NormalModel::Hertz => "Hertzian K_n taken as a linear stiffness, as MFIX does",
     };
+    if phases.is_empty() {
+        return Err(EngineError::BadReference("at least one phase is needed".into()));
+    }
     // TCOLL is always evaluated: even with an explicit Δt it is worth reporting.
     let mut tcoll = f64::INFINITY;
     let mut limiting = (0, 0);
@@ -98,6 +150,17 @@ pub fn choose(
                 ));
             }
             let dt = tcoll / factor;
+            if !(dt.is_finite() && dt > 0.0) {
+                let c = table.pair(limiting.0, limiting.1);
+                return Err(EngineError::BadReference(format!(
+                    "MFIX's time-step rule gives no usable step: the collision time TCOLL of phase pair '{}'-'{}' is {tcoll:e} s (K = {:e}, effective mass {:e} kg, eta_n = {:e}); the stiffness, diameter or density is outside what double precision can hold (are they in SI units?); give an explicit dt",
+                    phases[limiting.0].name,
+                    phases[limiting.1].name,
+                    c.kn,
+                    c.m_eff,
+                    absolute_eta(law, c)
+                )));
+            }
             let text = format!(
                 "dt = {dt:.7e} s from MFIX's rule: TCOLL = {tcoll:.7e} s (phase pair '{}'-'{}', {model}) / DTSOLID_FACTOR {factor}",
                 phases[limiting.0].name, phases[limiting.1].name
@@ -108,7 +171,24 @@ pub fn choose(
             if !(dt.is_finite() && dt > 0.0) {
                 return Err(EngineError::invalid("dt", dt, "the time step must be a positive time in s"));
             }
-            let text = if tcoll.is_finite() {
+            let hertz_default = law.normal == NormalModel::Hertz
+                && hertz_default_dt(phases).is_some_and(|d| d.to_bits() == dt.to_bits());
+            let text = if hertz_default {
+                // The step a Hertz case without dt gets (the case layer puts it here).
+                let (tr, k) = rayleigh_time(phases).unwrap_or((f64::NAN, 0));
+                let mfix = if tcoll.is_finite() {
+                    format!(
+                        "; MFIX's rule, TCOLL/50 with K_n taken as a linear stiffness, would give {:.7e} s",
+                        tcoll / 50.0
+                    )
+                } else {
+                    String::new()
+                };
+                format!(
+                    "dt = {dt:.7e} s = {HERTZ_DEFAULT_RAYLEIGH_FRACTION} x the Rayleigh time {tr:.7e} s of phase '{}', the default for Hertz contacts when dt is not given (stable to about 0.3 x T_R{mfix})",
+                    phases[k].name
+                )
+            } else if tcoll.is_finite() {
                 format!(
                     "dt = {dt:.7e} s given explicitly (MFIX's rule would give TCOLL/50 = {:.7e} s; TCOLL/dt = {:.1})",
                     tcoll / 50.0,
@@ -120,15 +200,17 @@ pub fn choose(
             (dt, tcoll.is_finite().then_some(tcoll), text)
         }
     };
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(EngineError::BadReference(
-            "MFIX's time-step rule needs at least one phase; give an explicit dt".into(),
-        ));
-    }
+    check_step_count(span, dt)?;
     let steps = match rule {
         TimeStepRule::Mfix { .. } => step_count(span, dt),
         TimeStepRule::Fixed(_) => fixed_step_count(span, dt),
     };
+    if steps == 0 {
+        // Below single precision (MFIX's step count): span and dt both tiny.
+        return Err(EngineError::BadReference(format!(
+            "the step count of a run of {span:e} s at dt = {dt:e} s cannot be formed (MFIX counts steps in single precision, which these times are below); check t_stop, t_start and dt"
+        )));
+    }
     Ok(TimeStepChoice { dt, steps, tcoll, explanation })
 }
 

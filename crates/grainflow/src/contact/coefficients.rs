@@ -138,6 +138,37 @@ pub fn upper_triangle_index(m: usize, l: usize, n: usize) -> usize {
     a * n - a * (a + 1) / 2 + b
 }
 
+/// The most solids phases a case may define: 100 (MFIX allows 10). The coefficient table
+/// holds every phase pair, so its size grows as the square of the count.
+pub const MAX_PHASES: usize = 100;
+
+/// The most wall materials a case may define: 100.
+pub const MAX_WALL_MATERIALS: usize = 100;
+
+/// Every derived coefficient must be a finite number and the effective mass positive:
+/// finite inputs can overflow (a density of 1e308) or underflow (a diameter of 1e-300).
+fn usable(what: &str, c: ContactCoeffs) -> Result<ContactCoeffs, EngineError> {
+    let fields = [
+        ("stiffness K_n", c.kn),
+        ("tangential stiffness", c.kt),
+        ("normal damping", c.eta_n),
+        ("tangential damping", c.eta_t),
+        ("effective mass", c.m_eff),
+    ];
+    if let Some((name, v)) = fields.iter().find(|(_, v)| !v.is_finite()) {
+        return Err(EngineError::BadReference(format!(
+            "{what}: the derived {name} is {v}: the diameter, density or stiffness is beyond what double precision can hold (are they in SI units: m, kg/m³, N/m, Pa?)"
+        )));
+    }
+    if !(c.m_eff >= f64::MIN_POSITIVE) {
+        return Err(EngineError::BadReference(format!(
+            "{what}: the effective mass is {:e} kg: the diameter or density is too small for double precision (are they in SI units: m, kg/m³?)",
+            c.m_eff
+        )));
+    }
+    Ok(c)
+}
+
 impl CoeffTable {
     /// Derives the coefficients.
     ///
@@ -152,6 +183,16 @@ impl CoeffTable {
     ) -> Result<Self, EngineError> {
         let n = phases.len();
         let nw = wall_materials.len();
+        if n > MAX_PHASES {
+            return Err(EngineError::BadReference(format!(
+                "{n} phases; at most {MAX_PHASES} are allowed (MFIX allows 10)"
+            )));
+        }
+        if nw > MAX_WALL_MATERIALS {
+            return Err(EngineError::BadReference(format!(
+                "{nw} wall materials; at most {MAX_WALL_MATERIALS} are allowed"
+            )));
+        }
         if pair_params.len() != n * (n + 1) / 2 {
             return Err(EngineError::BadReference(format!(
                 "{} phase-pair parameter sets given for {n} phases; {} are needed",
@@ -192,7 +233,7 @@ impl CoeffTable {
                         Some(HertzInputs { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: ra * rb / (ra + rb) })
                     }
                 };
-                let c = derive(law, &what, p, m_eff, elastic)?;
+                let c = usable(&what, derive(law, &what, p, m_eff, elastic)?)?;
                 pairs[m * n + l] = c;
                 pairs[l * n + m] = c;
             }
@@ -217,7 +258,7 @@ impl CoeffTable {
                         Some(HertzInputs { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: phases[m].radius() })
                     }
                 };
-                walls[m * nw + w] = derive(law, &what, p, phases[m].mass(), elastic)?;
+                walls[m * nw + w] = usable(&what, derive(law, &what, p, phases[m].mass(), elastic)?)?;
             }
         }
         let uniform_pair = pairs.first().filter(|c0| pairs.iter().all(|c| c == *c0)).copied();
