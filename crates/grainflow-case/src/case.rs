@@ -971,8 +971,7 @@ fn validate<'h>(
             ),
         ));
     }
-    grainflow::motion::check_rules(&motion)
-        .map_err(|e| CaseError::invalid("[[motion]]", "particles", "(the rules)", e.to_string()))?;
+    grainflow::motion::check_rules(&motion).map_err(|e| CaseError::Geometry(format!("[[motion]]: {e}")))?;
     check_geometry(&particles, &walls, (min, max), max_overlap)?;
     if let Some(per) = &periodic {
         let skin = skin.unwrap_or_else(|| grainflow::simulation::default_skin(particles.max_radius()));

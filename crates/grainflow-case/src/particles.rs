@@ -208,7 +208,13 @@ pub fn match_phase(diameter: f64, density: f64, phases: &[Phase]) -> Option<usiz
 fn describe_phases(phases: &[Phase]) -> String {
     phases
         .iter()
-        .map(|p| format!("'{}' d = {} m, rho = {} kg/m³", p.name, p.diameter, p.density))
+        .map(|p| format!("'{}' d = {} m, rho = {} kg/m³", p.name, short(p.diameter), short(p.density)))
         .collect::<Vec<_>>()
         .join("; ")
+}
+
+/// A number as written for people: plain in the usual range, else with an exponent (so a
+/// density of 1e308 is not 309 digits).
+pub(crate) fn short(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
 }

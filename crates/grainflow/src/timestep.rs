@@ -104,7 +104,12 @@ pub fn hertz_default_dt(phases: &[Phase]) -> Option<f64> {
 pub fn check_step_count(span: f64, dt: f64) -> Result<(), EngineError> {
     let q = span / dt;
     let advice = "check t_stop, t_start and dt, and the stiffness (kn, youngs_modulus) and masses that set the time step";
-    if !q.is_finite() || q > MAX_STEPS {
+    if !q.is_finite() {
+        return Err(EngineError::BadReference(format!(
+            "the run's step count (t_stop - t_start)/dt = {span:e} s / {dt:e} s overflows: more than the limit of {MAX_STEPS:e} steps; {advice}"
+        )));
+    }
+    if q > MAX_STEPS {
         return Err(EngineError::BadReference(format!(
             "the run would take {q:.3e} steps (t_stop - t_start = {span:e} s at dt = {dt:e} s), more than the limit of {MAX_STEPS:e} steps; {advice}"
         )));
