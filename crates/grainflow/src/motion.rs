@@ -249,4 +249,24 @@ mod tests {
         assert!(apply(&follow, &mut p));
         assert_eq!(p.position[1].x, 0.25);
     }
+
+    #[test]
+    fn rule_sets_without_a_meaning_are_refused() {
+        let follow = |particle, leader| PrescribedMotion {
+            particle,
+            rule: MotionRule::Follow { leader, axes: [true, false, false] },
+        };
+        let hold = |particle| PrescribedMotion { particle, rule: MotionRule::Hold };
+        // A chain ending at a held particle is fine; so is one ending at a free particle.
+        assert!(check_rules(&[follow(1, 2), follow(2, 3), hold(3)]).is_ok());
+        assert!(check_rules(&[follow(1, 2), follow(3, 2)]).is_ok());
+        let e = check_rules(&[hold(5), follow(1, 2), follow(2, 3), follow(3, 1)]).unwrap_err().to_string();
+        assert!(e.contains("cycle (1 follows 2 follows 3 follows 1)"), "{e}");
+        let e = check_rules(&[hold(4), follow(4, 1)]).unwrap_err().to_string();
+        assert!(e.contains("particle 4 has two prescribed-motion rules"), "{e}");
+        let e = check_rules(&[follow(7, 7)]).unwrap_err().to_string();
+        assert!(e.contains("cannot follow itself"), "{e}");
+        // Through resolve too (the engine's set-up).
+        assert!(resolve(&[follow(1, 2), follow(2, 1)], &two_particles()).is_err());
+    }
 }

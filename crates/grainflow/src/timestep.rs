@@ -287,3 +287,85 @@ pub fn stability_limit(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::{ContactLaw, ContactParams, NormalModel};
+
+    fn glass() -> Phase {
+        Phase {
+            name: "glass".into(),
+            diameter: 0.004,
+            density: 2500.0,
+            youngs_modulus: Some(6.0e10),
+            poisson_ratio: Some(0.25),
+        }
+    }
+
+    fn table(law: &ContactLaw, phases: &[Phase], kn: f64) -> CoeffTable {
+        let p = ContactParams { kn: Some(kn), en: 0.9, et: Some(0.9), ..Default::default() };
+        CoeffTable::build(law, phases, &[], &[p], &[]).expect("valid")
+    }
+
+    #[test]
+    fn step_counts_above_the_limit_or_not_formed_are_refused() {
+        // span/dt exactly 1e10 (0.5 and 5e9 are exact in binary) is the limit and allowed.
+        assert!(check_step_count(5e9, 0.5).is_ok());
+        let e = check_step_count(5e9 + 1.0, 0.5).expect_err("one step over").to_string();
+        assert!(e.contains("1.000e10 steps") && e.contains("more than the limit of 1e10"), "{e}");
+        assert!(check_step_count(0.01, 5e-324).expect_err("overflows").to_string().contains("overflows"));
+        let law = ContactLaw::mfix(NormalModel::LinearSpringDashpot);
+        let phases = [glass()];
+        let t = table(&law, &phases, 1000.0);
+        // dt = 1e-300 for 0.01 s used to run for ever; t_stop = 1e300 overflowed to 0 steps.
+        for (rule, span) in
+            [(TimeStepRule::Fixed(1e-300), 0.01), (TimeStepRule::Mfix { factor: 50.0 }, 1e300)]
+        {
+            let e = choose(rule, &law, &phases, &t, span).expect_err("refused").to_string();
+            assert!(e.contains("more than the limit"), "{e}");
+        }
+        // The MFIX rule's single-precision count: k_n = 1e300 gives dt ~ 1e-156 s; a run of
+        // 1e-150 s is some 10^5 steps in double precision, but both times are 0 in single.
+        let stiff = table(&law, &phases, 1e300);
+        let e = choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &stiff, 1e-150)
+            .expect_err("no count")
+            .to_string();
+        assert!(e.contains("single precision"), "{e}");
+        // An ordinary run is unaffected: 0.01 s at MFIX's 1.2867e-5 s is 778 steps (cli.rs).
+        assert_eq!(choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &t, 0.01).unwrap().steps, 778);
+    }
+
+    #[test]
+    fn the_hertz_default_is_a_fifth_of_the_rayleigh_time_and_says_so() {
+        let law = ContactLaw::mfix(NormalModel::Hertz);
+        let phases = [glass()];
+        let t = table(&law, &phases, 1.0);
+        let limit = stability_limit(&law, &phases, &[], &t);
+        let dt = hertz_default_dt(&phases).expect("E and ν given");
+        // 0.2·T_R against the 0.3·T_R limit: exactly two thirds of it (to rounding).
+        assert!((dt / limit.dt_max - 2.0 / 3.0).abs() < 1e-12, "{dt} vs {}", limit.dt_max);
+        let c = choose(TimeStepRule::Fixed(dt), &law, &phases, &t, 0.01).unwrap();
+        assert!(c.explanation.contains("0.2 x the Rayleigh time"), "{}", c.explanation);
+        assert!(c.explanation.contains("MFIX's rule"), "{}", c.explanation);
+        // Any other explicit step is reported as given.
+        let c = choose(TimeStepRule::Fixed(0.5 * dt), &law, &phases, &t, 0.01).unwrap();
+        assert!(c.explanation.contains("given explicitly"), "{}", c.explanation);
+        // No elastic constants: no default.
+        let lsd = Phase { youngs_modulus: None, ..glass() };
+        assert_eq!(hertz_default_dt(&[lsd]), None);
+    }
+
+    #[test]
+    fn an_unusable_collision_time_names_the_pair_not_the_phase_count() {
+        let law = ContactLaw::mfix(NormalModel::LinearSpringDashpot);
+        // k_n at the float maximum: TCOLL underflows far below a usable step.
+        let phases = [glass()];
+        let t = table(&law, &phases, f64::MAX);
+        let e = choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &t, 0.01)
+            .expect_err("refused")
+            .to_string();
+        assert!(!e.contains("at least one phase"), "{e}");
+        assert!(e.contains("steps") || e.contains("'glass'-'glass'"), "{e}");
+    }
+}
