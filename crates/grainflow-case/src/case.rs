@@ -321,7 +321,7 @@ fn validate<'h>(
         if !(m.is_finite() && m >= f64::MIN_POSITIVE) {
             return Err(CaseError::invalid(
                 &table,
-                if diameter > 1.0 || diameter < 1e-9 { "diameter" } else { "density" },
+                if (1e-9..=1.0).contains(&diameter) { "density" } else { "diameter" },
                 format!("(diameter {diameter:e} m, density {density:e} kg/m³)"),
                 format!(
                     "the particle mass ρ·π·d³/6 = {m:e} kg is beyond what double precision can hold; are the diameter and density in SI units (m, kg/m³)?"

@@ -212,7 +212,8 @@ fn the_engine_refuses_coincident_centres_and_motion_cycles_itself() {
     .expect("valid");
     let mut p = c.particles.clone();
     p.position[1] = p.position[0];
-    let e = grainflow::Simulation::new(c.config.clone(), p).err().expect("refused").to_string();
+    let Err(e) = grainflow::Simulation::new(c.config.clone(), p) else { panic!("accepted") };
+    let e = e.to_string();
     assert!(e.contains("particles 1 and 2 have the same centre"), "{e}");
     let mut cfg = c.config.clone();
     let follow = |leader| grainflow::MotionRule::Follow { leader, axes: [true, false, false] };
@@ -220,6 +221,7 @@ fn the_engine_refuses_coincident_centres_and_motion_cycles_itself() {
         grainflow::PrescribedMotion { particle: 1, rule: follow(2) },
         grainflow::PrescribedMotion { particle: 2, rule: follow(1) },
     ];
-    let e = grainflow::Simulation::new(cfg, c.particles).err().expect("refused").to_string();
+    let Err(e) = grainflow::Simulation::new(cfg, c.particles) else { panic!("accepted") };
+    let e = e.to_string();
     assert!(e.contains("cycle (1 follows 2 follows 1)"), "{e}");
 }
