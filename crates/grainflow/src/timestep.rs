@@ -194,10 +194,13 @@ pub fn choose(
                     phases[k].name
                 )
             } else if tcoll.is_finite() {
+                let ratio = tcoll / dt;
+                // Plain in the usual range; with an exponent when a soft spring or a tiny step
+                // would print dozens of digits.
+                let ratio = if ratio < 1e6 { format!("{ratio:.1}") } else { format!("{ratio:.3e}") };
                 format!(
-                    "dt = {dt:.7e} s given explicitly (MFIX's rule would give TCOLL/50 = {:.7e} s; TCOLL/dt = {:.1})",
-                    tcoll / 50.0,
-                    tcoll / dt
+                    "dt = {dt:.7e} s given explicitly (MFIX's rule would give TCOLL/50 = {:.7e} s; TCOLL/dt = {ratio})",
+                    tcoll / 50.0
                 )
             } else {
                 format!("dt = {dt:.7e} s given explicitly")
