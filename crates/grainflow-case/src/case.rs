@@ -1,8 +1,10 @@
 //! From a raw case file to a validated [`Case`]: SI values, engine objects, cross-field checks.
 
 use crate::error::CaseError;
+use crate::input;
 use crate::particles;
 use crate::raw::*;
+use grainflow::contact::coefficients::{MAX_PHASES, MAX_WALL_MATERIALS};
 use grainflow::contact::limits::{self, Range};
 use grainflow::contact::{
     ContactLaw, ContactParams, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel,
@@ -37,6 +39,9 @@ pub struct Case {
     pub hash: String,
     /// Things the user should know (e.g. parameters the chosen model does not use).
     pub warnings: Vec<String>,
+    /// `[particles] max_overlap`: the largest overlap allowed during the run, as a fraction of
+    /// the smaller radius (the run's health check stops a run that exceeds it).
+    pub max_overlap: f64,
 }
 
 /// `[output]`, validated.
@@ -51,14 +56,18 @@ pub struct OutputSettings {
 }
 
 /// Reads and validates a case file; particle files are read relative to its folder.
+/// Both are read through [`crate::input`]: regular files only, within its size limits, the
+/// particle file streamed.
 pub fn load(path: &Path) -> Result<Case, CaseError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| CaseError::Read { path: path.to_path_buf(), source })?;
+    let text = input::read_text(path, input::Kind::CaseFile)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    parse(&text, &path.display().to_string(), &|name: &str| {
-        let p = dir.join(name);
-        std::fs::read_to_string(&p).map_err(|source| CaseError::Read { path: p, source })
-    })
+    let raw = parse_raw(&text, &path.display().to_string())?;
+    from_raw_opened(raw, &text, &input::open_beside(&dir))
+}
+
+fn parse_raw(text: &str, origin: &str) -> Result<RawCase, CaseError> {
+    toml::from_str(input::strip_bom(text))
+        .map_err(|e| CaseError::Syntax(did_you_mean(format!("{origin}: {e}"))))
 }
 
 /// Validates case-file text. `origin` names it in messages; `read_file` reads a particle file
@@ -68,8 +77,7 @@ pub fn parse(
     origin: &str,
     read_file: &dyn Fn(&str) -> Result<String, CaseError>,
 ) -> Result<Case, CaseError> {
-    let raw: RawCase =
-        toml::from_str(text).map_err(|e| CaseError::Syntax(did_you_mean(format!("{origin}: {e}"))))?;
+    let raw = parse_raw(text, origin)?;
     from_raw(raw, text, read_file)
 }
 
@@ -81,45 +89,110 @@ pub fn from_raw(
     source: &str,
     read_file: &dyn Fn(&str) -> Result<String, CaseError>,
 ) -> Result<Case, CaseError> {
+    from_raw_opened(raw, source, &input::open_text(read_file))
+}
+
+/// [`from_raw`] with particle files opened as streams.
+pub(crate) fn from_raw_opened(
+    raw: RawCase,
+    source: &str,
+    open: &input::Opener<'_>,
+) -> Result<Case, CaseError> {
     use sha2::{Digest, Sha256};
-    // The hash covers the case text and every file it reads, in the order read.
+    // The hash covers the case text and every file it reads, in the order read: the bytes
+    // are hashed as the reader takes them, and a reader that succeeds reads to the end.
     let hasher = std::cell::RefCell::new(Sha256::new());
     hasher.borrow_mut().update(source.as_bytes());
-    let hashing_read = |name: &str| {
-        let content = read_file(name)?;
+    let hashing_open = |name: &str| {
+        let reader = open(name)?;
         let mut h = hasher.borrow_mut();
         h.update(b"\0file\0");
         h.update(name.as_bytes());
         h.update(b"\0");
-        h.update(content.as_bytes());
-        Ok(content)
+        drop(h);
+        Ok(input::Stream::new(std::io::BufReader::new(Hashing { inner: reader, hasher: &hasher }), name))
     };
-    let mut case = validate(raw, &hashing_read)?;
+    let mut case = validate(raw, &hashing_open)?;
     case.hash = hasher.into_inner().finalize().iter().map(|b| format!("{b:02x}")).collect();
     Ok(case)
 }
 
+/// A reader that adds every byte it passes to the case hash.
+struct Hashing<'h> {
+    inner: Box<dyn std::io::BufRead>,
+    hasher: &'h std::cell::RefCell<sha2::Sha256>,
+}
+
+impl std::io::Read for Hashing<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        use sha2::Digest;
+        let n = self.inner.read(buf)?;
+        self.hasher.borrow_mut().update(&buf[..n]);
+        Ok(n)
+    }
+}
+
 /// Adds "did you mean `x`?" to serde's "unknown field `y`, expected one of `a`, `b`, …" when
-/// one of the expected keys is close to the unknown one.
+/// one of the expected keys is close to the unknown one, or the unknown one is the MFIX (or
+/// another code's) name of an expected key (`mew` → `mu`).
 fn did_you_mean(message: String) -> String {
     let Some(start) = message.find("unknown field `") else { return message };
     let rest = &message[start + 15..];
     let Some(end) = rest.find('`') else { return message };
     let unknown = &rest[..end];
     let Some(list) = rest.find("expected one of ").map(|k| &rest[k + 16..]) else { return message };
-    let best = list
+    let expected: Vec<&str> = list
         .split(',')
         .map(|w| w.trim().trim_matches(|c: char| c == '`' || c.is_whitespace() || c == '.'))
         .filter(|w| !w.is_empty())
-        .map(|w| (strsim::damerau_levenshtein(unknown, w), w))
-        .min();
+        .collect();
+    let alias = ALIASES
+        .iter()
+        .find(|(a, k)| a.eq_ignore_ascii_case(unknown) && expected.contains(k))
+        .map(|(a, k)| (*k, format!(" (`{a}` is its name in MFIX or other codes)")));
+    let best = alias
+        .or_else(|| crate::error::closest(unknown, expected.iter().copied()).map(|w| (w, String::new())));
     match best {
-        Some((d, w)) if d <= 2.max(unknown.len() / 3) => {
-            format!("{}\ndid you mean `{w}`?", message.trim_end())
-        }
-        _ => message,
+        Some((w, why)) => format!("{}\ndid you mean `{w}`?{why}", message.trim_end()),
+        None => message,
     }
 }
+
+/// Names users bring from MFIX decks and other DEM codes, and the case-file key they mean.
+const ALIASES: &[(&str, &str)] = &[
+    ("mew", "mu"),
+    ("mew_w", "mu"),
+    ("friction", "mu"),
+    ("mew_r", "mu_roll"),
+    ("mew_rw", "mu_roll"),
+    ("rolling_friction", "mu_roll"),
+    ("des_en_input", "en"),
+    ("des_en_wall_input", "en"),
+    ("restitution", "en"),
+    ("e_n", "en"),
+    ("des_et_input", "et"),
+    ("e_t", "et"),
+    ("kn_w", "kn"),
+    ("k_n", "kn"),
+    ("kt_w_fac", "kt_fac"),
+    ("des_etat_fac", "etat_fac"),
+    ("des_etat_w_fac", "etat_fac"),
+    ("d_p0", "diameter"),
+    ("ro_s0", "density"),
+    ("rho", "density"),
+    ("e_young", "youngs_modulus"),
+    ("ew_young", "youngs_modulus"),
+    ("young", "youngs_modulus"),
+    ("youngs", "youngs_modulus"),
+    ("v_poisson", "poisson_ratio"),
+    ("vw_poisson", "poisson_ratio"),
+    ("poisson", "poisson_ratio"),
+    ("nu", "poisson_ratio"),
+    ("tstop", "t_stop"),
+    ("time", "t_start"),
+    ("des_intg_method", "integrator"),
+    ("factor_rlm", "skin"),
+];
 
 fn require<T>(v: Option<T>, table: &str, key: &str, hint: &str) -> Result<T, CaseError> {
     v.ok_or_else(|| CaseError::missing(table, key, hint))
@@ -152,7 +225,10 @@ fn vec3(a: [f64; 3], table: &str, key: &str) -> Result<Vec3, CaseError> {
     }
 }
 
-fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>) -> Result<Case, CaseError> {
+fn validate<'h>(
+    raw: RawCase,
+    open: &dyn Fn(&str) -> Result<input::Stream<'h>, CaseError>,
+) -> Result<Case, CaseError> {
     let mut warnings = Vec::new();
     match raw.version {
         None => {
@@ -194,6 +270,23 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
             "at least one solids phase with name, diameter (m) and density (kg/m³)",
         ));
     }
+    // Checked before any table is built: the pair tables grow as the square of the count.
+    if raw.phases.len() > MAX_PHASES {
+        return Err(CaseError::invalid(
+            "top level",
+            "[[phases]]",
+            format!("({} tables)", raw.phases.len()),
+            format!("at most {MAX_PHASES} phases are allowed (MFIX allows 10)"),
+        ));
+    }
+    if raw.wall_materials.len() > MAX_WALL_MATERIALS {
+        return Err(CaseError::invalid(
+            "top level",
+            "[[wall_materials]]",
+            format!("({} tables)", raw.wall_materials.len()),
+            format!("at most {MAX_WALL_MATERIALS} wall materials are allowed"),
+        ));
+    }
     let mut phases = Vec::new();
     for (k, p) in raw.phases.iter().enumerate() {
         let table = format!("[[phases]] #{}", k + 1);
@@ -223,7 +316,19 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
             p.youngs_modulus.map(|v| check(limits::YOUNGS, &table, "youngs_modulus", v)).transpose()?;
         let poisson_ratio =
             p.poisson_ratio.map(|v| check(limits::POISSON, &table, "poisson_ratio", v)).transpose()?;
-        phases.push(Phase { name, diameter, density, youngs_modulus, poisson_ratio });
+        let phase = Phase { name, diameter, density, youngs_modulus, poisson_ratio };
+        let m = phase.mass();
+        if !(m.is_finite() && m >= f64::MIN_POSITIVE) {
+            return Err(CaseError::invalid(
+                &table,
+                if (1e-9..=1.0).contains(&diameter) { "density" } else { "diameter" },
+                format!("(diameter {diameter:e} m, density {density:e} kg/m³)"),
+                format!(
+                    "the particle mass ρ·π·d³/6 = {m:e} kg is beyond what double precision can hold; are the diameter and density in SI units (m, kg/m³)?"
+                ),
+            ));
+        }
+        phases.push(phase);
     }
     let phase_index = |name: &str, table: &str, key: &str| -> Result<usize, CaseError> {
         phases.iter().position(|p| p.name == name).ok_or_else(|| {
@@ -282,6 +387,14 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
                 "each periodic axis must be \"x\", \"y\" or \"z\"",
             )
         })?;
+        if axes[k] {
+            return Err(CaseError::invalid(
+                "[domain]",
+                "periodic",
+                format!("{:?}", domain.periodic.as_deref().unwrap_or_default()),
+                format!("the axis \"{a}\" is listed twice; list each periodic axis once"),
+            ));
+        }
         axes[k] = true;
     }
     let periodic = axes.iter().any(|&a| a).then_some(grainflow::Periodic { lo: min, hi: max, axes });
@@ -543,6 +656,14 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         (Some(dt), None) => {
             return Err(CaseError::invalid("[time]", "dt", dt, "must be a positive time in s"));
         }
+        // A Hertz case without dt: a fraction of the Rayleigh time (MFIX's rule takes the
+        // Hertz K_n as linear and gives a step some 20 times below the stable one). MFIX decks
+        // give dtsolid_factor, and keep MFIX's rule.
+        (None, None)
+            if normal == NormalModel::Hertz && grainflow::timestep::hertz_default_dt(&phases).is_some() =>
+        {
+            TimeStepRule::Fixed(grainflow::timestep::hertz_default_dt(&phases).unwrap_or(f64::NAN))
+        }
         (None, f) => {
             let factor = f.unwrap_or(50.0);
             if !(factor.is_finite() && factor >= 10.0) {
@@ -629,11 +750,36 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
                 "mfix".into()
             }
         });
-        let text = read_file(file)?;
+        if !["mfix", "csv", "lammps"].contains(&format.as_str()) {
+            return Err(CaseError::invalid(
+                "[particles]",
+                "format",
+                format!("\"{format}\""),
+                "must be \"mfix\", \"csv\" or \"lammps\"",
+            ));
+        }
+        let mut stream = open(file)?;
         init = match format.as_str() {
-            "mfix" => particles::read_mfix(&text, file, &phases)?,
-            "csv" => particles::read_csv(&text, file, &phases)?,
-            "lammps" => crate::lammps::read_data(&text, file, &phases)?,
+            "mfix" => particles::read_mfix_from(&mut stream, &phases)?,
+            "csv" => particles::read_csv_from(&mut stream, &phases)?,
+            "lammps" => {
+                let data = crate::lammps::read_data_from(&mut stream, &phases)?;
+                if let Some((blo, bhi)) = data.bounds {
+                    let close = |a: Vec3, b: Vec3| {
+                        (a - b).abs().max_element() <= 1e-9 * (max - min).abs().max_element()
+                    };
+                    if !(close(blo, min) && close(bhi, max)) {
+                        warnings.push(format!(
+                            "[particles]: the LAMMPS data file {file} declares the box {:?} to {:?}, which differs from [domain] min = {:?}, max = {:?}; grainflow uses [domain] (its walls and periodic axes), not the file's box",
+                            blo.to_array(),
+                            bhi.to_array(),
+                            min.to_array(),
+                            max.to_array()
+                        ));
+                    }
+                }
+                data.atoms
+            }
             other => {
                 return Err(CaseError::invalid(
                     "[particles]",
@@ -797,7 +943,16 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         }
     }
 
-    let max_overlap = praw.max_initial_overlap.unwrap_or(DEFAULT_MAX_INITIAL_OVERLAP);
+    let run_overlap = praw.max_overlap.unwrap_or(DEFAULT_MAX_OVERLAP);
+    if !(run_overlap.is_finite() && run_overlap > 0.0 && run_overlap <= 1.0) {
+        return Err(CaseError::invalid(
+            "[particles]",
+            "max_overlap",
+            run_overlap,
+            "must be a fraction in (0, 1] of the smaller radius",
+        ));
+    }
+    let max_overlap = praw.max_initial_overlap.unwrap_or(DEFAULT_MAX_INITIAL_OVERLAP.min(run_overlap));
     if !(max_overlap.is_finite() && max_overlap >= 0.0) {
         return Err(CaseError::invalid(
             "[particles]",
@@ -806,6 +961,17 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
             "must be a fraction >= 0 of the radius",
         ));
     }
+    if max_overlap > run_overlap {
+        return Err(CaseError::invalid(
+            "[particles]",
+            "max_initial_overlap",
+            max_overlap,
+            format!(
+                "must not exceed max_overlap = {run_overlap} (the run stops at an overlap above max_overlap, so a start above it could not run); raise max_overlap too, or separate the particles"
+            ),
+        ));
+    }
+    grainflow::motion::check_rules(&motion).map_err(|e| CaseError::Geometry(format!("[[motion]]: {e}")))?;
     check_geometry(&particles, &walls, (min, max), max_overlap)?;
     if let Some(per) = &periodic {
         let skin = skin.unwrap_or_else(|| grainflow::simulation::default_skin(particles.max_radius()));
@@ -814,6 +980,7 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
     let force_dt = time.force_dt.unwrap_or(false);
     check_stability(
         time_step,
+        t_stop - t_start,
         &law,
         &phases,
         &wall_materials,
@@ -847,6 +1014,7 @@ fn validate(raw: RawCase, read_file: &dyn Fn(&str) -> Result<String, CaseError>)
         domain: (min, max),
         hash: String::new(),
         warnings,
+        max_overlap: run_overlap,
     })
 }
 
@@ -867,6 +1035,9 @@ fn sort_into_bins(init: &mut [ParticleInit], lo: Vec3, bin: f64) {
 
 /// Default of `[particles] max_initial_overlap`.
 pub const DEFAULT_MAX_INITIAL_OVERLAP: f64 = 0.05;
+
+/// Default of `[particles] max_overlap`: half the smaller radius.
+pub const DEFAULT_MAX_OVERLAP: f64 = 0.5;
 
 /// Particles must start inside the domain box, in front of every wall, and overlap no wall
 /// or other particle by more than `max_overlap` of the (smaller) radius: a larger overlap
@@ -917,6 +1088,13 @@ fn check_geometry(
     nl.build(p, &[]);
     for [i, j] in nl.pairs() {
         let (i, j) = (i as usize, j as usize);
+        if p.position[i] == p.position[j] {
+            return Err(CaseError::Geometry(format!(
+                "{} and particle {} have the same centre: their contact has no normal direction; move one of them",
+                at(i),
+                p.id[j]
+            )));
+        }
         let overlap = p.radius[i] + p.radius[j] - (p.position[j] - p.position[i]).length();
         let r = p.radius[i].min(p.radius[j]);
         if overlap > max_overlap * r {
@@ -936,6 +1114,7 @@ fn check_geometry(
 /// MFIX's rule above it (possible only through stiff walls, which MFIX leaves out) warns.
 fn check_stability(
     rule: TimeStepRule,
+    span: f64,
     law: &ContactLaw,
     phases: &[Phase],
     wall_materials: &[WallMaterial],
@@ -946,6 +1125,8 @@ fn check_stability(
 ) -> Result<(), CaseError> {
     let table = grainflow::contact::CoeffTable::build(law, phases, wall_materials, pair_params, wall_params)?;
     let limit = grainflow::timestep::stability_limit(law, phases, wall_materials, &table);
+    // The step and the step count, refused here as the engine would refuse them.
+    let chosen = grainflow::timestep::choose(rule, law, phases, &table, span)?;
     match rule {
         TimeStepRule::Fixed(dt) if dt > limit.dt_max => {
             let text = format!(
@@ -968,7 +1149,7 @@ fn check_stability(
             }
         }
         TimeStepRule::Mfix { factor } => {
-            let dt = grainflow::timestep::choose(rule, law, phases, &table, 1.0)?.dt;
+            let dt = chosen.dt;
             if dt > limit.dt_max {
                 warnings.push(format!(
                     "[time]: MFIX's rule (TCOLL/{factor}) gives dt = {dt:.4e} s, above the stability limit {:.4e} s ({}); consider dt = {:.4e} s",

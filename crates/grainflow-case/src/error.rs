@@ -78,3 +78,35 @@ impl CaseError {
         CaseError::Missing { table: table.into(), key: key.into(), hint: hint.into() }
     }
 }
+
+/// The candidate closest to `unknown` for a "did you mean" (case-insensitive
+/// Damerau-Levenshtein distance at most `max(2, len/4)` of the candidate). Ties go to the
+/// candidate sharing more of the start (Jaro-Winkler), so `mew` suggests `mu`, not `en`.
+pub(crate) fn closest<'a>(unknown: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let u = unknown.to_ascii_lowercase();
+    let mut best: Option<(usize, f64, &'a str)> = None;
+    for c in candidates {
+        let l = c.to_ascii_lowercase();
+        let d = strsim::damerau_levenshtein(&u, &l);
+        if d > 2.max(c.len() / 4) || d >= u.len().max(1) {
+            continue;
+        }
+        let jw = strsim::jaro_winkler(&u, &l);
+        if best.is_none_or(|(bd, bj, _)| d < bd || (d == bd && jw > bj)) {
+            best = Some((d, jw, c));
+        }
+    }
+    best.map(|b| b.2)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn closest_prefers_the_shared_start() {
+        let keys = ["kn", "kt_fac", "etat_fac", "en", "et", "mu", "mu_roll", "gamma_n", "gamma_t"];
+        assert_eq!(super::closest("mew", keys), Some("mu"));
+        assert_eq!(super::closest("kt_fca", keys), Some("kt_fac"));
+        // Nothing near: no suggestion.
+        assert_eq!(super::closest("colour", keys), None);
+    }
+}

@@ -7,6 +7,7 @@
 //! `[[phases]]`); each particle keeps its own diameter and density. Other sections are skipped.
 
 use crate::error::CaseError;
+use crate::input::Stream;
 use grainflow::Vec3;
 use grainflow::material::Phase;
 use grainflow::state::ParticleInit;
@@ -30,23 +31,44 @@ pub fn box_bounds(text: &str) -> Option<(Vec3, Vec3)> {
 
 /// Reads the particles of a LAMMPS data file.
 pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
-    let err =
-        |line: usize, message: String| CaseError::ParticleFile { path: path.to_string(), line, message };
-    // Large beds come in large files: the lines are read where they are, and the atoms are
+    read_data_from(&mut Stream::from_text(text, path), phases).map(|d| d.atoms)
+}
+
+/// What a data file gives: the atoms (sorted by id) and the box bounds, if declared.
+#[derive(Debug, Clone)]
+pub struct DataFile {
+    /// The atoms, sorted by id.
+    pub atoms: Vec<ParticleInit>,
+    /// The box (lower, upper corner), if the header declares all three axes.
+    pub bounds: Option<(Vec3, Vec3)>,
+}
+
+/// [`read_data`] from a stream, line by line. The header must declare the atom count
+/// (`N atoms`) before the Atoms section, as LAMMPS requires; the reader stops at the first
+/// atom beyond it and at the first velocity given twice.
+pub fn read_data_from(s: &mut Stream<'_>, phases: &[Phase]) -> Result<DataFile, CaseError> {
+    let path = s.name.clone();
+    let err = |line: usize, message: String| CaseError::ParticleFile { path: path.clone(), line, message };
+    // Large beds come in large files: the lines are read one at a time, and the atoms are
     // kept sorted by id (for the Velocities section) instead of in an id index.
-    let mut expected_atoms = None;
+    let mut expected_atoms: Option<usize> = None;
     let mut section = "";
+    let mut in_header = true;
     let mut atoms: Vec<ParticleInit> = Vec::new();
+    // The line of each atom, for the message naming an id given twice.
+    let mut lines: Vec<u32> = Vec::new();
     let mut sorted = true;
+    let mut has_velocity: Vec<bool> = Vec::new();
+    let mut velocity_section = false;
     let mut velocities = 0usize;
+    let (mut lo, mut hi) = ([f64::NAN; 3], [f64::NAN; 3]);
     let mut last_line = 0;
-    for (k, raw) in text.lines().enumerate() {
-        last_line = k + 1;
-        let line_no = k + 1;
-        let line = raw.split('#').next().unwrap_or("").trim();
-        if k == 0 {
+    while let Some((line_no, raw)) = s.next_line()? {
+        last_line = line_no;
+        if line_no == 1 {
             continue; // the title line
         }
+        let line = raw.split('#').next().unwrap_or("").trim();
         if line.is_empty() {
             continue;
         }
@@ -58,15 +80,35 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
                     format!("'{head}': only atom_style sphere is read (id type diameter density x y z)"),
                 ));
             }
+            if expected_atoms.is_none() {
+                return Err(err(
+                    line_no,
+                    "the Atoms section comes before the header declares the atom count (`N atoms`), which LAMMPS requires".into(),
+                ));
+            }
+            if !atoms.is_empty() || velocity_section {
+                return Err(err(
+                    line_no,
+                    "a second Atoms section, or one after the Velocities section: a data file has one Atoms section, then at most one Velocities section".into(),
+                ));
+            }
+            in_header = false;
             section = "Atoms";
             continue;
         }
         if head.starts_with("Velocities") {
+            if velocity_section {
+                return Err(err(line_no, "a second Velocities section: a data file has at most one".into()));
+            }
+            velocity_section = true;
+            in_header = false;
             section = "Velocities";
-            sort_by_id(&mut atoms, &mut sorted, text, path)?;
+            sort_by_id(&mut atoms, &lines, &mut sorted, &path)?;
+            has_velocity = vec![false; atoms.len()];
             continue;
         }
         if head.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) {
+            in_header = false;
             section = "other";
             continue;
         }
@@ -78,16 +120,34 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
                 .ok_or_else(|| err(line_no, format!("{what} = '{s}' is not a number")))
         };
         match section {
-            "" if f.len() == 2 && f[1] == "atoms" => {
+            "" if in_header && f.len() == 2 && f[1] == "atoms" => {
                 let n = f[0]
                     .parse::<usize>()
                     .map_err(|_| err(line_no, format!("'{}' is not an atom count", f[0])))?;
+                if n == 0 {
+                    return Err(err(line_no, "the header declares 0 atoms: there is nothing to run".into()));
+                }
                 expected_atoms = Some(n);
-                // Room for all of them at once (a header that overstates the count cannot
-                // ask for more than the file could hold: an atom line has 14 characters or more).
-                atoms.reserve_exact(n.min(text.len() / 14));
+                // Room for the first of them; the rest as they come (a header that overstates
+                // the count must not reserve memory the file does not fill).
+                atoms.reserve_exact(n.min(1 << 16));
+            }
+            "" if in_header && f.len() >= 4 && ["xlo", "ylo", "zlo"].contains(&f[2]) => {
+                let k = ["xlo", "ylo", "zlo"].iter().position(|t| *t == f[2]).unwrap_or(0);
+                lo[k] = num(f[0], f[2])?;
+                hi[k] = num(f[1], ["xhi", "yhi", "zhi"][k])?;
             }
             "Atoms" => {
+                let n = expected_atoms.unwrap_or(0);
+                if atoms.len() >= n {
+                    return Err(err(
+                        line_no,
+                        format!(
+                            "the header declares {n} atoms but the Atoms section has more (this line is atom {})",
+                            atoms.len() + 1
+                        ),
+                    ));
+                }
                 if f.len() != 7 && f.len() != 10 {
                     return Err(err(
                         line_no,
@@ -120,6 +180,7 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
                     velocity: Vec3::ZERO,
                     omega: Vec3::ZERO,
                 });
+                lines.push(u32::try_from(line_no).unwrap_or(u32::MAX));
             }
             "Velocities" => {
                 if f.len() != 7 {
@@ -133,6 +194,14 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
                 let slot = atoms.binary_search_by_key(&id, |a| a.id).map_err(|_| {
                     err(line_no, format!("velocity for atom {id}, which the Atoms section does not have"))
                 })?;
+                if std::mem::replace(&mut has_velocity[slot], true) {
+                    return Err(err(
+                        line_no,
+                        format!(
+                            "the velocity of atom {id} is given twice; each atom has one Velocities line"
+                        ),
+                    ));
+                }
                 atoms[slot].velocity = Vec3::new(num(f[1], "vx")?, num(f[2], "vy")?, num(f[3], "vz")?);
                 atoms[slot].omega = Vec3::new(num(f[4], "wx")?, num(f[5], "wy")?, num(f[6], "wz")?);
                 velocities += 1;
@@ -158,47 +227,39 @@ pub fn read_data(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
         ));
     }
     // LAMMPS writes atoms in no particular order; keep them sorted by id.
-    sort_by_id(&mut atoms, &mut sorted, text, path)?;
-    Ok(atoms)
+    sort_by_id(&mut atoms, &lines, &mut sorted, &path)?;
+    let (lo, hi) = (Vec3::from_array(lo), Vec3::from_array(hi));
+    let bounds = (lo.is_finite() && hi.is_finite()).then_some((lo, hi));
+    Ok(DataFile { atoms, bounds })
 }
 
 /// Sorts the atoms by id unless they are known to be sorted; an id that appears twice is an
-/// error naming the line of its second appearance.
+/// error naming the lines of both appearances (`lines[k]` is where atom k was read).
 fn sort_by_id(
     atoms: &mut [ParticleInit],
+    lines: &[u32],
     sorted: &mut bool,
-    text: &str,
     path: &str,
 ) -> Result<(), CaseError> {
-    if !*sorted {
-        // Ids are unique (checked below), so an unstable sort orders them as a stable one,
-        // without its buffer of half the atoms.
-        atoms.sort_unstable_by_key(|a| a.id);
-        *sorted = true;
+    if *sorted {
+        return Ok(()); // strictly increasing ids: none twice
     }
-    let Some(w) = atoms.windows(2).find(|w| w[0].id == w[1].id) else {
-        return Ok(());
-    };
-    let id = w[0].id.to_string();
-    // The second line of the Atoms section that starts with this id.
-    let mut in_atoms = false;
-    let line = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| {
-            let head = l.trim();
-            if head.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) {
-                in_atoms = head.starts_with("Atoms");
-            }
-            in_atoms && head.split_whitespace().next() == Some(id.as_str())
-        })
-        .nth(1)
-        .map_or(0, |(k, _)| k + 1);
-    Err(CaseError::ParticleFile {
-        path: path.to_string(),
-        line,
-        message: format!("atom id {id} appears twice"),
-    })
+    // The duplicate check on (id, line) pairs, 8 bytes an atom, before the atoms are moved.
+    let mut keys: Vec<(u32, u32)> = atoms.iter().zip(lines).map(|(a, &l)| (a.id, l)).collect();
+    keys.sort_unstable();
+    if let Some(w) = keys.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(CaseError::ParticleFile {
+            path: path.to_string(),
+            line: w[1].1 as usize,
+            message: format!("atom id {} appears twice (also on line {})", w[0].0, w[0].1),
+        });
+    }
+    drop(keys);
+    // Ids are unique, so an unstable sort orders them as a stable one, without its buffer
+    // of half the atoms.
+    atoms.sort_unstable_by_key(|a| a.id);
+    *sorted = true;
+    Ok(())
 }
 
 #[cfg(test)]

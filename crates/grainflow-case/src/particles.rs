@@ -1,6 +1,7 @@
 //! Particle files: MFIX's legacy `particle_input.dat` and CSV.
 
 use crate::error::CaseError;
+use crate::input::Stream;
 use grainflow::Vec3;
 use grainflow::material::Phase;
 use grainflow::state::ParticleInit;
@@ -10,28 +11,17 @@ use grainflow::state::ParticleInit;
 /// are skipped. The phase is found as MFIX does: the phase whose diameter and density match
 /// the particle's (relative tolerance 1e-6). Ids are the 1-based particle numbers.
 pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
+    read_mfix_from(&mut Stream::from_text(text, path), phases)
+}
+
+/// [`read_mfix`] from a stream, line by line.
+pub fn read_mfix_from(s: &mut Stream<'_>, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
     let mut out = Vec::new();
-    for (k, line) in text.lines().enumerate() {
-        let t = line.trim();
-        if t.is_empty() || t.starts_with('#') || t.starts_with('!') {
-            continue;
-        }
-        let err = |message: String| CaseError::ParticleFile { path: path.to_string(), line: k + 1, message };
-        let fields: Vec<&str> = t.split_whitespace().collect();
-        if fields.len() != 8 {
-            return Err(err(format!(
-                "expected 8 numbers (x y z radius density u v w), found {}",
-                fields.len()
-            )));
-        }
-        let mut v = [0.0; 8];
-        for (slot, f) in v.iter_mut().zip(&fields) {
-            *slot = parse_number(f).ok_or_else(|| err(format!("'{f}' is not a number")))?;
-        }
-        let [x, y, z, r, rho, u, vv, w] = v;
-        if !(r.is_finite() && r > 0.0) {
-            return Err(err(format!("radius {r} must be positive (m)")));
-        }
+    let path = s.name.clone();
+    while let Some((line, text)) = s.next_line()? {
+        let Some(fields) = mfix_fields(text) else { continue };
+        let err = |message: String| CaseError::ParticleFile { path: path.clone(), line, message };
+        let [x, y, z, r, rho, u, vv, w] = mfix_numbers(&fields).map_err(err)?;
         let phase = match_phase(2.0 * r, rho, phases).ok_or_else(|| {
             err(format!(
                 "no phase has diameter {} m and density {rho} kg/m³ (phases: {})",
@@ -39,8 +29,10 @@ pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
                 describe_phases(phases)
             ))
         })?;
+        let id =
+            u32::try_from(out.len() + 1).map_err(|_| err(format!("more than {} particles", u32::MAX)))?;
         out.push(ParticleInit {
-            id: (out.len() + 1) as u32,
+            id,
             phase: phase as u32,
             radius: r,
             density: rho,
@@ -49,7 +41,38 @@ pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
             omega: Vec3::ZERO,
         });
     }
+    if out.is_empty() {
+        return Err(CaseError::ParticleFile {
+            path,
+            line: s.lines_read(),
+            message: "the file holds no particles (one line per particle: x y z radius density u v w)".into(),
+        });
+    }
     Ok(out)
+}
+
+/// The fields of a data line of `particle_input.dat`, or `None` for a blank or comment line.
+pub(crate) fn mfix_fields(line: &str) -> Option<Vec<&str>> {
+    let t = line.trim();
+    if t.is_empty() || t.starts_with('#') || t.starts_with('!') {
+        return None;
+    }
+    Some(t.split_whitespace().collect())
+}
+
+/// The eight numbers of a `particle_input.dat` line (SI), the radius checked.
+pub(crate) fn mfix_numbers(fields: &[&str]) -> Result<[f64; 8], String> {
+    if fields.len() != 8 {
+        return Err(format!("expected 8 numbers (x y z radius density u v w), found {}", fields.len()));
+    }
+    let mut v = [0.0; 8];
+    for (slot, f) in v.iter_mut().zip(fields) {
+        *slot = parse_number(f).ok_or_else(|| format!("'{f}' is not a number"))?;
+    }
+    if !(v[3].is_finite() && v[3] > 0.0) {
+        return Err(format!("radius {} must be positive (m)", v[3]));
+    }
+    Ok(v)
 }
 
 /// Reads a CSV particle file with a header row. Columns (any order):
@@ -57,16 +80,35 @@ pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particl
 /// number), `diameter` or `radius` (m, default: the phase's), `u,v,w` (m/s, default 0),
 /// `wx,wy,wz` (rad/s, default 0). Unknown columns are an error.
 pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
+    read_csv_from(&mut Stream::from_text(text, path), phases)
+}
+
+/// [`read_csv`] from a stream, record by record.
+pub fn read_csv_from(s: &mut Stream<'_>, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
+    let path = s.name.clone();
+    let path = path.as_str();
     const KNOWN: [&str; 13] =
         ["id", "phase", "x", "y", "z", "diameter", "radius", "u", "v", "w", "wx", "wy", "wz"];
-    let mut rdr =
-        csv::ReaderBuilder::new().trim(csv::Trim::All).comment(Some(b'#')).from_reader(text.as_bytes());
+    let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).comment(Some(b'#')).from_reader(s);
     let header_err = |message: String| CaseError::ParticleFile { path: path.to_string(), line: 1, message };
     let headers = rdr.headers().map_err(|e| header_err(format!("cannot read the header row: {e}")))?.clone();
     let mut col = [None; 13];
+    if headers.iter().all(|h| h.is_empty()) {
+        return Err(header_err(format!(
+            "the file is empty; a CSV particle file starts with a header row naming its columns ({})",
+            KNOWN.join(", ")
+        )));
+    }
     for (c, h) in headers.iter().enumerate() {
         let h = h.to_ascii_lowercase();
         match KNOWN.iter().position(|k| *k == h) {
+            Some(k) if col[k].is_some() => {
+                return Err(header_err(format!(
+                    "the column '{h}' appears twice (columns {} and {}); each column may appear once",
+                    col[k].map_or(0, |c: usize| c + 1),
+                    c + 1
+                )));
+            }
             Some(k) => col[k] = Some(c),
             None => {
                 return Err(header_err(format!(
@@ -123,7 +165,7 @@ pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particle
             return Err(err(format!("the radius {radius} m must be positive")));
         }
         let id = match get(0)? {
-            None => (row + 1) as u32,
+            None => u32::try_from(row + 1).map_err(|_| err(format!("more than {} particles", u32::MAX)))?,
             Some(v) if v >= 1.0 && v <= u32::MAX as f64 && v.fract() == 0.0 => v as u32,
             Some(v) => return Err(err(format!("id {v} must be a whole number >= 1"))),
         };
@@ -138,6 +180,14 @@ pub fn read_csv(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<Particle
             position: v3(2)?,
             velocity: v3(7)?,
             omega: v3(10)?,
+        });
+    }
+    if out.is_empty() {
+        return Err(CaseError::ParticleFile {
+            path: path.to_string(),
+            line: 1,
+            message: "the file has a header row but no particles (one row per particle below the header)"
+                .into(),
         });
     }
     Ok(out)
@@ -158,7 +208,13 @@ pub fn match_phase(diameter: f64, density: f64, phases: &[Phase]) -> Option<usiz
 fn describe_phases(phases: &[Phase]) -> String {
     phases
         .iter()
-        .map(|p| format!("'{}' d = {} m, rho = {} kg/m³", p.name, p.diameter, p.density))
+        .map(|p| format!("'{}' d = {} m, rho = {} kg/m³", p.name, short(p.diameter), short(p.density)))
         .collect::<Vec<_>>()
         .join("; ")
+}
+
+/// A number as written for people: plain in the usual range, else with an exponent (so a
+/// density of 1e308 is not 309 digits).
+pub(crate) fn short(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
 }

@@ -309,6 +309,11 @@ pub struct RawParticles {
     /// or of the radius (walls). Default 0.05.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_initial_overlap: Option<f64>,
+    /// Largest overlap allowed during the run, as a fraction of the smaller radius: the run's
+    /// health check stops a run whose largest overlap exceeds it. Default 0.5; must lie in
+    /// (0, 1] and be at least `max_initial_overlap`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_overlap: Option<f64>,
     /// Slot order of the particles in memory: "input" (as listed) or "spatial" (sorted into
     /// bins of half the neighbour cut-off, x fastest, then y, then z, so that neighbours sit
     /// close in memory — faster for large beds). Default "input". Results do not depend on it

@@ -38,6 +38,13 @@ impl Phase {
         let who = format!("phase '{}'", self.name);
         limits::DIAMETER.check(&who, "diameter", self.diameter)?;
         limits::DENSITY.check(&who, "density", self.density)?;
+        let m = self.mass();
+        if !(m.is_finite() && m >= f64::MIN_POSITIVE) {
+            return Err(EngineError::BadReference(format!(
+                "{who}: diameter {:e} m and density {:e} kg/m³ give a particle mass of {m:e} kg, beyond what double precision can hold; are they in SI units (m, kg/m³)?",
+                self.diameter, self.density
+            )));
+        }
         validate_elastic(&who, self.youngs_modulus, self.poisson_ratio)
     }
 }

@@ -41,7 +41,58 @@ pub(crate) struct ResolvedMotion {
     anchor: Vec3,
 }
 
+/// Refuses rule sets without a meaning: a particle with two rules (which one holds?), and
+/// leaders that follow each other in a cycle (no particle of the cycle moves freely, and where
+/// they end up would depend on the order the rules are applied in).
+pub fn check_rules(rules: &[PrescribedMotion]) -> Result<(), EngineError> {
+    use std::collections::HashMap;
+    let mut leader_of: HashMap<u32, Option<u32>> = HashMap::with_capacity(rules.len());
+    for r in rules {
+        let leader = match r.rule {
+            MotionRule::Hold => None,
+            MotionRule::Follow { leader, .. } if leader == r.particle => {
+                return Err(EngineError::BadReference(format!("particle {leader} cannot follow itself")));
+            }
+            MotionRule::Follow { leader, .. } => Some(leader),
+        };
+        if leader_of.insert(r.particle, leader).is_some() {
+            return Err(EngineError::BadReference(format!(
+                "particle {} has two prescribed-motion rules; give each particle one",
+                r.particle
+            )));
+        }
+    }
+    // 1: on the chain being walked, 2: known to end at a particle that is not following.
+    let mut state: HashMap<u32, u8> = HashMap::with_capacity(leader_of.len());
+    let mut ids: Vec<u32> = leader_of.keys().copied().collect();
+    ids.sort_unstable();
+    for start in ids {
+        let mut chain = Vec::new();
+        let mut cur = start;
+        while state.get(&cur).copied().unwrap_or(0) == 0 {
+            let Some(Some(next)) = leader_of.get(&cur) else { break };
+            state.insert(cur, 1);
+            chain.push(cur);
+            cur = *next;
+        }
+        if state.get(&cur) == Some(&1) {
+            let from = chain.iter().position(|&c| c == cur).unwrap_or(0);
+            let cycle: Vec<String> =
+                chain[from..].iter().chain(std::iter::once(&cur)).map(|c| c.to_string()).collect();
+            return Err(EngineError::BadReference(format!(
+                "prescribed motion: particles follow each other in a cycle ({}); a chain of leaders must end at a particle that is not following",
+                cycle.join(" follows ")
+            )));
+        }
+        for c in chain {
+            state.insert(c, 2);
+        }
+    }
+    Ok(())
+}
+
 pub(crate) fn resolve(rules: &[PrescribedMotion], p: &Particles) -> Result<Vec<ResolvedMotion>, EngineError> {
+    check_rules(rules)?;
     let mut slot_of = std::collections::HashMap::with_capacity(p.len());
     for (i, &id) in p.id.iter().enumerate() {
         slot_of.insert(id, i);
@@ -197,5 +248,25 @@ mod tests {
         p.position[0].x = 0.25;
         assert!(apply(&follow, &mut p));
         assert_eq!(p.position[1].x, 0.25);
+    }
+
+    #[test]
+    fn rule_sets_without_a_meaning_are_refused() {
+        let follow = |particle, leader| PrescribedMotion {
+            particle,
+            rule: MotionRule::Follow { leader, axes: [true, false, false] },
+        };
+        let hold = |particle| PrescribedMotion { particle, rule: MotionRule::Hold };
+        // A chain ending at a held particle is fine; so is one ending at a free particle.
+        assert!(check_rules(&[follow(1, 2), follow(2, 3), hold(3)]).is_ok());
+        assert!(check_rules(&[follow(1, 2), follow(3, 2)]).is_ok());
+        let e = check_rules(&[hold(5), follow(1, 2), follow(2, 3), follow(3, 1)]).unwrap_err().to_string();
+        assert!(e.contains("cycle (1 follows 2 follows 3 follows 1)"), "{e}");
+        let e = check_rules(&[hold(4), follow(4, 1)]).unwrap_err().to_string();
+        assert!(e.contains("particle 4 has two prescribed-motion rules"), "{e}");
+        let e = check_rules(&[follow(7, 7)]).unwrap_err().to_string();
+        assert!(e.contains("cannot follow itself"), "{e}");
+        // Through resolve too (the engine's set-up).
+        assert!(resolve(&[follow(1, 2), follow(2, 1)], &two_particles()).is_err());
     }
 }

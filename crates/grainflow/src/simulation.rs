@@ -108,6 +108,18 @@ impl Simulation {
     pub fn new(config: SimulationConfig, particles: Particles) -> Result<Self, EngineError> {
         let mut sim = Simulation::unbuilt(config, particles)?;
         sim.neighbors.build(&sim.particles, &sim.walls);
+        // Two particles at the same centre have no contact normal: the force loop would
+        // treat them as not touching.
+        let x = &sim.particles.position;
+        if let Some([i, j]) = sim.neighbors.pairs().find(|&[i, j]| x[i as usize] == x[j as usize]) {
+            let (i, j) = (i as usize, j as usize);
+            let (a, b) =
+                (sim.particles.id[i].min(sim.particles.id[j]), sim.particles.id[i].max(sim.particles.id[j]));
+            return Err(EngineError::BadReference(format!(
+                "particles {a} and {b} have the same centre ({:e}, {:e}, {:e}) m: their contact has no normal direction; move one of them",
+                x[i].x, x[i].y, x[i].z
+            )));
+        }
         Ok(sim)
     }
 
@@ -851,11 +863,24 @@ fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
                 "a radius must be positive, in m",
             ));
         }
-        if !(p.mass[i].is_finite() && p.mass[i] > 0.0) {
+        if !(p.mass[i].is_finite() && p.mass[i] >= f64::MIN_POSITIVE) {
             return Err(EngineError::invalid(
                 format!("particle {id} mass"),
                 p.mass[i],
-                "the density must be positive, in kg/m³",
+                format!(
+                    "the mass must be a positive finite number in kg (radius {:e} m); a density that is not positive, or a radius and density beyond what double precision can hold (not SI units?), give this",
+                    p.radius[i]
+                ),
+            ));
+        }
+        if !(p.inertia[i].is_finite() && p.inertia[i] >= f64::MIN_POSITIVE) {
+            return Err(EngineError::invalid(
+                format!("particle {id} moment of inertia"),
+                p.inertia[i],
+                format!(
+                    "the moment of inertia 0.4·m·r² (m = {:e} kg, r = {:e} m) must be a positive finite number; are the radius and density in SI units?",
+                    p.mass[i], p.radius[i]
+                ),
             ));
         }
         if !(p.position[i].is_finite() && p.velocity[i].is_finite() && p.omega[i].is_finite()) {

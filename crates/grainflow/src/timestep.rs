@@ -63,6 +63,60 @@ pub fn fixed_step_count(span: f64, dt: f64) -> u64 {
     if (q - r).abs() <= 1e-9 * q { r as u64 } else { q.ceil() as u64 }
 }
 
+/// The most steps a run may take: 10¹⁰. At the engine's fastest, some 10⁷ particle-steps a
+/// second on one core, that is a quarter of an hour for a single particle and four months for
+/// a bed of 10 000; a count above it comes from a mistyped time, time step or stiffness
+/// (`dt = 1e-300`, `t_stop = 1e300`, `kn = 1e300`), and is refused before the run.
+pub const MAX_STEPS: f64 = 1e10;
+
+/// Fraction of the Rayleigh time that is the default step of a Hertz case without `dt`:
+/// 0.2, the largest step LIGGGHTS accepts without a warning (`check_timestep/gran`) and the
+/// low end of EDEM's 20-40 % guidance; the explicit schemes are stable up to about 0.3·T_R
+/// ([`stability_limit`]).
+pub const HERTZ_DEFAULT_RAYLEIGH_FRACTION: f64 = 0.2;
+
+/// The Rayleigh time T_R = πR√(ρ/G)/(0.1631ν + 0.8766) of the phase with the smallest one,
+/// s, with that phase's index; `None` if no phase has E and ν.
+pub fn rayleigh_time(phases: &[Phase]) -> Option<(f64, usize)> {
+    let mut best: Option<(f64, usize)> = None;
+    for (k, ph) in phases.iter().enumerate() {
+        if let (Some(e), Some(nu)) = (ph.youngs_modulus, ph.poisson_ratio) {
+            let g = e / (2.0 * (1.0 + nu));
+            let t = std::f64::consts::PI * ph.radius() * (ph.density / g).sqrt() / (0.1631 * nu + 0.8766);
+            if best.is_none_or(|b| t < b.0) {
+                best = Some((t, k));
+            }
+        }
+    }
+    best
+}
+
+/// The default Δt of a Hertz case that gives none: [`HERTZ_DEFAULT_RAYLEIGH_FRACTION`] of the
+/// smallest Rayleigh time. `None` if no phase has E and ν or the result is not a positive
+/// finite time.
+pub fn hertz_default_dt(phases: &[Phase]) -> Option<f64> {
+    let (t, _) = rayleigh_time(phases)?;
+    let dt = HERTZ_DEFAULT_RAYLEIGH_FRACTION * t;
+    (dt.is_finite() && dt > 0.0).then_some(dt)
+}
+
+/// Refuses a run whose step count is absurd or cannot be formed (see [`MAX_STEPS`]).
+pub fn check_step_count(span: f64, dt: f64) -> Result<(), EngineError> {
+    let q = span / dt;
+    let advice = "check t_stop, t_start and dt, and the stiffness (kn, youngs_modulus) and masses that set the time step";
+    if !q.is_finite() {
+        return Err(EngineError::BadReference(format!(
+            "the run's step count (t_stop - t_start)/dt = {span:e} s / {dt:e} s overflows: more than the limit of {MAX_STEPS:e} steps; {advice}"
+        )));
+    }
+    if q > MAX_STEPS {
+        return Err(EngineError::BadReference(format!(
+            "the run would take {q:.3e} steps (t_stop - t_start = {span:e} s at dt = {dt:e} s), more than the limit of {MAX_STEPS:e} steps; {advice}"
+        )));
+    }
+    Ok(())
+}
+
 /// Applies the rule.
 pub fn choose(
     rule: TimeStepRule,
@@ -75,6 +129,9 @@ pub fn choose(
         NormalModel::LinearSpringDashpot => "linear spring-dashpot k_n",
         NormalModel::Hertz => "Hertzian K_n taken as a linear stiffness, as MFIX does",
     };
+    if phases.is_empty() {
+        return Err(EngineError::BadReference("at least one phase is needed".into()));
+    }
     // TCOLL is always evaluated: even with an explicit Δt it is worth reporting.
     let mut tcoll = f64::INFINITY;
     let mut limiting = (0, 0);
@@ -98,6 +155,17 @@ pub fn choose(
                 ));
             }
             let dt = tcoll / factor;
+            if !(dt.is_finite() && dt > 0.0) {
+                let c = table.pair(limiting.0, limiting.1);
+                return Err(EngineError::BadReference(format!(
+                    "MFIX's time-step rule gives no usable step: the collision time TCOLL of phase pair '{}'-'{}' is {tcoll:e} s (K = {:e}, effective mass {:e} kg, eta_n = {:e}); the stiffness, diameter or density is outside what double precision can hold (are they in SI units?); give an explicit dt",
+                    phases[limiting.0].name,
+                    phases[limiting.1].name,
+                    c.kn,
+                    c.m_eff,
+                    absolute_eta(law, c)
+                )));
+            }
             let text = format!(
                 "dt = {dt:.7e} s from MFIX's rule: TCOLL = {tcoll:.7e} s (phase pair '{}'-'{}', {model}) / DTSOLID_FACTOR {factor}",
                 phases[limiting.0].name, phases[limiting.1].name
@@ -108,11 +176,31 @@ pub fn choose(
             if !(dt.is_finite() && dt > 0.0) {
                 return Err(EngineError::invalid("dt", dt, "the time step must be a positive time in s"));
             }
-            let text = if tcoll.is_finite() {
+            let hertz_default = law.normal == NormalModel::Hertz
+                && hertz_default_dt(phases).is_some_and(|d| d.to_bits() == dt.to_bits());
+            let text = if hertz_default {
+                // The step a Hertz case without dt gets (the case layer puts it here).
+                let (tr, k) = rayleigh_time(phases).unwrap_or((f64::NAN, 0));
+                let mfix = if tcoll.is_finite() {
+                    format!(
+                        "; MFIX's rule, TCOLL/50 with K_n taken as a linear stiffness, would give {:.7e} s",
+                        tcoll / 50.0
+                    )
+                } else {
+                    String::new()
+                };
                 format!(
-                    "dt = {dt:.7e} s given explicitly (MFIX's rule would give TCOLL/50 = {:.7e} s; TCOLL/dt = {:.1})",
-                    tcoll / 50.0,
-                    tcoll / dt
+                    "dt = {dt:.7e} s = {HERTZ_DEFAULT_RAYLEIGH_FRACTION} x the Rayleigh time {tr:.7e} s of phase '{}', the default for Hertz contacts when dt is not given (stable to about 0.3 x T_R{mfix})",
+                    phases[k].name
+                )
+            } else if tcoll.is_finite() {
+                let ratio = tcoll / dt;
+                // Plain in the usual range; with an exponent when a soft spring or a tiny step
+                // would print dozens of digits.
+                let ratio = if ratio < 1e6 { format!("{ratio:.1}") } else { format!("{ratio:.3e}") };
+                format!(
+                    "dt = {dt:.7e} s given explicitly (MFIX's rule would give TCOLL/50 = {:.7e} s; TCOLL/dt = {ratio})",
+                    tcoll / 50.0
                 )
             } else {
                 format!("dt = {dt:.7e} s given explicitly")
@@ -120,15 +208,17 @@ pub fn choose(
             (dt, tcoll.is_finite().then_some(tcoll), text)
         }
     };
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(EngineError::BadReference(
-            "MFIX's time-step rule needs at least one phase; give an explicit dt".into(),
-        ));
-    }
+    check_step_count(span, dt)?;
     let steps = match rule {
         TimeStepRule::Mfix { .. } => step_count(span, dt),
         TimeStepRule::Fixed(_) => fixed_step_count(span, dt),
     };
+    if steps == 0 {
+        // Below single precision (MFIX's step count): span and dt both tiny.
+        return Err(EngineError::BadReference(format!(
+            "the step count of a run of {span:e} s at dt = {dt:e} s cannot be formed (MFIX counts steps in single precision, which these times are below); check t_stop, t_start and dt"
+        )));
+    }
     Ok(TimeStepChoice { dt, steps, tcoll, explanation })
 }
 
@@ -198,5 +288,87 @@ pub fn stability_limit(
                 reason: format!("Rayleigh time {:.4e} s of {} (limit 0.3·T_R)", best.0, best.1),
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::{ContactLaw, ContactParams, NormalModel};
+
+    fn glass() -> Phase {
+        Phase {
+            name: "glass".into(),
+            diameter: 0.004,
+            density: 2500.0,
+            youngs_modulus: Some(6.0e10),
+            poisson_ratio: Some(0.25),
+        }
+    }
+
+    fn table(law: &ContactLaw, phases: &[Phase], kn: f64) -> CoeffTable {
+        let p = ContactParams { kn: Some(kn), en: 0.9, et: Some(0.9), ..Default::default() };
+        CoeffTable::build(law, phases, &[], &[p], &[]).expect("valid")
+    }
+
+    #[test]
+    fn step_counts_above_the_limit_or_not_formed_are_refused() {
+        // span/dt exactly 1e10 (0.5 and 5e9 are exact in binary) is the limit and allowed.
+        assert!(check_step_count(5e9, 0.5).is_ok());
+        let e = check_step_count(5e9 + 1.0, 0.5).expect_err("one step over").to_string();
+        assert!(e.contains("1.000e10 steps") && e.contains("more than the limit of 1e10"), "{e}");
+        assert!(check_step_count(0.01, 5e-324).expect_err("overflows").to_string().contains("overflows"));
+        let law = ContactLaw::mfix(NormalModel::LinearSpringDashpot);
+        let phases = [glass()];
+        let t = table(&law, &phases, 1000.0);
+        // dt = 1e-300 for 0.01 s used to run for ever; t_stop = 1e300 overflowed to 0 steps.
+        for (rule, span) in
+            [(TimeStepRule::Fixed(1e-300), 0.01), (TimeStepRule::Mfix { factor: 50.0 }, 1e300)]
+        {
+            let e = choose(rule, &law, &phases, &t, span).expect_err("refused").to_string();
+            assert!(e.contains("more than the limit"), "{e}");
+        }
+        // The MFIX rule's single-precision count: k_n = 1e300 gives dt ~ 1e-156 s; a run of
+        // 1e-150 s is some 10^5 steps in double precision, but both times are 0 in single.
+        let stiff = table(&law, &phases, 1e300);
+        let e = choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &stiff, 1e-150)
+            .expect_err("no count")
+            .to_string();
+        assert!(e.contains("single precision"), "{e}");
+        // An ordinary run is unaffected: 0.01 s at MFIX's 1.2867e-5 s is 778 steps (cli.rs).
+        assert_eq!(choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &t, 0.01).unwrap().steps, 778);
+    }
+
+    #[test]
+    fn the_hertz_default_is_a_fifth_of_the_rayleigh_time_and_says_so() {
+        let law = ContactLaw::mfix(NormalModel::Hertz);
+        let phases = [glass()];
+        let t = table(&law, &phases, 1.0);
+        let limit = stability_limit(&law, &phases, &[], &t);
+        let dt = hertz_default_dt(&phases).expect("E and ν given");
+        // 0.2·T_R against the 0.3·T_R limit: exactly two thirds of it (to rounding).
+        assert!((dt / limit.dt_max - 2.0 / 3.0).abs() < 1e-12, "{dt} vs {}", limit.dt_max);
+        let c = choose(TimeStepRule::Fixed(dt), &law, &phases, &t, 0.01).unwrap();
+        assert!(c.explanation.contains("0.2 x the Rayleigh time"), "{}", c.explanation);
+        assert!(c.explanation.contains("MFIX's rule"), "{}", c.explanation);
+        // Any other explicit step is reported as given.
+        let c = choose(TimeStepRule::Fixed(0.5 * dt), &law, &phases, &t, 0.01).unwrap();
+        assert!(c.explanation.contains("given explicitly"), "{}", c.explanation);
+        // No elastic constants: no default.
+        let lsd = Phase { youngs_modulus: None, ..glass() };
+        assert_eq!(hertz_default_dt(&[lsd]), None);
+    }
+
+    #[test]
+    fn an_unusable_collision_time_names_the_pair_not_the_phase_count() {
+        let law = ContactLaw::mfix(NormalModel::LinearSpringDashpot);
+        // k_n at the float maximum: TCOLL underflows far below a usable step.
+        let phases = [glass()];
+        let t = table(&law, &phases, f64::MAX);
+        let e = choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &t, 0.01)
+            .expect_err("refused")
+            .to_string();
+        assert!(!e.contains("at least one phase"), "{e}");
+        assert!(e.contains("steps") || e.contains("'glass'-'glass'"), "{e}");
     }
 }

@@ -569,13 +569,7 @@ pub fn lookup(name: &str) -> Option<&'static Keyword> {
 
 /// The known keyword closest to an unknown one, for "did you mean".
 pub fn closest(name: &str) -> Option<&'static str> {
-    KEYWORDS
-        .iter()
-        .filter(|k| !k.name.ends_with('*'))
-        .map(|k| (strsim::damerau_levenshtein(name, k.name), k.name))
-        .filter(|(d, k)| *d <= 2.max(k.len() / 4))
-        .min()
-        .map(|(_, k)| k)
+    crate::error::closest(name, KEYWORDS.iter().filter(|k| !k.name.ends_with('*')).map(|k| k.name))
 }
 
 #[cfg(test)]

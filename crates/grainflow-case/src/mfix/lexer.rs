@@ -100,8 +100,11 @@ fn syntax(loc: &Loc, msg: impl fmt::Display) -> CaseError {
 
 /// Splits a deck into assignments. `file` names the deck in messages.
 pub fn lex_deck(text: &str, file: &str) -> Result<Lexed, CaseError> {
+    // A byte-order mark (some Windows editors write one) is not part of the first keyword.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut out = Lexed::default();
     let mut in_block = false;
+    let mut total = 0usize;
     for (k, line) in text.lines().enumerate() {
         let loc = Loc::Line { file: file.to_string(), line: k + 1 };
         let trimmed = line.trim();
@@ -130,7 +133,7 @@ pub fn lex_deck(text: &str, file: &str) -> Result<Lexed, CaseError> {
             }
             continue;
         }
-        lex_line(line, &loc, &mut out.assignments, true)?;
+        lex_line(line, &loc, &mut out.assignments, true, &mut total)?;
     }
     Ok(out)
 }
@@ -139,7 +142,7 @@ pub fn lex_deck(text: &str, file: &str) -> Result<Lexed, CaseError> {
 pub fn lex_override(text: &str) -> Result<Assignment, CaseError> {
     let loc = Loc::Arg { text: text.to_string() };
     let mut v = Vec::new();
-    lex_line(text, &loc, &mut v, false)?;
+    lex_line(text, &loc, &mut v, false, &mut 0)?;
     match v.len() {
         1 => Ok(v.remove(0)),
         0 => Err(syntax(&loc, "expected KEYWORD=VALUE, e.g. TSTOP=0.5")),
@@ -149,7 +152,13 @@ pub fn lex_override(text: &str) -> Result<Assignment, CaseError> {
 
 /// Lexes one line into `out`. With `continuation`, a line without a `KEY =` head continues the
 /// previous assignment.
-fn lex_line(line: &str, loc: &Loc, out: &mut Vec<Assignment>, continuation: bool) -> Result<(), CaseError> {
+fn lex_line(
+    line: &str,
+    loc: &Loc,
+    out: &mut Vec<Assignment>,
+    continuation: bool,
+    total: &mut usize,
+) -> Result<(), CaseError> {
     let chars: Vec<char> = line.chars().collect();
     let mut i = 0;
     let mut current: Option<usize> = None;
@@ -192,6 +201,15 @@ fn lex_line(line: &str, loc: &Loc, out: &mut Vec<Assignment>, continuation: bool
                 ));
             }
         };
+        *total += items.len();
+        if *total > MAX_TOTAL_VALUES {
+            return Err(syntax(
+                loc,
+                format!(
+                    "the deck holds more than {MAX_TOTAL_VALUES} values up to this line (counting each `n*value` as n); MFIX's arrays hold at most a few thousand elements: is a repeat count mistyped?"
+                ),
+            ));
+        }
         out[target].values.extend(items);
         i = next;
     }
@@ -269,6 +287,15 @@ fn assignment_head(
 /// count in the hundreds), small enough that a mistyped repeat count or subscript cannot make
 /// the reader allocate without bound.
 const MAX_ELEMENTS: usize = 100_000;
+
+/// The most values a deck may hold in all, each `n*value` counted as n: as many as the largest
+/// array. MFIX's own arrays hold at most a few thousand elements; the cap keeps one line of
+/// repeats (`1000 x 100000*0.7`) from taking gigabytes.
+pub const MAX_TOTAL_VALUES: usize = MAX_ELEMENTS;
+
+/// The deepest nesting of an `@( )` expression (parentheses, signs and `**` exponents): 64.
+/// Real decks nest two or three levels; the evaluator recurses once a level.
+pub const MAX_EXPR_DEPTH: usize = 64;
 
 fn parse_subscript(inside: &str, name: &str, loc: &Loc) -> Result<Vec<Sub>, CaseError> {
     let bad = |what: &str| {
@@ -418,7 +445,7 @@ pub fn fortran_number(s: &str) -> Option<f64> {
 /// Evaluates the inside of `@( … )`: numbers, `+ - * / **` and parentheses. `**` binds
 /// tighter than a leading sign, as in Fortran (`-2**2` is −4), and is right-associative.
 pub fn eval_expr(text: &str) -> Result<f64, String> {
-    let mut p = ExprParser { s: text.as_bytes(), i: 0 };
+    let mut p = ExprParser { s: text.as_bytes(), i: 0, depth: 0 };
     let v = p.expr()?;
     p.blanks();
     if p.i < p.s.len() {
@@ -430,6 +457,8 @@ pub fn eval_expr(text: &str) -> Result<f64, String> {
 struct ExprParser<'a> {
     s: &'a [u8],
     i: usize,
+    /// Nesting depth of `factor` calls (every recursion passes through it).
+    depth: usize,
 }
 
 impl ExprParser<'_> {
@@ -493,6 +522,18 @@ impl ExprParser<'_> {
     }
 
     fn factor(&mut self) -> Result<f64, String> {
+        self.depth += 1;
+        if self.depth > MAX_EXPR_DEPTH {
+            return Err(format!(
+                "the expression nests deeper than {MAX_EXPR_DEPTH} levels (parentheses, signs or ** exponents)"
+            ));
+        }
+        let v = self.factor_inner();
+        self.depth -= 1;
+        v
+    }
+
+    fn factor_inner(&mut self) -> Result<f64, String> {
         let base = self.primary()?;
         if self.peek() == Some(b'*') && self.s.get(self.i + 1) == Some(&b'*') {
             self.i += 2;
@@ -597,6 +638,22 @@ mod tests {
     }
 
     #[test]
+    fn total_expansion_and_byte_order_mark() {
+        // 100 items of 1000 repeats are the cap exactly; one more value is refused, naming
+        // the line where the total passes it.
+        let at_cap = format!("KN = 1\nA = {}\n", vec!["1000*0.7"; 100].join(" "));
+        let e = lex_deck(&at_cap, "t.dat").expect_err("one over").to_string();
+        assert!(e.starts_with("t.dat, line 2: the deck holds more than 100000 values"), "{e}");
+        let l = lex_deck(&at_cap.replace("KN = 1\n", ""), "t.dat").expect("at the cap");
+        assert_eq!(l.assignments[0].values.len(), MAX_TOTAL_VALUES);
+        // The line: 1000 items of 100000 repeats, refused at once.
+        let huge = format!("A = {}\n", vec!["100000*0.7"; 1000].join(" "));
+        assert!(lex_deck(&huge, "t.dat").is_err());
+        let l = lex_deck("\u{feff}RUN_NAME = 'x'\n", "t.dat").expect("a BOM is skipped");
+        assert_eq!(l.assignments[0].key, "RUN_NAME");
+    }
+
+    #[test]
     fn arithmetic() {
         assert_eq!(eval_expr("1 + 2 * 3"), Ok(7.0));
         assert_eq!(eval_expr("(1 + 2) * 3"), Ok(9.0));
@@ -609,6 +666,19 @@ mod tests {
         assert!(eval_expr("1 +").is_err());
         assert!(eval_expr("(1").is_err());
         assert!(eval_expr("pi").is_err());
+        // 64 levels evaluate; 65 are refused with the reason, whichever way they nest.
+        let nest = |n: usize| format!("{}1{}", "(".repeat(n), ")".repeat(n));
+        assert_eq!(eval_expr(&nest(MAX_EXPR_DEPTH - 1)), Ok(1.0));
+        for deep in [
+            nest(MAX_EXPR_DEPTH),
+            "-".repeat(MAX_EXPR_DEPTH + 1) + "1",
+            vec!["2"; MAX_EXPR_DEPTH + 1].join("**"),
+        ] {
+            let e = eval_expr(&deep).expect_err("too deep");
+            assert!(e.contains("nests deeper than 64 levels"), "{e}");
+        }
+        // 30 000 levels (which overflowed the stack) are refused the same way.
+        assert!(eval_expr(&nest(30_000)).expect_err("too deep").contains("nests deeper"));
     }
 
     #[test]

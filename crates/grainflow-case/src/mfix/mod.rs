@@ -56,6 +56,7 @@ pub mod lexer;
 
 use crate::case::{Case, DEFAULT_MAX_INITIAL_OVERLAP};
 use crate::error::CaseError;
+use crate::input;
 use crate::particles;
 use crate::raw::*;
 use deck::{Deck, Got, show};
@@ -93,22 +94,21 @@ pub fn is_deck(path: &Path) -> bool {
 /// Reads, translates and validates a deck; `particle_input.dat` is read beside it. `overrides`
 /// are `KEY=VALUE` strings applied after the deck; `motion` is a TOML file of `[[motion]]`
 /// tables replacing user-defined functions that prescribe particle motion.
+///
+/// Every file is read through [`crate::input`]: regular files only, within its size limits,
+/// the particle file streamed.
 pub fn load(path: &Path, overrides: &[String], motion: Option<&Path>) -> Result<DeckCase, CaseError> {
-    let read = |p: &Path| {
-        std::fs::read_to_string(p).map_err(|source| CaseError::Read { path: p.to_path_buf(), source })
-    };
-    let text = read(path)?;
-    let motion_text = motion.map(|m| read(m).map(|t| (t, m.display().to_string()))).transpose()?;
+    let text = input::read_text(path, input::Kind::Deck)?;
+    let motion_text = motion
+        .map(|m| input::read_text(m, input::Kind::Motion).map(|t| (t, m.display().to_string())))
+        .transpose()?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    parse(
+    parse_opened(
         &text,
         &path.display().to_string(),
         overrides,
         motion_text.as_ref().map(|(t, o)| (t.as_str(), o.as_str())),
-        &|name: &str| {
-            let p = dir.join(name);
-            std::fs::read_to_string(&p).map_err(|source| CaseError::Read { path: p, source })
-        },
+        &input::open_beside(&dir),
     )
 }
 
@@ -121,6 +121,17 @@ pub fn parse(
     motion: Option<(&str, &str)>,
     read_file: &dyn Fn(&str) -> Result<String, CaseError>,
 ) -> Result<DeckCase, CaseError> {
+    parse_opened(text, origin, overrides, motion, &input::open_text(read_file))
+}
+
+/// [`parse`] with the particle file opened as a stream.
+fn parse_opened(
+    text: &str,
+    origin: &str,
+    overrides: &[String],
+    motion: Option<(&str, &str)>,
+    read_file: &input::Opener<'_>,
+) -> Result<DeckCase, CaseError> {
     let mut lexed = lexer::lex_deck(text, origin)?;
     let mut deck = Deck::default();
     for a in std::mem::take(&mut lexed.assignments) {
@@ -130,7 +141,7 @@ pub fn parse(
         deck.assign(lexer::lex_override(o)?)?;
     }
     deck.check_types()?;
-    let rules = motion.map(|(t, o)| parse_motion(t, o)).transpose()?;
+    let rules = motion.map(|(t, o)| parse_motion(input::strip_bom(t), o)).transpose()?;
     let mut tr = Translator { deck: &deck, lexed: &lexed, origin, cgs: false, notes: Vec::new() };
     let (raw, extra_source) = tr.translate(rules, read_file)?;
     let notes = tr.notes;
@@ -145,7 +156,8 @@ pub fn parse(
         source.push_str(t);
     }
     source.push_str(&extra_source);
-    let mut case = crate::case::from_raw(raw.clone(), &source, read_file).map_err(|e| explain(e, origin))?;
+    let mut case =
+        crate::case::from_raw_opened(raw.clone(), &source, read_file).map_err(|e| explain(e, origin))?;
     let mut warnings = notes.clone();
     warnings.append(&mut case.warnings);
     case.warnings = warnings;
@@ -306,7 +318,7 @@ impl Translator<'_> {
     fn translate(
         &mut self,
         motion: Option<Vec<RawMotion>>,
-        read_file: &dyn Fn(&str) -> Result<String, CaseError>,
+        read_file: &input::Opener<'_>,
     ) -> Result<(RawCase, String), CaseError> {
         let d = self.deck;
         // Units first: every dimensional value depends on them.
@@ -1124,7 +1136,7 @@ impl Translator<'_> {
         phases: &[Phase],
         lo: Vec3,
         hi: Vec3,
-        read_file: &dyn Fn(&str) -> Result<String, CaseError>,
+        read_file: &input::Opener<'_>,
     ) -> Result<(RawParticles, String), CaseError> {
         let count = self.deck.int("PARTICLES", &[])?;
         if let Some(g) = &count
@@ -1137,69 +1149,100 @@ impl Translator<'_> {
                 "must be at least 1: a run without initial particles needs a mass inflow, which grainflow does not have",
             ));
         }
-        let text = read_file(PARTICLE_FILE)?;
-        let first = text.lines().next().unwrap_or("").trim();
-        if first.starts_with("Version") {
-            return Err(CaseError::ParticleFile {
-                path: PARTICLE_FILE.into(),
-                line: 1,
-                message: format!(
-                    "'{first}': the header format of MFIX 20.1+ (version 2.0) is not read yet; write the legacy format, one particle per line: x y z radius density u v w"
-                ),
-            });
-        }
-        let data: Vec<(usize, &str)> = text
-            .lines()
-            .enumerate()
-            .map(|(k, l)| (k + 1, l.trim()))
-            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#') && !l.starts_with('!'))
-            .collect();
         let want = count.as_ref().map_or(default_int("PARTICLES"), |g| g.v) as usize;
-        if data.len() != want {
+        // One streamed pass: the data lines are counted (MFIX reads exactly PARTICLES of
+        // them, so the pass stops soon after a file that has more), and kept as numbers for
+        // the overlap check (SI) or the inline list (CGS). The bytes are kept for the case
+        // hash only for CGS, whose particles the case lists inline.
+        let kept = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+        let reader = read_file(PARTICLE_FILE)?;
+        let reader: Box<dyn std::io::BufRead> = if self.cgs {
+            Box::new(std::io::BufReader::new(Tee { inner: reader, out: kept.clone() }))
+        } else {
+            reader
+        };
+        let mut stream = input::Stream::new(reader, PARTICLE_FILE);
+        let mut data: Vec<(usize, [f64; 8])> = Vec::new();
+        let mut first_error: Option<CaseError> = None;
+        let mut n_data = 0usize;
+        // Lines counted past PARTICLES for the message, at most this many.
+        const COUNT_PAST: usize = 1_000_000;
+        let mut complete = true;
+        while let Some((line, l)) = stream.next_line()? {
+            if line == 1 && l.trim().starts_with("Version") {
+                return Err(CaseError::ParticleFile {
+                    path: PARTICLE_FILE.into(),
+                    line: 1,
+                    message: format!(
+                        "'{}': the header format of MFIX 20.1+ (version 2.0) is not read yet; write the legacy format, one particle per line: x y z radius density u v w",
+                        l.trim()
+                    ),
+                });
+            }
+            let Some(fields) = particles::mfix_fields(l) else { continue };
+            n_data += 1;
+            if n_data > want {
+                if n_data > want + COUNT_PAST {
+                    complete = false;
+                    break;
+                }
+                continue;
+            }
+            if first_error.is_some() {
+                continue;
+            }
+            let numbers = if self.cgs { cgs_numbers(&fields) } else { particles::mfix_numbers(&fields) };
+            match numbers {
+                Ok(v) => data.push((line, v)),
+                Err(message) => {
+                    first_error = Some(CaseError::ParticleFile { path: PARTICLE_FILE.into(), line, message })
+                }
+            }
+        }
+        drop(stream);
+        if n_data != want {
             let (loc, text) =
                 count.as_ref().map_or((self.origin.to_string(), format!("{want} (MFIX's default)")), |g| {
                     (g.loc.to_string(), g.text.clone())
                 });
+            let listed = if complete { n_data.to_string() } else { format!("more than {n_data}") };
             return Err(CaseError::invalid(
                 loc,
                 "PARTICLES",
                 text,
-                format!(
-                    "{PARTICLE_FILE} lists {} particle{} and MFIX reads exactly PARTICLES of them: set PARTICLES = {}",
-                    data.len(),
-                    if data.len() == 1 { "" } else { "s" },
-                    data.len()
-                ),
+                if complete {
+                    format!(
+                        "{PARTICLE_FILE} lists {listed} particle{} and MFIX reads exactly PARTICLES of them: set PARTICLES = {n_data}",
+                        if n_data == 1 { "" } else { "s" },
+                    )
+                } else {
+                    format!(
+                        "{PARTICLE_FILE} lists {listed} particles and MFIX reads exactly PARTICLES of them"
+                    )
+                },
             ));
+        }
+        if let Some(e) = first_error {
+            return Err(e);
         }
         let mut raw = RawParticles {
             file: None,
             format: None,
             max_initial_overlap: None,
+            max_overlap: None,
             order: None,
             list: Vec::new(),
         };
         let mut extra_source = String::new();
         let init = if self.cgs {
             let mut init = Vec::new();
-            for (line, l) in &data {
+            for (line, v) in &data {
                 let err = |message: String| CaseError::ParticleFile {
                     path: PARTICLE_FILE.into(),
                     line: *line,
                     message,
                 };
-                let fields: Vec<&str> = l.split_whitespace().collect();
-                if fields.len() != 8 {
-                    return Err(err(format!(
-                        "expected 8 numbers (x y z radius density u v w, CGS), found {}",
-                        fields.len()
-                    )));
-                }
-                let mut v = [0.0; 8];
-                for (slot, f) in v.iter_mut().zip(&fields) {
-                    *slot = lexer::fortran_number(f).ok_or_else(|| err(format!("'{f}' is not a number")))?;
-                }
-                let [x, y, z, r, rho, u, vv, w] = v;
+                let [x, y, z, r, rho, u, vv, w] = *v;
                 let (x, y, z, r) = (x / 100.0, y / 100.0, z / 100.0, r / 100.0);
                 let rho = Unit::Density.cgs_to_si(rho);
                 let vel = [u, vv, w].map(|c| Unit::Velocity.cgs_to_si(c));
@@ -1237,14 +1280,12 @@ impl Translator<'_> {
                     if diameter != phases[phase].diameter { r } else { phases[phase].radius() },
                 ));
             }
+            let text = String::from_utf8_lossy(&kept.borrow()).into_owned();
             extra_source = format!("\0file\0{PARTICLE_FILE}\0{text}");
             init
         } else {
             raw.file = Some(PARTICLE_FILE.into());
-            particles::read_mfix(&text, PARTICLE_FILE, phases)?
-                .iter()
-                .map(|p| (p.position, p.radius))
-                .collect()
+            data.iter().map(|(_, v)| (Vec3::new(v[0], v[1], v[2]), v[3])).collect()
         };
         // MFIX does not check initial overlaps; grainflow's cases refuse more than
         // DEFAULT_MAX_INITIAL_OVERLAP unless told. Say what this deck needs.
@@ -1377,4 +1418,30 @@ fn largest_overlap(p: &[(Vec3, f64)], lo: Vec3, hi: Vec3) -> Option<(f64, String
         }
     }
     best
+}
+
+/// The eight numbers of a CGS `particle_input.dat` line, as written (cm, g/cm³, cm/s).
+fn cgs_numbers(fields: &[&str]) -> Result<[f64; 8], String> {
+    if fields.len() != 8 {
+        return Err(format!("expected 8 numbers (x y z radius density u v w, CGS), found {}", fields.len()));
+    }
+    let mut v = [0.0; 8];
+    for (slot, f) in v.iter_mut().zip(fields) {
+        *slot = lexer::fortran_number(f).ok_or_else(|| format!("'{f}' is not a number"))?;
+    }
+    Ok(v)
+}
+
+/// A reader that keeps a copy of the bytes it passes.
+struct Tee {
+    inner: Box<dyn std::io::BufRead>,
+    out: std::rc::Rc<std::cell::RefCell<Vec<u8>>>,
+}
+
+impl std::io::Read for Tee {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.out.borrow_mut().extend_from_slice(&buf[..n]);
+        Ok(n)
+    }
 }

@@ -138,6 +138,37 @@ pub fn upper_triangle_index(m: usize, l: usize, n: usize) -> usize {
     a * n - a * (a + 1) / 2 + b
 }
 
+/// The most solids phases a case may define: 100 (MFIX allows 10). The coefficient table
+/// holds every phase pair, so its size grows as the square of the count.
+pub const MAX_PHASES: usize = 100;
+
+/// The most wall materials a case may define: 100.
+pub const MAX_WALL_MATERIALS: usize = 100;
+
+/// Every derived coefficient must be a finite number and the effective mass positive:
+/// finite inputs can overflow (a density of 1e308) or underflow (a diameter of 1e-300).
+fn usable(what: &str, c: ContactCoeffs) -> Result<ContactCoeffs, EngineError> {
+    // The mass first: when it underflows the damping is NaN too, and the mass says why.
+    if !(c.m_eff.is_finite() && c.m_eff >= f64::MIN_POSITIVE) {
+        return Err(EngineError::BadReference(format!(
+            "{what}: the effective mass is {:e} kg: the diameter or density is beyond what double precision can hold (are they in SI units: m, kg/m³?)",
+            c.m_eff
+        )));
+    }
+    let fields = [
+        ("stiffness K_n", c.kn),
+        ("tangential stiffness", c.kt),
+        ("normal damping", c.eta_n),
+        ("tangential damping", c.eta_t),
+    ];
+    if let Some((name, v)) = fields.iter().find(|(_, v)| !v.is_finite()) {
+        return Err(EngineError::BadReference(format!(
+            "{what}: the derived {name} is {v}: the diameter, density or stiffness is beyond what double precision can hold (are they in SI units: m, kg/m³, N/m, Pa?)"
+        )));
+    }
+    Ok(c)
+}
+
 impl CoeffTable {
     /// Derives the coefficients.
     ///
@@ -152,6 +183,16 @@ impl CoeffTable {
     ) -> Result<Self, EngineError> {
         let n = phases.len();
         let nw = wall_materials.len();
+        if n > MAX_PHASES {
+            return Err(EngineError::BadReference(format!(
+                "{n} phases; at most {MAX_PHASES} are allowed (MFIX allows 10)"
+            )));
+        }
+        if nw > MAX_WALL_MATERIALS {
+            return Err(EngineError::BadReference(format!(
+                "{nw} wall materials; at most {MAX_WALL_MATERIALS} are allowed"
+            )));
+        }
         if pair_params.len() != n * (n + 1) / 2 {
             return Err(EngineError::BadReference(format!(
                 "{} phase-pair parameter sets given for {n} phases; {} are needed",
@@ -192,7 +233,7 @@ impl CoeffTable {
                         Some(HertzInputs { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: ra * rb / (ra + rb) })
                     }
                 };
-                let c = derive(law, &what, p, m_eff, elastic)?;
+                let c = usable(&what, derive(law, &what, p, m_eff, elastic)?)?;
                 pairs[m * n + l] = c;
                 pairs[l * n + m] = c;
             }
@@ -217,7 +258,7 @@ impl CoeffTable {
                         Some(HertzInputs { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: phases[m].radius() })
                     }
                 };
-                walls[m * nw + w] = derive(law, &what, p, phases[m].mass(), elastic)?;
+                walls[m * nw + w] = usable(&what, derive(law, &what, p, phases[m].mass(), elastic)?)?;
             }
         }
         let uniform_pair = pairs.first().filter(|c0| pairs.iter().all(|c| c == *c0)).copied();
@@ -353,5 +394,48 @@ fn derive(
             what: format!("{what} elastic constants"),
             model: "hertz".into(),
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn phase(name: String, diameter: f64, density: f64) -> Phase {
+        Phase { name, diameter, density, youngs_modulus: None, poisson_ratio: None }
+    }
+
+    #[test]
+    fn too_many_phases_or_wall_materials_are_refused_before_the_table() {
+        let law = ContactLaw::mfix(NormalModel::LinearSpringDashpot);
+        let p = ContactParams { kn: Some(1000.0), ..Default::default() };
+        let phases: Vec<Phase> = (0..=MAX_PHASES).map(|k| phase(format!("p{k}"), 0.004, 2500.0)).collect();
+        // 101 phases: refused although the parameter list is also wrong (the count comes first).
+        let e = CoeffTable::build(&law, &phases, &[], &[p], &[]).expect_err("101 phases").to_string();
+        assert!(e.contains("101 phases; at most 100"), "{e}");
+        let n = MAX_PHASES;
+        let ok = CoeffTable::build(&law, &phases[..n], &[], &vec![p; n * (n + 1) / 2], &[]);
+        assert!(ok.is_ok(), "100 phases are allowed");
+        let walls: Vec<WallMaterial> = (0..=MAX_WALL_MATERIALS)
+            .map(|k| WallMaterial { name: format!("w{k}"), youngs_modulus: None, poisson_ratio: None })
+            .collect();
+        let e = CoeffTable::build(&law, &phases[..1], &walls, &[p], &[]).expect_err("101 walls").to_string();
+        assert!(e.contains("101 wall materials"), "{e}");
+    }
+
+    #[test]
+    fn coefficients_that_overflow_from_finite_inputs_are_refused() {
+        let law = ContactLaw::mfix(NormalModel::LinearSpringDashpot);
+        let p = ContactParams { kn: Some(1000.0), en: 0.9, ..Default::default() };
+        // ρ = 1e308: the mass (3e300 kg) is finite, √(k·m) is not the problem, but
+        // k·m overflows for k_n = 1e10 and so does the damping.
+        let big = [phase("heavy".into(), 0.004, 1e308)];
+        let pk = ContactParams { kn: Some(1e10), ..p };
+        let e = CoeffTable::build(&law, &big, &[], &[pk], &[]).expect_err("overflow").to_string();
+        assert!(e.contains("contact 'heavy'-'heavy'") && e.contains("double precision"), "{e}");
+        // d = 1e-300: the mass underflows to 0 and the effective mass with it.
+        let tiny = [phase("dust".into(), 1e-300, 2500.0)];
+        let e = CoeffTable::build(&law, &tiny, &[], &[p], &[]).expect_err("underflow").to_string();
+        assert!(e.contains("effective mass"), "{e}");
     }
 }

@@ -1,0 +1,227 @@
+//! The case layer's limits and honest answers: overlap limits, phase counts, repeated keys,
+//! particle files that are inconsistent, the step count, and the default time step of Hertz
+//! cases. (The command-line side, under a memory cap, is crates/grainflow-cli/tests/hostile.rs.)
+
+use grainflow::TimeStepRule;
+use grainflow_case::{CaseError, parse};
+
+const BASE: &str = r#"
+version = 1
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.1, 0.1, 0.1]
+[[phases]]
+name = "glass"
+diameter = 0.004
+density = 2500.0
+youngs_modulus = 6.0e10
+poisson_ratio = 0.25
+[[wall_materials]]
+name = "steel"
+youngs_modulus = 2.0e11
+poisson_ratio = 0.3
+[contact]
+model = "lsd"
+[contact.particle]
+kn = 1000.0
+en = 0.9
+mu = 0.3
+[contact.wall]
+kn = 1000.0
+en = 0.9
+mu = 0.3
+[time]
+t_stop = 0.01
+[[particles.list]]
+phase = "glass"
+position = [0.05, 0.05, 0.05]
+"#;
+
+const INLINE: &str = "[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]\n";
+
+fn files(name: &str) -> Result<String, CaseError> {
+    let data = "LAMMPS data\n\n2 atoms\n1 atom types\n\n0 0.1 xlo xhi\n0 0.1 ylo yhi\n0 0.1 zlo zhi\n\nAtoms # sphere\n\n1 1 0.004 2500 0.05 0.05 0.05\n2 1 0.004 2500 0.05 0.02 0.05\n";
+    match name {
+        "dup.csv" => Ok("x,y,z,phase,Y\n0.05,0.05,0.05,glass,0.02\n".into()),
+        "empty.csv" => Ok("x,y,z,phase\n# only a comment\n".into()),
+        "bom.csv" => Ok("\u{feff}x,y,z,phase\n0.05,0.05,0.05,glass\n".into()),
+        "box.data" => Ok(data.into()),
+        "tall.data" => Ok(data.replace("0 0.1 zlo zhi", "-0.1 0.1 zlo zhi")),
+        "vel.data" => Ok(format!("{data}\nVelocities\n\n1 0 0 0 0 0 0\n2 0 0 0 0 0 0\n2 1 0 0 0 0 0\n")),
+        "same.dat" => Ok("0.05 0.05 0.05 0.002 2500 0 0 0\n0.05 0.05 0.05 0.002 2500 0 0 0\n".into()),
+        other => {
+            Err(CaseError::Read { path: other.into(), source: std::io::Error::other("not in this test") })
+        }
+    }
+}
+
+fn parse_text(text: &str) -> Result<grainflow_case::Case, CaseError> {
+    parse(text, "case.toml", &files)
+}
+
+fn edit(from: &str, to: &str) -> String {
+    assert!(BASE.contains(from), "test bug: '{from}' not in the base case");
+    BASE.replacen(from, to, 1)
+}
+
+fn refused(text: &str, want: &[&str]) {
+    let e = parse_text(text).expect_err("must be refused").to_string();
+    for w in want {
+        assert!(e.contains(w), "message lacks '{w}': {e}");
+    }
+}
+
+fn with_particles(table: &str) -> String {
+    edit(INLINE, &format!("[particles]\n{table}\n"))
+}
+
+#[test]
+fn max_overlap_is_exposed_validated_and_bounds_the_initial_limit() {
+    assert_eq!(parse_text(BASE).expect("valid").max_overlap, 0.5, "the default: half the smaller radius");
+    let c = parse_text(&edit(INLINE, &format!("[particles]\nmax_overlap = 0.2\n{INLINE}"))).expect("valid");
+    assert_eq!(c.max_overlap, 0.2);
+    for bad in ["0.0", "-0.1", "1.5", "nan"] {
+        refused(
+            &edit(INLINE, &format!("[particles]\nmax_overlap = {bad}\n{INLINE}")),
+            &["max_overlap", "(0, 1]"],
+        );
+    }
+    refused(
+        &edit(INLINE, &format!("[particles]\nmax_initial_overlap = 0.3\nmax_overlap = 0.2\n{INLINE}")),
+        &["max_initial_overlap", "0.3", "must not exceed max_overlap = 0.2"],
+    );
+    // The initial limit defaults to the smaller of 0.05 and max_overlap: a 3 % wall overlap
+    // (centre 0.00194 m from the floor, radius 0.002 m) passes under 0.05, not under 0.01.
+    let near_floor = |table: &str| {
+        edit(
+            INLINE,
+            &format!("[particles]\n{table}\n{}", INLINE.replace("0.05, 0.05, 0.05", "0.05, 0.00194, 0.05")),
+        )
+    };
+    parse_text(&near_floor("")).expect("3 % is under the 5 % default");
+    refused(&near_floor("max_overlap = 0.01"), &["max_initial_overlap = 0.01"]);
+}
+
+#[test]
+fn repeated_and_contradictory_keys_are_refused() {
+    refused(
+        &edit(
+            "max = [0.1, 0.1, 0.1]",
+            "max = [0.1, 0.1, 0.1]\nperiodic = [\"x\", \"z\", \"x\"]\nwalls = false",
+        ),
+        &["[domain]", "periodic", "\"x\" is listed twice"],
+    );
+    refused(
+        &with_particles("file = \"dup.csv\""),
+        &["dup.csv, line 1", "the column 'y' appears twice (columns 2 and 5)"],
+    );
+    refused(&with_particles("file = \"empty.csv\""), &["empty.csv", "a header row but no particles"]);
+    refused(
+        &with_particles("file = \"vel.data\""),
+        &["vel.data, line 19", "velocity of atom 2 is given twice"],
+    );
+    refused(
+        &with_particles("file = \"same.dat\""),
+        &["particle 1 at", "and particle 2 have the same centre"],
+    );
+}
+
+#[test]
+fn a_lammps_box_other_than_the_domain_is_a_warning() {
+    let c = parse_text(&with_particles("file = \"box.data\"")).expect("valid");
+    assert!(c.warnings.is_empty(), "the box is the domain: {:?}", c.warnings);
+    let c = parse_text(&with_particles("file = \"tall.data\"")).expect("valid");
+    assert_eq!(c.warnings.len(), 1, "{:?}", c.warnings);
+    assert!(c.warnings[0].contains("[0.0, 0.0, -0.1]") && c.warnings[0].contains("grainflow uses [domain]"));
+    parse_text(&with_particles("file = \"bom.csv\"")).expect("a byte-order mark is skipped");
+}
+
+#[test]
+fn phase_and_wall_material_counts_are_limited_before_any_table() {
+    let phases = |n: usize| -> String {
+        (0..n).map(|k| format!("[[phases]]\nname = \"p{k}\"\ndiameter = 0.004\ndensity = 2500.0\n")).collect()
+    };
+    // 100 phases (the limit) are read; 101 are refused naming the limit.
+    let at = |n: usize| {
+        edit("[[phases]]\nname = \"glass\"", &format!("{}[[phases]]\nname = \"glass\"", phases(n - 1)))
+    };
+    assert_eq!(parse_text(&at(100)).expect("100 phases").config.phases.len(), 100);
+    refused(&at(101), &["[[phases]]", "(101 tables)", "at most 100 phases"]);
+    let walls: String = (0..101).map(|k| format!("[[wall_materials]]\nname = \"w{k}\"\n")).collect();
+    refused(&edit("[contact]\n", &format!("{walls}[contact]\n")), &["at most 100 wall materials"]);
+}
+
+#[test]
+fn absurd_step_counts_and_derived_overflows_are_refused() {
+    // 0.01 s at the MFIX rule's 1.29e-5 s is 778 steps; each edit below makes it absurd.
+    for (from, to) in [
+        ("t_stop = 0.01", "t_stop = 1e300"),
+        ("t_stop = 0.01", "t_stop = 0.01\ndt = 1e-300"),
+        ("kn = 1000.0\nen = 0.9\nmu = 0.3\n[contact.wall]", "kn = 1e300\nen = 0.9\nmu = 0.3\n[contact.wall]"),
+    ] {
+        refused(&edit(from, to), &["more than the limit of 1e10 steps"]);
+    }
+    refused(&edit("t_stop = 0.01", "t_stop = 0.01\ndt = 5e-324"), &["overflows"]);
+    // 2^33 = 8.6e9 steps (dt = 2^-33 s for 1 s) are below the limit; 1.01e10 are not.
+    parse_text(&edit("t_stop = 0.01", "t_stop = 1.0\ndt = 1.1641532182693481e-10"))
+        .expect("8.6e9 steps are allowed");
+    refused(&edit("t_stop = 0.01", "t_stop = 1.0\ndt = 9.9e-11"), &["1.010e10 steps"]);
+    refused(&edit("density = 2500.0", "density = 1e308"), &["double precision"]);
+    refused(&edit("diameter = 0.004", "diameter = 1e-300"), &["`diameter`", "particle mass"]);
+}
+
+#[test]
+fn the_mfix_name_of_a_key_is_suggested() {
+    refused(&edit("mu = 0.3\n[contact.wall]", "mew = 0.3\n[contact.wall]"), &["did you mean `mu`?"]);
+    refused(&edit("density = 2500.0", "ro_s0 = 2500.0"), &["did you mean `density`?"]);
+    refused(
+        &edit("kn = 1000.0\nen = 0.9\nmu", "kn = 1000.0\nen = 0.9\nmu_rol = 0.0\nmu"),
+        &["did you mean `mu_roll`?"],
+    );
+}
+
+#[test]
+fn hertz_cases_without_dt_default_to_a_fifth_of_the_rayleigh_time() {
+    let hertz = BASE.replace("model = \"lsd\"", "model = \"hertz\"").replace("kn = 1000.0\n", "et = 0.9\n");
+    let c = parse_text(&hertz).expect("valid");
+    // T_R = πR√(ρ/G)/(0.1631ν + 0.8766), R = 0.002 m, ρ = 2500 kg/m³, G = E/(2(1+ν)) = 2.4e10 Pa,
+    // ν = 0.25: 2.2143e-6 s; the default is 0.2·T_R.
+    let tr = std::f64::consts::PI * 0.002 * (2500.0f64 / 2.4e10).sqrt() / (0.1631 * 0.25 + 0.8766);
+    let TimeStepRule::Fixed(dt) = c.config.time_step else { panic!("{:?}", c.config.time_step) };
+    assert!((dt / (0.2 * tr) - 1.0).abs() < 1e-12, "dt = {dt}, T_R = {tr}");
+    let sim = grainflow::Simulation::new(c.config.clone(), c.particles.clone()).expect("runs");
+    let why = &sim.time_step().explanation;
+    assert!(why.contains("Rayleigh time") && why.contains("the default for Hertz contacts"), "{why}");
+    // MFIX's rule (K_n taken as linear) stays available by name, and gives a far smaller step:
+    // here TCOLL/50 = 1.2e-8 s, about 37 times below the default.
+    let mfix =
+        parse_text(&hertz.replace("t_stop = 0.01", "t_stop = 0.01\ndtsolid_factor = 50")).expect("valid");
+    assert_eq!(mfix.config.time_step, TimeStepRule::Mfix { factor: 50.0 });
+    let mfix_dt = grainflow::Simulation::new(mfix.config, mfix.particles).expect("runs").dt();
+    assert!(dt / mfix_dt > 20.0, "default {dt} vs MFIX's {mfix_dt}");
+    // A linear case without dt keeps MFIX's rule.
+    assert_eq!(parse_text(BASE).expect("valid").config.time_step, TimeStepRule::Mfix { factor: 50.0 });
+}
+
+#[test]
+fn the_engine_refuses_coincident_centres_and_motion_cycles_itself() {
+    let c = parse_text(&edit(
+        INLINE,
+        &format!("{INLINE}{}", INLINE.replace("0.05, 0.05, 0.05", "0.05, 0.02, 0.05")),
+    ))
+    .expect("valid");
+    let mut p = c.particles.clone();
+    p.position[1] = p.position[0];
+    let Err(e) = grainflow::Simulation::new(c.config.clone(), p) else { panic!("accepted") };
+    let e = e.to_string();
+    assert!(e.contains("particles 1 and 2 have the same centre"), "{e}");
+    let mut cfg = c.config.clone();
+    let follow = |leader| grainflow::MotionRule::Follow { leader, axes: [true, false, false] };
+    cfg.motion = vec![
+        grainflow::PrescribedMotion { particle: 1, rule: follow(2) },
+        grainflow::PrescribedMotion { particle: 2, rule: follow(1) },
+    ];
+    let Err(e) = grainflow::Simulation::new(cfg, c.particles) else { panic!("accepted") };
+    let e = e.to_string();
+    assert!(e.contains("cycle (1 follows 2 follows 1)"), "{e}");
+}
