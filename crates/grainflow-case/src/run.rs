@@ -8,8 +8,8 @@
 //!   `out/checkpoint.gfc` (the previous one survives a crash mid-write), from which
 //!   [`RunOptions::restart`] continues bit for bit;
 //! - **health checks** every [`HEALTH_EVERY`] steps and at every output: a non-finite value, a
-//!   particle outside the domain box or an overlap above [`HEALTH_MAX_OVERLAP`] of the radius
-//!   stops the run with a message naming the particle, the step, the likely cause and a fix,
+//!   particle outside the domain box or an overlap above `[particles] max_overlap` of the
+//!   smaller radius stops the run with a message naming the particle, the step, the likely cause and a fix,
 //!   after writing the last good state (kept at every output and every 10·`HEALTH_EVERY`
 //!   steps) to `out/checkpoint-last-good.gfc`;
 //! - **interruption**: when the `stop` flag is raised (SIGINT/SIGTERM in the program) the step
@@ -29,8 +29,6 @@ use std::time::{Duration, Instant};
 pub const HEALTH_EVERY: u64 = 100;
 /// Most steps taken between two checks for a stop request.
 const MAX_STEPS_UNSEEN: u64 = 20;
-/// Largest overlap, as a fraction of the smaller radius, before a run is stopped as unhealthy.
-pub const HEALTH_MAX_OVERLAP: f64 = 0.5;
 /// File name of the running checkpoint in the output folder.
 pub const CHECKPOINT_FILE: &str = "checkpoint.gfc";
 /// File name of the last good state written when a run fails its health check.
@@ -192,7 +190,7 @@ pub fn run_case(
     mut on_progress: impl FnMut(&Simulation) + Send,
 ) -> Result<RunSummary, RunError> {
     let (output, domain, hash) = (case.output, case.domain, case.hash.clone());
-    let max_overlap = HEALTH_MAX_OVERLAP;
+    let max_overlap = case.max_overlap;
     let mut sim = match &options.restart {
         None => Simulation::new(case.config, case.particles)?,
         Some(path) => {

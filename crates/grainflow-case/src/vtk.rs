@@ -310,7 +310,13 @@ impl VtkSeries {
     pub fn resume(dir: &Path, walls: &[Wall], lo: Vec3, hi: Vec3, step: u64) -> io::Result<Self> {
         let mut series = Self::create(dir, walls, lo, hi)?;
         let keep = |collection: &str| -> Vec<(f64, String)> {
-            let Ok(text) = std::fs::read_to_string(dir.join(collection)) else { return Vec::new() };
+            // Our own file, at most a line per frame; anything else (not a regular file, or
+            // larger than any collection of a million frames) is not continued.
+            let path = dir.join(collection);
+            let ours = std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file() && m.len() < 1 << 28);
+            let Some(text) = ours.then(|| std::fs::read_to_string(&path).ok()).flatten() else {
+                return Vec::new();
+            };
             text.lines()
                 .filter_map(|l| {
                     let attr = |name: &str| {
