@@ -81,7 +81,7 @@ fn edit(base: &str, from: &str, to: &str) -> String {
 }
 
 const RUN_CASE: &[&str] = &["run", "case.toml", "--out", "out", "-j", "1"];
-const RUN_DECK: &[&str] = &["run", "mfix.dat", "--out", "out", "-j", "1"];
+const RUN_DECK: &[&str] = &["run", "mfix.dat", "--out", "out-deck", "-j", "1"];
 const INLINE: &str = "[[particles.list]]\nphase = \"glass\"\nposition = [0.05, 0.05, 0.05]\n";
 
 /// The base case with one edit.
@@ -559,8 +559,8 @@ fn cases() -> Vec<Hostile> {
         ),
         motion("motion: no rules", "m.toml", Some(text("# nothing\n")), "[[motion]]"),
         // ---- checkpoints (--restart)
-        restart("checkpoint: /dev/zero", "/dev/zero", None, "not a grainflow checkpoint"),
-        restart("checkpoint: /dev/urandom", "/dev/urandom", None, "not a grainflow checkpoint"),
+        restart("checkpoint: /dev/zero", "/dev/zero", None, "not a regular file"),
+        restart("checkpoint: /dev/urandom", "/dev/urandom", None, "not a regular file"),
         restart("checkpoint: a directory", "c.gfc", Some(Content::Dir), "cannot restart from c.gfc"),
         restart("checkpoint: empty", "c.gfc", Some(text("")), "not a grainflow checkpoint"),
         restart(
