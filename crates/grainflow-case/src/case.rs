@@ -765,12 +765,21 @@ fn validate<'h>(
             "lammps" => {
                 let data = crate::lammps::read_data_from(&mut stream, &phases)?;
                 if let Some((blo, bhi)) = data.bounds {
-                    let close = |a: Vec3, b: Vec3| {
-                        (a - b).abs().max_element() <= 1e-9 * (max - min).abs().max_element()
-                    };
-                    if !(close(blo, min) && close(bhi, max)) {
+                    // A larger domain along a walled axis only holds the file's box (LAMMPS
+                    // shrink-wraps a flow's open top); a periodic axis of another length, or a
+                    // domain that cuts into the file's box, is another system.
+                    let tol = 1e-9 * (max - min).abs().max_element();
+                    let differs = (0..3).any(|k| {
+                        let (dl, dh, fl, fh) = (min[k], max[k], blo[k], bhi[k]);
+                        if axes[k] {
+                            (dl - fl).abs() > tol || (dh - fh).abs() > tol
+                        } else {
+                            dl > fl + tol || dh < fh - tol
+                        }
+                    });
+                    if differs {
                         warnings.push(format!(
-                            "[particles]: the LAMMPS data file {file} declares the box {:?} to {:?}, which differs from [domain] min = {:?}, max = {:?}; grainflow uses [domain] (its walls and periodic axes), not the file's box",
+                            "[particles]: the LAMMPS data file {file} declares the box {:?} to {:?}, which [domain] min = {:?}, max = {:?} does not match (along a periodic axis) or does not hold; grainflow uses [domain] (its walls and periodic axes), not the file's box",
                             blo.to_array(),
                             bhi.to_array(),
                             min.to_array(),
