@@ -163,11 +163,14 @@ pub struct RawContact {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub history: Option<String>,
     /// Lever arm of the tangential force: "mfix" (centre to radical plane: R − δ/2 between
-    /// equal spheres, R − δ at a wall) or "radius" (R). Default "mfix".
+    /// equal spheres, R − δ at a wall), "radius" (R) or "lammps_granular" (LAMMPS `pair
+    /// granular`'s: velocity with R, torque with R − δ/2 between particles and R at walls).
+    /// Default "mfix".
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lever_arm: Option<String>,
-    /// Normal damping from restitution: "mfix" (MFIX's formula for both laws) or
-    /// "exact_restitution" (solved so that a normal impact rebounds with exactly e_n).
+    /// Normal damping: "mfix" (MFIX's formula from e_n for both laws), "exact_restitution"
+    /// (solved so that a normal impact rebounds with exactly e_n), "mass_velocity" (LAMMPS's:
+    /// γ·m_eff with `gamma_n`, `gamma_t`) or "tsuji" (LAMMPS's: α(e_n)·√(m_eff K_n)).
     /// Default "mfix".
     #[serde(skip_serializing_if = "Option::is_none")]
     pub damping: Option<String>,
