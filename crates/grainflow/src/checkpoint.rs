@@ -17,10 +17,11 @@ use crate::state::Particles;
 use std::io::{self, Read, Write};
 use thiserror::Error;
 
-/// The checkpoint format this build writes (3: format 2 with the run id after the case hash;
-/// contact pairs by slots).
+/// The checkpoint format this build writes (3: the run id after the case hash; contact pairs
+/// and particle–wall pairs named by particle ids, so that a checkpoint does not depend on the
+/// order the particles are stored in).
 pub const FORMAT_VERSION: u32 = 3;
-/// The oldest format this build still reads (2: without the run id).
+/// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
 /// Bytes before the payload: signature, version, payload length.
@@ -220,6 +221,31 @@ impl<R: Read> Dec<R> {
     }
 }
 
+/// Turns the particle ids that name a format 3 checkpoint's pairs into the slots the
+/// particles were restored to (a pair whose slots come out reversed is taken in the other
+/// direction by the neighbour list, its history negated).
+fn ids_to_slots(ids: &[u32], nl: &mut NeighborState) -> Result<(), CheckpointError> {
+    let mut by_id: Vec<(u32, u32)> = ids.iter().enumerate().map(|(slot, &id)| (id, slot as u32)).collect();
+    by_id.sort_unstable();
+    if let Some(w) = by_id.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(CheckpointError::Mismatch(format!("particle id {} appears twice", w[0].0)));
+    }
+    let slot = |id: u32| -> Result<u32, CheckpointError> {
+        by_id.binary_search_by_key(&id, |e| e.0).map(|k| by_id[k].1).map_err(|_| {
+            CheckpointError::Mismatch(format!(
+                "a contact names particle {id}, which the checkpoint does not hold"
+            ))
+        })
+    };
+    for pair in &mut nl.pairs {
+        *pair = [slot(pair[0])?, slot(pair[1])?];
+    }
+    for pair in &mut nl.wall_pairs {
+        pair[0] = slot(pair[0])?;
+    }
+    Ok(())
+}
+
 fn le_u32(c: &[u8]) -> u32 {
     u32::from_le_bytes(std::array::from_fn(|i| c[i]))
 }
@@ -282,6 +308,10 @@ impl Payload {
             reference: d.vec3s("reference positions")?,
         };
         let anchors = d.vec3s("motion anchors")?;
+        let mut neighbors = neighbors;
+        if version >= 3 {
+            ids_to_slots(&p.id, &mut neighbors)?;
+        }
         Ok(Payload {
             case_hash,
             run_id,
@@ -369,9 +399,10 @@ impl Simulation {
         }
         e.f64(nl.skin())?;
         e.u64(nl.is_built() as u64)?;
-        e.pairs(nl.pair_count(), nl.pairs())?;
+        let id = |slot: u32| p.id[slot as usize];
+        e.pairs(nl.pair_count(), nl.pairs().map(|[a, b]| [id(a), id(b)]))?;
         e.vec3s_from(nl.pair_histories())?;
-        e.pairs(nl.wall_pairs().len(), nl.wall_pairs().iter().copied())?;
+        e.pairs(nl.wall_pairs().len(), nl.wall_pairs().iter().map(|&[i, w]| [id(i), w]))?;
         e.vec3s(nl.wall_history())?;
         e.vec3s(nl.reference())?;
         e.vec3s(&self.motion_anchors())?;

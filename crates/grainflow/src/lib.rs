@@ -12,7 +12,8 @@
 //!
 //! ## One time step, module by module
 //! 1. [`neighbor`] — broad phase: linked cells with a skin give the candidate pairs and
-//!    particle–wall pairs; contact history survives rebuilds, keyed by stable ids.
+//!    particle–wall pairs; contact history survives rebuilds, keyed by slot pairs (slots do not
+//!    change during a run; checkpoints name the pairs by particle ids).
 //! 2. [`contact`] — fine phase and contact laws: geometry, normal and tangential forces, Coulomb
 //!    cap, torques ([`contact::law`]), coefficients derived from the inputs
 //!    ([`contact::coefficients`]).

@@ -1,8 +1,8 @@
 //! Particle state as a structure of arrays.
 //!
 //! Every per-particle field is its own `Vec`; index `i` is the particle's current slot, `id[i]`
-//! its stable identity (contact history is keyed by ids, so a future reordering of slots keeps
-//! it).
+//! its stable identity. Slots do not change during a run (the neighbour list keys contact
+//! history by slot pairs); checkpoints name the pairs by ids.
 
 use crate::math::{Vec3, sphere_inertia, sphere_mass};
 
