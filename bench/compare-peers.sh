@@ -57,7 +57,7 @@ done
 [ -f chute_eq.data ] || lmp -in "$LMPIN/in.chute_like.lmp" -var neq 50000 -var nrun 0 -log none -screen none
 cd "$W"
 
-lmp_ke() { awk '/^Step/{f=1;next} f && $1==1000 {print $3; exit}' "$1"; }
+lmp_ke() { awk '/^ *Step/{f=1;next} f && $1==1000 {print $3; exit}' "$1"; }
 loop_time() { awk '/^Loop time of/{print $4; exit}' "$1"; }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
 # From `alternate CASE 1,1x2,2`: two copies at once ÷ one, 2 threads ÷ 1 (speeds), and the
