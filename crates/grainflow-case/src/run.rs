@@ -224,6 +224,7 @@ pub fn run_case(
         run_id: folder.run_id().to_string(),
         started: crate::outdir::utc_now(),
     };
+    folder.record(Path::new(RUN_INFO_FILE))?;
     info.write(out, &sim, "running", None)?;
     // The whole run on the simulation's threads: handing each step over to them on its own
     // costs several microseconds a step.
@@ -571,7 +572,6 @@ fn run_simulation(
         TimeSeriesWriter::create(&ts_path)
     }
     .map_err(io_err(&ts_path))?;
-    folder.record(Path::new(crate::outdir::RUN_INFO_FILE))?;
     let every = output_every(interval, sim.dt(), sim.total_steps());
     let mut files = vec![ts_path.clone()];
     let vtk_dir = out.join("vtk");
