@@ -19,8 +19,11 @@ use thiserror::Error;
 
 /// The checkpoint format this build writes (3: the run id after the case hash; contact pairs
 /// and particle–wall pairs named by particle ids, so that a checkpoint does not depend on the
-/// order the particles are stored in).
-pub const FORMAT_VERSION: u32 = 3;
+/// order the particles are stored in; 4: the last force evaluation's load peaks, from which the
+/// next takes the quanta of its sums, and the count of evaluations with inexact sums, after
+/// the flags). A checkpoint of format 2 or 3 continues with the quanta of its first evaluation
+/// taken afresh: not bit for bit as the run that wrote it would have gone on.
+pub const FORMAT_VERSION: u32 = 4;
 /// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
@@ -262,6 +265,8 @@ struct Payload {
     timing: (f64, f64, f64),
     history_started: bool,
     forces_current: bool,
+    /// The load peaks (None: not known) and the inexact-sum count.
+    sums: (Option<[f64; 2]>, u64),
     particles: Particles,
     neighbors: NeighborState,
     anchors: Vec<Vec3>,
@@ -279,6 +284,14 @@ impl Payload {
         let timing = (d.f64("time")?, d.f64("time step")?, d.f64("start time")?);
         let history_started = d.u64("flags")? != 0;
         let forces_current = d.u64("flags")? != 0;
+        let sums = if version >= 4 {
+            let peak = [d.f64("load peaks")?, d.f64("load peaks")?];
+            let inexact = d.u64("inexact sums")?;
+            // NaN: written before any evaluation.
+            (peak.iter().all(|p| !p.is_nan()).then_some(peak), inexact)
+        } else {
+            (None, 0)
+        };
         let mut p = Particles {
             id: d.u32s("ids")?,
             phase: d.u32s("phases")?,
@@ -319,6 +332,7 @@ impl Payload {
             timing,
             history_started,
             forces_current,
+            sums,
             particles: p,
             neighbors,
             anchors,
@@ -356,6 +370,7 @@ impl Simulation {
             + 8
             + self.run_id().len()
             + 6 * 8
+            + 3 * 8
             + 2 * (8 + 4 * n)
             + 3 * (8 + 8 * n)
             + 5 * (8 + 24 * n)
@@ -389,6 +404,11 @@ impl Simulation {
         e.f64(t_start)?;
         e.u64(history_started as u64)?;
         e.u64(forces_current as u64)?;
+        let (peak, inexact) = self.sums_state();
+        for v in peak.unwrap_or([f64::NAN; 2]) {
+            e.f64(v)?;
+        }
+        e.u64(inexact)?;
         e.u32s(&p.id)?;
         e.u32s(&p.phase)?;
         for v in [&p.radius, &p.mass, &p.inertia] {
@@ -504,10 +524,12 @@ impl Simulation {
             neighbors,
             anchors,
             run_id,
+            sums,
             ..
         } = payload;
         let mut sim = Simulation::unbuilt(config, particles)?;
         sim.set_run_id(run_id);
+        sim.set_sums_state(sums.0, sums.1);
         sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
             .map_err(CheckpointError::Mismatch)?;
         Ok(sim)

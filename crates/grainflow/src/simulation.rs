@@ -100,6 +100,14 @@ pub struct Simulation {
     pool: Option<std::sync::Arc<rayon::ThreadPool>>,
     /// Blocks of the parallel force stage.
     plan: ForcePlan,
+    /// The largest force and torque components of the last force evaluation's loads, from
+    /// which the next takes the quanta of its order-free sums (`forces::sum`); `None` before
+    /// the first.
+    load_peak: Option<forces::Peak>,
+    /// The floor of those quanta, from the case (never the particles).
+    peak_floor: forces::Peak,
+    /// Force evaluations whose loads grew beyond what their quanta sum exactly.
+    inexact_sums: u64,
 }
 
 impl Simulation {
@@ -200,6 +208,7 @@ impl Simulation {
         let held = motion::held(&motion, particles.len());
         neighbors.exclude_pairs_among(held.clone());
         let held = if held.iter().any(|&h| h) { held } else { Vec::new() };
+        let peak_floor = sum_floor(&config.law, &config.phases, &coeffs);
         Ok(Simulation {
             particles,
             phases: config.phases,
@@ -226,6 +235,9 @@ impl Simulation {
             timing: None,
             pool: None,
             plan: ForcePlan::default(),
+            load_peak: None,
+            peak_floor,
+            inexact_sums: 0,
         })
     }
 
@@ -308,6 +320,14 @@ impl Simulation {
         self.t_base + (self.step - self.step_base) as f64 * self.time_step.dt
     }
 
+    /// Force evaluations so far in which a load grew more than a thousandfold over the largest
+    /// of the evaluation before, beyond what the order-free sums hold exactly: their results
+    /// are correctly rounded but may depend on the order of the particles and the threads
+    /// (see `forces::sum`). Zero in a run whose results are independent of both.
+    pub fn inexact_sums(&self) -> u64 {
+        self.inexact_sums
+    }
+
     /// The neighbour list (with the contact histories).
     pub fn neighbors(&self) -> &NeighborList {
         &self.neighbors
@@ -316,6 +336,17 @@ impl Simulation {
     /// (steps taken, Adams–Bashforth history present, forces of the current state held).
     pub(crate) fn counters(&self) -> (u64, bool, bool) {
         (self.step, self.history_started, self.forces_current)
+    }
+
+    /// (the last evaluation's load peaks, force evaluations with inexact sums) for checkpoints.
+    pub(crate) fn sums_state(&self) -> (Option<forces::Peak>, u64) {
+        (self.load_peak, self.inexact_sums)
+    }
+
+    /// Restores what [`sums_state`](Self::sums_state) gave.
+    pub(crate) fn set_sums_state(&mut self, peak: Option<forces::Peak>, inexact: u64) {
+        self.load_peak = peak;
+        self.inexact_sums = inexact;
     }
 
     /// (current time, Δt, start time of the run's clock) for checkpoints.
@@ -576,6 +607,17 @@ impl Simulation {
         if let (Some(t0), Some(t)) = (t0, self.timing.as_mut()) {
             t.neighbor += t0.elapsed().as_secs_f64();
         }
+        // The first evaluation takes its quanta from the loads of the state as it is (the
+        // stored springs not advanced, nothing stored): every later one from the one before.
+        if self.load_peak.is_none() {
+            self.force_stage(false, par);
+            self.inexact_sums = 0;
+        }
+        self.force_stage(advance_history, par);
+    }
+
+    /// The force stage for the simulation's law (see [`evaluate_forces`](Self::evaluate_forces)).
+    fn force_stage(&mut self, advance_history: bool, par: bool) {
         use NormalModel::*;
         use TangentialModel::*;
         match (self.law.normal, self.law.tangential) {
@@ -608,6 +650,9 @@ impl Simulation {
     fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool, par: bool) {
         let clock = self.timing.map(|_| std::time::Instant::now());
         let common_mass = self.common().0.map(forces::CommonMass::of);
+        let peak_before = self.load_peak.unwrap_or([0.0; 2]);
+        let quanta = forces::Quanta::new(peak_before, self.peak_floor);
+        let mut peak = [0.0; 2];
         let p = &mut self.particles;
         let build = self.neighbors.stats().builds;
         let (offsets, partners, pair_history, in_contact, wall_pairs, wall_history) =
@@ -630,6 +675,7 @@ impl Simulation {
             offsets,
             partners,
             wall_pairs,
+            quanta,
         };
         let blocks = self.pool.as_ref().filter(|_| par).map(|pool| {
             let plan = &mut self.plan;
@@ -647,6 +693,7 @@ impl Simulation {
         let out = forces::ForceOutputs {
             force: &mut p.force,
             torque: &mut p.torque,
+            peak: &mut peak,
             pair_history,
             in_contact,
             wall_history,
@@ -661,6 +708,10 @@ impl Simulation {
                 ..Default::default()
             },
         };
+        if quanta.exceeded_by(peak) {
+            self.inexact_sums += 1;
+        }
+        self.load_peak = Some(peak);
         if let (Some(c), Some(t)) = (clock, self.timing.as_mut()) {
             let total = c.elapsed().as_secs_f64();
             t.walls += work.walls.min(total);
@@ -824,6 +875,19 @@ pub struct ContactInfo {
 /// that computes its contacts; none (one thread) without `par` or before the first plan.
 fn thread_blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usize>] {
     if par { plan.blocks_for(n) } else { &[] }
+}
+
+/// The floor of the force stage's quanta for a case (see `forces::sum`), from its reference
+/// force: the largest normal force of any contact at an overlap of the largest reference
+/// radius.
+fn sum_floor(law: &ContactLaw, phases: &[Phase], coeffs: &CoeffTable) -> forces::Peak {
+    let r = phases.iter().map(|p| p.radius()).fold(0.0, f64::max);
+    let power = match law.normal {
+        NormalModel::LinearSpringDashpot => 1.0,
+        NormalModel::Hertz => 1.5,
+    };
+    let kn = coeffs.all().map(|c| c.kn).fold(0.0, f64::max);
+    forces::peak_floor(kn * r.powf(power), r)
 }
 
 fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {

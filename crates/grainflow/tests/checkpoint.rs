@@ -219,10 +219,11 @@ fn a_damaged_count_is_refused_as_corruption_without_allocating_it() {
     }
     let good = sim.checkpoint("h");
     // The payload starts (after the 20-byte header) with the case hash's length, then the
-    // hash, the run id's length (the run id is empty), step, time, time step, start time and
-    // two flags (8 bytes each), then the count of ids. Claiming 2^61 ids (16 EiB) must be
-    // refused from the payload's length, before any memory is asked for.
-    let ids_count = 20 + 8 + "h".len() + 8 + 6 * 8;
+    // hash, the run id's length (the run id is empty), step, time, time step, start time, two
+    // flags, two load peaks and the inexact-sum count (8 bytes each), then the count of ids.
+    // Claiming 2^61 ids (16 EiB) must be refused from the payload's length, before any memory
+    // is asked for.
+    let ids_count = 20 + 8 + "h".len() + 8 + 9 * 8;
     assert_eq!(
         u64::from_le_bytes(good[ids_count..ids_count + 8].try_into().unwrap()),
         init.len() as u64,

@@ -292,6 +292,11 @@ impl CoeffTable {
         &self.walls[a * self.n_wall_materials + w]
     }
 
+    /// Every phase pair's and phase–wall-material pair's coefficients.
+    pub fn all(&self) -> impl Iterator<Item = &ContactCoeffs> {
+        self.pairs.iter().chain(&self.walls)
+    }
+
     /// Number of phases.
     pub fn n_phases(&self) -> usize {
         self.n_phases

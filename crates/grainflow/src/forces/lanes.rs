@@ -11,7 +11,7 @@
 use std::ops::Range;
 
 use super::detect::Found;
-use super::{CrossingLoad, ForceInputs};
+use super::{Accumulators, CrossingLoad, ForceInputs, Peak, Quanta};
 use crate::boundary::Images;
 use crate::contact::geometry::pair_touching;
 use crate::contact::law::parts;
@@ -216,7 +216,8 @@ fn coeff_lanes(c: &ContactCoeffs) -> [f64; 6] {
     [c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll]
 }
 
-/// The loads and advanced histories of a batch, component by component.
+/// The loads and advanced histories of a batch, component by component; once computed, the
+/// loads are rounded to the quanta of the sums (`forces::sum`).
 #[derive(Debug, Clone, Copy)]
 struct OutputLanes {
     f: Vec3Lanes,
@@ -237,34 +238,72 @@ impl OutputLanes {
         self.h.set(i, h);
     }
 
+    /// Rounds the loads to the quanta `q`, raising the lanes' peaks `peak` (force, torque) by
+    /// the loads of the lanes where `live` is 1 (0: a lane that holds what an earlier batch
+    /// left, or a crossing pair's, which the pass over the crossing pairs computed).
     #[inline(always)]
-    fn get(&self, i: usize) -> (PairLoad, Vec3) {
-        (PairLoad { f: self.f.get(i), ta: self.ta.get(i), tb: self.tb.get(i) }, self.h.get(i))
+    fn round(&mut self, q: Quanta, live: &Live, peak: &mut PeakLanes) {
+        for k in 0..3 {
+            q.force.round_all(&mut self.f.0[k], live, &mut peak[0]);
+            q.torque.round_all(&mut self.ta.0[k], live, &mut peak[1]);
+            q.torque.round_all(&mut self.tb.0[k], live, &mut peak[1]);
+        }
+    }
+
+    /// The load of lane `i`.
+    #[inline(always)]
+    fn load(&self, i: usize) -> PairLoad {
+        PairLoad { f: self.f.get(i), ta: self.ta.get(i), tb: self.tb.get(i) }
     }
 }
 
-/// The inputs and outputs of a batch of touching pairs.
+/// The largest force and torque components, lane by lane, of the loads of the batches so far.
+type PeakLanes = [[f64; LANES]; 2];
+
+/// 1 for the lanes of a batch that hold a load of this evaluation's own, 0 for the others.
+type Live = [f64; LANES];
+
+/// The first `n` lanes live.
+#[inline(always)]
+fn first_live(n: usize) -> Live {
+    std::array::from_fn(|i| if i < n { 1.0 } else { 0.0 })
+}
+
+/// The inputs and outputs of a batch of touching pairs, and the peaks of the loads of the
+/// batches so far.
 pub(super) struct Lanes {
     pub(super) input: InputLanes,
     output: OutputLanes,
+    peak: PeakLanes,
 }
 
 impl Lanes {
     pub(super) fn new() -> Self {
-        Lanes { input: InputLanes::ZERO, output: OutputLanes::ZERO }
+        Lanes { input: InputLanes::ZERO, output: OutputLanes::ZERO, peak: [[0.0; LANES]; 2] }
     }
 
-    /// The loads of the batch in the input lanes ([`contact_loads`]), into the output lanes; a
-    /// wall batch with `WALL`.
+    /// The largest force and torque components of the loads computed so far.
+    pub(super) fn peak(&self) -> Peak {
+        self.peak.map(|lanes| lanes.iter().fold(0.0, |m: f64, &v| if v > m { v } else { m }))
+    }
+
+    /// The loads of the batch in the input lanes ([`contact_loads`]), into the output lanes,
+    /// rounded for the sums, the peaks raised by those of the `live` lanes; a wall batch with
+    /// `WALL`.
     #[inline(always)]
-    fn compute<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(&mut self, x: &ForceInputs) {
+    fn compute<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+        &mut self,
+        x: &ForceInputs,
+        live: &Live,
+    ) {
         contact_loads::<HERTZ, INCREMENTAL, WALL>(
             &x.law,
             x.coeffs.rolling(),
             x.dt,
+            Some((x.quanta, live, &mut self.peak)),
             &self.input,
             &mut self.output,
-        );
+        )
     }
 
     /// The history to store for pair lane `lane`, whose advanced history is `h`: `h`, or the
@@ -285,21 +324,26 @@ impl Lanes {
         rows: Range<usize>,
         group: &[Found],
         crossing: &mut std::slice::Iter<CrossingLoad>,
-        force: &mut [Vec3],
-        torque: &mut [Vec3],
+        acc: &mut Accumulators,
         hist: &mut [Vec3],
     ) {
         let (r0, r1) = (rows.start, rows.end);
         let k0 = x.offsets[r0];
         self.input.gather_pairs(x, r1, k0, group, hist);
-        self.compute::<HERTZ, INCREMENTAL, false>(x);
+        let mut live = [0.0; LANES];
+        for (l, f) in live.iter_mut().zip(group) {
+            *l = if (x.partners[f.k()] as usize) < r1 { 1.0 } else { 0.0 };
+        }
+        self.compute::<HERTZ, INCREMENTAL, false>(x, &live);
+        // The loads of a row's pairs (a ascending) are summed here and added to the row's
+        // accumulators once the row is done (the sums do not depend on their order).
+        let mut row = (usize::MAX, Vec3::ZERO, Vec3::ZERO);
         for (i, f) in group.iter().enumerate() {
             let (a, b, k) = (f.a as usize, x.partners[f.k()] as usize, f.k());
             let l = if b < r1 {
-                let (l, h) = self.output.get(i);
-                hist[k - k0] = self.stored_history(x, i, h);
-                force[b - r0] -= l.f;
-                torque[b - r0] += l.tb;
+                let l = self.output.load(i);
+                hist[k - k0] = self.stored_history(x, i, self.output.h.get(i));
+                acc.add::<true>(b - r0, l.f, l.tb);
                 l
             } else {
                 match crossing.next() {
@@ -307,8 +351,17 @@ impl Lanes {
                     _ => continue,
                 }
             };
-            force[a - r0] += l.f;
-            torque[a - r0] += l.ta;
+            if a != row.0 {
+                if row.0 != usize::MAX {
+                    acc.add::<false>(row.0 - r0, row.1, row.2);
+                }
+                row = (a, Vec3::ZERO, Vec3::ZERO);
+            }
+            row.1 += l.f;
+            row.2 += l.ta;
+        }
+        if row.0 != usize::MAX {
+            acc.add::<false>(row.0 - r0, row.1, row.2);
         }
     }
 
@@ -345,12 +398,11 @@ impl Lanes {
         if n == 0 {
             return;
         }
-        self.compute::<HERTZ, INCREMENTAL, false>(x);
+        self.compute::<HERTZ, INCREMENTAL, false>(x, &first_live(n));
         for (lane, &i) in kept[..n].iter().enumerate() {
             let k = pairs[i].1;
-            let (l, h) = self.output.get(lane);
-            hist[k - k0] = self.stored_history(x, lane, h);
-            loads[i] = Some(l);
+            hist[k - k0] = self.stored_history(x, lane, self.output.h.get(lane));
+            loads[i] = Some(self.output.load(lane));
         }
     }
 
@@ -363,14 +415,15 @@ impl Lanes {
         r0: usize,
         wall_pairs: &[[u32; 2]],
         group: &[usize],
-        force: &mut [Vec3],
-        torque: &mut [Vec3],
+        acc: &mut Accumulators,
         hist: &mut [Vec3],
     ) {
+        let mut live = [0.0; LANES];
         for (lane, &j) in group.iter().enumerate() {
             let [i, w] = wall_pairs[j];
             let (i, wall) = (i as usize, &x.walls[w as usize]);
             if let Some(g) = wall_geometry(x.position[i], x.radius[i], wall, x.law.lever) {
+                live[lane] = 1.0;
                 let input = PairInput {
                     d: g.normal,
                     ra: g.overlap,
@@ -385,15 +438,14 @@ impl Lanes {
                 self.input.set(lane, &input);
             }
         }
-        self.compute::<HERTZ, INCREMENTAL, true>(x);
+        self.compute::<HERTZ, INCREMENTAL, true>(x, &live);
         for (lane, &j) in group.iter().enumerate() {
             let i = wall_pairs[j][0] as usize;
-            let (l, h) = self.output.get(lane);
+            let l = self.output.load(lane);
             if x.advance {
-                hist[j] = h;
+                hist[j] = self.output.h.get(lane);
             }
-            force[i - r0] += l.f;
-            torque[i - r0] += l.ta;
+            acc.add::<false>(i - r0, l.f, l.ta);
         }
     }
 }
@@ -417,16 +469,17 @@ fn contact_loads<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
     law: &ContactLaw,
     rolling: bool,
     dt: f64,
+    q: Option<(Quanta, &Live, &mut PeakLanes)>,
     input: &InputLanes,
     output: &mut OutputLanes,
 ) {
     match parts::needed(law, rolling) {
         parts::LAMMPS_CAP => {
-            loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::LAMMPS_CAP }>(law, dt, input, output)
+            loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::LAMMPS_CAP }>(law, dt, q, input, output)
         }
-        LAMMPS_MINDLIN => loads_widest::<HERTZ, INCREMENTAL, WALL, LAMMPS_MINDLIN>(law, dt, input, output),
-        MFIX => loads_widest::<HERTZ, INCREMENTAL, WALL, MFIX>(law, dt, input, output),
-        _ => loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::ALL }>(law, dt, input, output),
+        LAMMPS_MINDLIN => loads_widest::<HERTZ, INCREMENTAL, WALL, LAMMPS_MINDLIN>(law, dt, q, input, output),
+        MFIX => loads_widest::<HERTZ, INCREMENTAL, WALL, MFIX>(law, dt, q, input, output),
+        _ => loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::ALL }>(law, dt, q, input, output),
     }
 }
 
@@ -437,6 +490,7 @@ fn contact_loads<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
 fn loads_widest<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
+    q: Option<(Quanta, &Live, &mut PeakLanes)>,
     input: &InputLanes,
     output: &mut OutputLanes,
 ) {
@@ -444,21 +498,24 @@ fn loads_widest<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, co
     #[allow(unsafe_code)]
     if std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the processor has AVX-512F (checked just above).
-        return unsafe { simd::loads_avx512::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output) };
+        return unsafe { simd::loads_avx512::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output) };
     }
     #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
     #[allow(unsafe_code)]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2 (checked just above).
-        return unsafe { simd::loads_avx2::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output) };
+        return unsafe { simd::loads_avx2::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output) };
     }
-    loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output)
+    loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output)
 }
 
+/// The loads of the batch; with `q` (the quanta, the count of live lanes and the peaks),
+/// rounded for the sums (`forces::sum`) and the peaks raised.
 #[inline(always)]
 fn loads_lanes<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
+    q: Option<(Quanta, &Live, &mut PeakLanes)>,
     input: &InputLanes,
     output: &mut OutputLanes,
 ) {
@@ -471,6 +528,9 @@ fn loads_lanes<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, con
             pair_law::<HERTZ, INCREMENTAL, PARTS>(&law, dt, &p)
         };
         output.set(i, load);
+    }
+    if let Some((q, live, peak)) = q {
+        output.round(q, live, peak);
     }
 }
 
@@ -488,10 +548,11 @@ mod simd {
     >(
         law: &ContactLaw,
         dt: f64,
+        q: Option<(Quanta, &Live, &mut PeakLanes)>,
         input: &InputLanes,
         output: &mut OutputLanes,
     ) {
-        loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output)
+        loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output)
     }
 
     #[cfg(not(target_feature = "avx2"))]
@@ -504,10 +565,11 @@ mod simd {
     >(
         law: &ContactLaw,
         dt: f64,
+        q: Option<(Quanta, &Live, &mut PeakLanes)>,
         input: &InputLanes,
         output: &mut OutputLanes,
     ) {
-        loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, input, output)
+        loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output)
     }
 }
 
@@ -642,9 +704,9 @@ mod tests {
             "the build's instruction set",
             run(&|out, wall| {
                 if wall {
-                    loads_lanes::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, input, out)
+                    loads_lanes::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, None, input, out)
                 } else {
-                    loads_lanes::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, input, out)
+                    loads_lanes::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, None, input, out)
                 }
             }),
         )];
@@ -655,9 +717,9 @@ mod tests {
                 "AVX2",
                 run(&|out, wall| unsafe {
                     if wall {
-                        simd::loads_avx2::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, input, out)
+                        simd::loads_avx2::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, None, input, out)
                     } else {
-                        simd::loads_avx2::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, input, out)
+                        simd::loads_avx2::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, None, input, out)
                     }
                 }),
             ));
@@ -669,9 +731,9 @@ mod tests {
                 "AVX-512",
                 run(&|out, wall| unsafe {
                     if wall {
-                        simd::loads_avx512::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, input, out)
+                        simd::loads_avx512::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, None, input, out)
                     } else {
-                        simd::loads_avx512::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, input, out)
+                        simd::loads_avx512::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, None, input, out)
                     }
                 }),
             ));
@@ -730,9 +792,13 @@ mod tests {
                             }
                             let expected = [bits(&scalar), bits(&wall_scalar)];
                             let mut batch = OutputLanes::ZERO;
-                            contact_loads::<HERTZ, INCREMENTAL, false>(&law, rolling, dt, &input, &mut batch);
+                            contact_loads::<HERTZ, INCREMENTAL, false>(
+                                &law, rolling, dt, None, &input, &mut batch,
+                            );
                             assert_eq!(bits(&batch), expected[0], "{law:?}");
-                            contact_loads::<HERTZ, INCREMENTAL, true>(&law, rolling, dt, &input, &mut batch);
+                            contact_loads::<HERTZ, INCREMENTAL, true>(
+                                &law, rolling, dt, None, &input, &mut batch,
+                            );
                             assert_eq!(bits(&batch), expected[1], "{law:?} (walls)");
                             // Every loop compiled for parts that include the law's, on every
                             // instruction set.

@@ -1,15 +1,14 @@
 //! The force stage of a step: every particle–wall and particle–particle contact's force and
-//! torque, summed into the particles' accumulators in one fixed order, whatever the number of
-//! threads.
+//! torque, summed into the particles' accumulators by sums that do not depend on their order —
+//! so the results are the same for any number of threads, any order of the particles in
+//! memory, and any split of them into parts.
 //!
-//! ## The order of the sums
-//! A particle's force is the sum, in this order, of: its wall contacts (in wall-list order);
-//! then the pairs (c, b) of the rows c below it, in row order; then its own row's pairs
-//! (a, b), in partner order. [`NeighborList`](crate::neighbor::NeighborList) keeps the pairs
-//! in rows of the lower slot, so walking the rows in slot order and adding each pair's force
-//! to both particles at once gives exactly that order. Floating-point sums depend on their
-//! order; keeping it fixed makes the results bit-identical from run to run and for any number
-//! of threads.
+//! ## The sums
+//! Every load is rounded to a multiple of a power-of-two quantum before it is added, so that
+//! the sums are exact (fixed-point arithmetic in `f64`s); the quantum follows the largest load
+//! of the evaluation before (see the `sum` module). Walls are added first, then the pairs in the order
+//! the rows are walked, but any other order gives the same bits. A pair's load is computed once
+//! and added to both particles (Newton's third law holds to the bit: the rounding is odd).
 //!
 //! ## Batches
 //! The contacts' loads do not depend on each other, only their sums do. So a block first tests
@@ -51,6 +50,7 @@
 mod detect;
 mod lanes;
 mod plan;
+mod sum;
 
 use std::ops::Range;
 
@@ -65,6 +65,7 @@ use detect::{Cursor, FOUND, Found, find_contacts, find_wall_contacts};
 use lanes::{LANES, Lanes};
 pub(crate) use plan::ForcePlan;
 pub use plan::{BLOCKS_PER_THREAD, MIN_PARALLEL_PARTICLES};
+pub(crate) use sum::{Accumulators, Peak, Quanta, max_peak, peak_floor};
 
 /// Read-only inputs of the force stage.
 pub(crate) struct ForceInputs<'a> {
@@ -91,19 +92,23 @@ pub(crate) struct ForceInputs<'a> {
     pub offsets: &'a [usize],
     pub partners: &'a [u32],
     pub wall_pairs: &'a [[u32; 2]],
+    /// The quanta of the order-free sums ([`sum`]).
+    pub quanta: Quanta,
 }
 
 /// Outputs of the force stage.
 pub(crate) struct ForceOutputs<'a> {
     pub force: &'a mut [Vec3],
     pub torque: &'a mut [Vec3],
+    /// The largest force and torque components of the loads ([`sum`]).
+    pub peak: &'a mut Peak,
     pub pair_history: &'a mut [Vec3],
     /// Whether each pair touched at the last evaluation (in), touches now (out).
     pub in_contact: &'a mut [bool],
     pub wall_history: &'a mut [Vec3],
 }
 
-/// A crossing pair's load, if in contact.
+/// A crossing pair's load (rounded for the sums: [`sum`]), if in contact.
 type CrossingLoad = Option<PairLoad>;
 
 /// Evaluates every contact into `out` on one thread. With `clock`, returns the seconds spent on
@@ -114,19 +119,20 @@ pub(crate) fn serial<const HERTZ: bool, const INCREMENTAL: bool>(
     clock: bool,
 ) -> f64 {
     let n = x.position.len();
-    block::<HERTZ, INCREMENTAL>(
+    let (walls, peak) = block::<HERTZ, INCREMENTAL>(
         clock,
         x,
         0..n,
-        out.force,
-        out.torque,
+        Accumulators { force: out.force, torque: out.torque, peak: [0.0; 2] },
         out.pair_history,
         out.in_contact,
         out.wall_history,
         0,
         Incoming::None,
         &[],
-    )
+    );
+    *out.peak = peak;
+    walls
 }
 
 /// How long the threads worked in one parallel force evaluation (zero unless clocked).
@@ -179,7 +185,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
             for (pairs, loads) in crossing[c0..cuts[t]].chunks(LANES).zip(loads.chunks_mut(LANES)) {
                 lanes.crossing_loads::<HERTZ, INCREMENTAL>(x, pairs, k0, hist, flags, loads);
             }
-            since(t0)
+            (since(t0), lanes.peak())
         })
     };
     // Pass 2: each block's walls, arriving crossing pairs and own rows.
@@ -197,12 +203,11 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
         let rows = blocks[t].clone();
         let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
         let t0 = clock.then(std::time::Instant::now);
-        let walls = block::<HERTZ, INCREMENTAL>(
+        let (walls, peak) = block::<HERTZ, INCREMENTAL>(
             clock,
             x,
             rows,
-            force,
-            torque,
+            Accumulators { force, torque, peak: [0.0; 2] },
             hist,
             flags,
             whist,
@@ -210,10 +215,13 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
             incoming,
             &loads[crossing_start[t]..crossing_start[t + 1]],
         );
-        (walls, since(t0))
+        (walls, since(t0), peak)
     });
+    // The peaks are maxima: the same whichever thread found them.
+    *out.peak =
+        block_times.iter().map(|b| b.2).chain(crossing_busy.iter().map(|c| c.1)).fold([0.0; 2], max_peak);
     let walls = block_times.iter().map(|b| b.0).sum::<f64>() / block_times.len().max(1) as f64;
-    let crossing = per_thread(crossing_busy.len(), |i| crossing_busy[i]);
+    let crossing = per_thread(crossing_busy.len(), |i| crossing_busy[i].0);
     let blocks = per_thread(block_times.len(), |i| block_times[i].1);
     ThreadWork { walls, mean: crossing.0 + blocks.0, slowest: crossing.1 + blocks.1 }
 }
@@ -235,28 +243,28 @@ enum Incoming<'a> {
     Crossing { start: &'a [u32], index: &'a [u32], loads: &'a [CrossingLoad] },
 }
 
-/// The force stage of the rows `rows`: `force`/`torque` are those rows' accumulators,
+/// The force stage of the rows `rows`: `acc` holds those rows' accumulators,
 /// `hist` and `in_contact` the histories and contact flags of their pairs, `whist` the
 /// histories of their wall pairs (starting at wall pair `w0`), `own_crossing` the loads of
-/// their crossing pairs in list order. With `clock`, returns the seconds spent on the walls.
+/// their crossing pairs in list order. Returns the seconds spent on the walls (with `clock`;
+/// 0 otherwise) and the peaks of the loads.
 #[inline(always)]
 fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     clock: bool,
     x: &ForceInputs,
     rows: Range<usize>,
-    force: &mut [Vec3],
-    torque: &mut [Vec3],
+    mut acc: Accumulators,
     hist: &mut [Vec3],
     in_contact: &mut [bool],
     whist: &mut [Vec3],
     w0: usize,
     incoming: Incoming,
     own_crossing: &[CrossingLoad],
-) -> f64 {
+) -> (f64, Peak) {
     let t0 = clock.then(std::time::Instant::now);
     let (r0, r1) = (rows.start, rows.end);
-    force.fill(Vec3::ZERO);
-    torque.fill(Vec3::ZERO);
+    acc.force.fill(Vec3::ZERO);
+    acc.torque.fill(Vec3::ZERO);
     // Walls first, as MFIX does: the touching wall pairs listed, then their loads computed a
     // batch at a time and added in list order.
     let mut lanes = Lanes::new();
@@ -266,17 +274,17 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     while at < wall_pairs.len() {
         let n = find_wall_contacts(x, wall_pairs, &mut at, whist, &mut found_walls);
         for group in found_walls[..n].chunks(LANES) {
-            lanes.add_wall_loads::<HERTZ, INCREMENTAL>(x, r0, wall_pairs, group, force, torque, whist);
+            lanes.add_wall_loads::<HERTZ, INCREMENTAL>(x, r0, wall_pairs, group, &mut acc, whist);
         }
     }
     let wall_seconds = t0.map_or(0.0, |t| t.elapsed().as_secs_f64());
+    acc.note_peak(lanes.peak());
     // Then the crossing pairs from the rows below this block, in list order.
     if let Incoming::Crossing { start, index, loads } = incoming {
         for b in rows.clone() {
             for &c in &index[start[b] as usize..start[b + 1] as usize] {
                 if let Some(l) = loads[c as usize] {
-                    force[b - r0] -= l.f;
-                    torque[b - r0] += l.tb;
+                    acc.add::<true>(b - r0, l.f, l.tb);
                 }
             }
         }
@@ -292,10 +300,11 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
         lanes.input.fill_coeffs(c);
     }
     while cursor.a < r1 {
-        let n = find_contacts(x, r0..r1, [&*force, &*torque], &mut cursor, in_contact, &mut found);
+        let n = find_contacts(x, r0..r1, [&*acc.force, &*acc.torque], &mut cursor, in_contact, &mut found);
         for group in found[..n].chunks(LANES) {
-            lanes.add_loads::<HERTZ, INCREMENTAL>(x, r0..r1, group, &mut crossing, force, torque, hist);
+            lanes.add_loads::<HERTZ, INCREMENTAL>(x, r0..r1, group, &mut crossing, &mut acc, hist);
         }
     }
-    wall_seconds
+    acc.note_peak(lanes.peak());
+    (wall_seconds, acc.peak)
 }
