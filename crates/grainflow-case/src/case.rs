@@ -459,7 +459,11 @@ fn validate<'h>(
         "model",
         contact.model.as_deref(),
         NormalModel::LinearSpringDashpot,
-        &[("lsd", NormalModel::LinearSpringDashpot), ("hertz", NormalModel::Hertz)],
+        &[
+            ("lsd", NormalModel::LinearSpringDashpot),
+            ("hertz", NormalModel::Hertz),
+            ("jkr", NormalModel::Jkr),
+        ],
     )?;
     let tangential = choose(
         "[contact]",
@@ -507,20 +511,41 @@ fn validate<'h>(
         &[("mfix", CoulombCap::Mfix), ("lammps", CoulombCap::Lammps)],
     )?;
     let law = ContactLaw { normal, tangential, history, lever, damping, clip_attraction, coulomb };
-    if normal == NormalModel::Hertz {
+    if normal == NormalModel::Jkr {
+        // The damping JKR takes (LAMMPS's examples pair `jkr` with `damping tsuji`), and no
+        // clipping, which would remove its adhesion.
+        if damping != NormalDamping::Tsuji {
+            return Err(CaseError::invalid(
+                "[contact]",
+                "damping",
+                format!("{:?}", contact.damping.as_deref().unwrap_or("mfix")),
+                "the jkr model takes damping = \"tsuji\" (LAMMPS's pair granular pairs jkr with it)",
+            ));
+        }
+        if clip_attraction {
+            return Err(CaseError::invalid(
+                "[contact]",
+                "clip_attraction",
+                "true",
+                "the jkr model is attractive by design: clipping the normal force at zero would remove its adhesion",
+            ));
+        }
+    }
+    if normal.elastic() {
+        let model = law.normal_name();
         for p in &phases {
             let table = format!("[[phases]] '{}'", p.name);
             require(
                 p.youngs_modulus,
                 &table,
                 "youngs_modulus",
-                "Young's modulus in Pa, required by the hertz model",
+                &format!("Young's modulus in Pa, required by the {model} model"),
             )?;
             require(
                 p.poisson_ratio,
                 &table,
                 "poisson_ratio",
-                "Poisson's ratio, required by the hertz model",
+                &format!("Poisson's ratio, required by the {model} model"),
             )?;
         }
         if !walls.is_empty() {
@@ -530,13 +555,13 @@ fn validate<'h>(
                     m.youngs_modulus,
                     &table,
                     "youngs_modulus",
-                    "Young's modulus in Pa, required by the hertz model for walls",
+                    &format!("Young's modulus in Pa, required by the {model} model for walls"),
                 )?;
                 require(
                     m.poisson_ratio,
                     &table,
                     "poisson_ratio",
-                    "Poisson's ratio, required by the hertz model for walls",
+                    &format!("Poisson's ratio, required by the {model} model for walls"),
                 )?;
             }
         }
@@ -659,9 +684,7 @@ fn validate<'h>(
         // A Hertz case without dt: a fraction of the Rayleigh time (MFIX's rule takes the
         // Hertz K_n as linear and gives a step some 20 times below the stable one). MFIX decks
         // give dtsolid_factor, and keep MFIX's rule.
-        (None, None)
-            if normal == NormalModel::Hertz && grainflow::timestep::hertz_default_dt(&phases).is_some() =>
-        {
+        (None, None) if normal.elastic() && grainflow::timestep::hertz_default_dt(&phases).is_some() => {
             TimeStepRule::Fixed(grainflow::timestep::hertz_default_dt(&phases).unwrap_or(f64::NAN))
         }
         (None, f) => {
@@ -1178,7 +1201,7 @@ fn check_params(
     law: ContactLaw,
     warnings: &mut Vec<String>,
 ) -> Result<(), CaseError> {
-    let checks: [(&str, Option<f64>, Range); 9] = [
+    let checks: [(&str, Option<f64>, Range); 10] = [
         ("kn", t.kn, limits::KN),
         ("kt_fac", t.kt_fac, limits::KT_FAC),
         ("etat_fac", t.etat_fac, limits::ETAT_FAC),
@@ -1188,6 +1211,7 @@ fn check_params(
         ("mu_roll", t.mu_roll, limits::MU_ROLL),
         ("gamma_n", t.gamma_n, limits::GAMMA),
         ("gamma_t", t.gamma_t, limits::GAMMA),
+        ("surface_energy", t.surface_energy, limits::SURFACE_ENERGY),
     ];
     for (key, v, r) in checks {
         if let Some(v) = v {
@@ -1195,8 +1219,21 @@ fn check_params(
         }
     }
     let unused: &[(&str, bool)] = match law.normal {
-        NormalModel::LinearSpringDashpot => &[("et", t.et.is_some())],
-        NormalModel::Hertz => &[("kn", t.kn.is_some()), ("kt_fac", t.kt_fac.is_some())],
+        NormalModel::LinearSpringDashpot => {
+            &[("et", t.et.is_some()), ("surface_energy", t.surface_energy.is_some())]
+        }
+        NormalModel::Hertz => &[
+            ("kn", t.kn.is_some()),
+            ("kt_fac", t.kt_fac.is_some()),
+            ("surface_energy", t.surface_energy.is_some()),
+        ],
+        NormalModel::Jkr => &[
+            ("kn", t.kn.is_some()),
+            ("kt_fac", t.kt_fac.is_some()),
+            ("et", t.et.is_some()),
+            ("hertz_kn", t.hertz_kn.is_some()),
+            ("hertz_kt", t.hertz_kt.is_some()),
+        ],
     };
     for (key, given) in unused {
         if *given {
@@ -1230,6 +1267,7 @@ fn layer(
         gamma_t: pick(|t| t.gamma_t),
         hertz_kn: pick(|t| t.hertz_kn),
         hertz_kt: pick(|t| t.hertz_kt),
+        surface_energy: pick(|t| t.surface_energy),
     };
     match law.normal {
         NormalModel::LinearSpringDashpot if p.kn.is_none() => Err(CaseError::missing(
@@ -1247,6 +1285,13 @@ fn layer(
                 format!("tangential restitution for the {what}, required by the hertz model"),
             ))
         }
+        NormalModel::Jkr if p.surface_energy.is_none() => Err(CaseError::missing(
+            base_table,
+            "surface_energy",
+            format!(
+                "surface energy γ in J/m² for the {what}, required by the jkr model (LAMMPS's: the pull-off force is 3πγR*)"
+            ),
+        )),
         _ => Ok(p),
     }
 }

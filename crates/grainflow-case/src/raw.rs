@@ -153,7 +153,8 @@ pub struct RawWall {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawContact {
-    /// "lsd" (linear spring–dashpot, MFIX's default) or "hertz". Default "lsd".
+    /// "lsd" (linear spring–dashpot, MFIX's default), "hertz" or "jkr" (JKR cohesion, as
+    /// LAMMPS's `pair granular … jkr`; with `damping = "tsuji"`). Default "lsd".
     #[serde(skip_serializing_if = "Option::is_none")]
     pub model: Option<String>,
     /// "mfix" (total displacement, MFIX 21.3) or "incremental_mindlin". Default "mfix".
@@ -245,6 +246,10 @@ pub struct RawContactParams {
     /// Hertz: K_t in N/m^1.5, given directly instead of 8G*√R*.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hertz_kt: Option<f64>,
+    /// JKR: surface energy γ, J/m², > 0 (LAMMPS's; the work of adhesion is 2γ and the
+    /// pull-off force 3πγR*). Required there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_energy: Option<f64>,
 }
 
 /// `[time]`

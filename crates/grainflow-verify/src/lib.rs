@@ -9,6 +9,7 @@ pub mod dem03;
 pub mod dem04;
 pub mod dem05;
 pub mod error;
+pub mod jkr;
 pub mod kharaz;
 pub mod plot;
 pub mod rolling;

@@ -100,6 +100,11 @@ pub fn cases() -> Vec<CaseEntry> {
             summary: "sphere released on an incline: rolls iff tan α ≤ 3.5μ (a = (5/7)g sin α), else slides",
             run: crate::rolling::run_incline,
         },
+        CaseEntry {
+            name: "jkr",
+            summary: "JKR cohesion: pull-off force 3πγR* and distance δ_c on the law's curve; a pair approaching, sticking and pulling off against LAMMPS pair granular jkr",
+            run: crate::jkr::run_case,
+        },
     ]
 }
 

@@ -3,8 +3,10 @@
 use crate::boundary::Periodic;
 use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
 use crate::contact::law::{contact_force_dyn, normal_spring_energy};
-use crate::contact::pair::{pair_geometry_of, pair_mass, scaled_damping, wall_geometry};
-use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, ContactParams, NormalModel, TangentialModel};
+use crate::contact::pair::{pair_geometry_in_contact, pair_mass, scaled_damping, wall_geometry_in_contact};
+use crate::contact::submodel::formed;
+use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
+use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, ContactParams};
 use crate::error::EngineError;
 use crate::forces::{self, ForcePlan};
 use crate::integrate::{self, Integrator};
@@ -23,6 +25,26 @@ pub const STANDARD_GRAVITY: f64 = 9.80665;
 /// The neighbour skin used when none is given: 20 % of the largest radius, m.
 pub fn default_skin(max_radius: f64) -> f64 {
     0.2 * max_radius
+}
+
+/// The skin for a law whose formed contacts hold to a pull-off distance `reach` (0 for the
+/// others, whose skin is kept): a contact stretched to −`reach` must be in the list when it is
+/// rebuilt, so the skin must exceed it. A default skin is raised to twice the reach; a given
+/// one at or below it is refused.
+fn skin_reaching(skin: f64, given: bool, reach: f64) -> Result<f64, EngineError> {
+    if skin > reach || reach == 0.0 {
+        Ok(skin)
+    } else if given {
+        Err(EngineError::invalid(
+            "skin",
+            skin,
+            format!(
+                "the neighbour skin must exceed the largest pull-off distance of the contacts, {reach:e} m, so that a contact stretched to it stays in the list"
+            ),
+        ))
+    } else {
+        Ok(2.0 * reach)
+    }
 }
 
 /// Everything the engine needs besides the particles, in SI units.
@@ -195,6 +217,7 @@ impl Simulation {
             }
             None => default_skin(particles.max_radius()),
         };
+        let skin = skin_reaching(skin, config.skin.is_some(), coeffs.reach())?;
         let mut particles = particles;
         if config.integrator == Integrator::AdamsBashforth && particles.accel_prev.is_empty() {
             particles.accel_prev = vec![Vec3::ZERO; particles.len()];
@@ -618,14 +641,7 @@ impl Simulation {
 
     /// The force stage for the simulation's law (see [`evaluate_forces`](Self::evaluate_forces)).
     fn force_stage(&mut self, advance_history: bool, par: bool) {
-        use NormalModel::*;
-        use TangentialModel::*;
-        match (self.law.normal, self.law.tangential) {
-            (LinearSpringDashpot, MfixTotal) => self.force_loop::<false, false>(advance_history, par),
-            (LinearSpringDashpot, IncrementalMindlin) => self.force_loop::<false, true>(advance_history, par),
-            (Hertz, MfixTotal) => self.force_loop::<true, false>(advance_history, par),
-            (Hertz, IncrementalMindlin) => self.force_loop::<true, true>(advance_history, par),
-        }
+        crate::with_submodels!(self.law, |N, T| self.force_loop::<N, T>(advance_history, par))
     }
 
     /// The mass every particle has and the moment of inertia every particle has, each if all
@@ -647,7 +663,7 @@ impl Simulation {
     }
 
     /// The force stage for one law; with `par`, on the thread pool.
-    fn force_loop<const HERTZ: bool, const INCREMENTAL: bool>(&mut self, advance_history: bool, par: bool) {
+    fn force_loop<N: NormalSubModel, T: TangentialSubModel>(&mut self, advance_history: bool, par: bool) {
         let clock = self.timing.map(|_| std::time::Instant::now());
         let common_mass = self.common().0.map(forces::CommonMass::of);
         let peak_before = self.load_peak.unwrap_or([0.0; 2]);
@@ -700,13 +716,10 @@ impl Simulation {
         };
         let timed = clock.is_some();
         let work = match blocks {
-            Some((pool, plan)) => {
-                pool.install(|| forces::parallel::<HERTZ, INCREMENTAL>(&x, plan, out, timed))
+            Some((pool, plan)) => pool.install(|| forces::parallel::<N, T>(&x, plan, out, timed)),
+            None => {
+                forces::ThreadWork { walls: forces::serial::<N, T>(&x, out, timed), ..Default::default() }
             }
-            None => forces::ThreadWork {
-                walls: forces::serial::<HERTZ, INCREMENTAL>(&x, out, timed),
-                ..Default::default()
-            },
         };
         if quanta.exceeded_by(peak) {
             self.inexact_sums += 1;
@@ -745,24 +758,24 @@ impl Simulation {
         let nl = &self.neighbors;
         for (&[i, w], &h) in nl.wall_pairs().iter().zip(nl.wall_history()) {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
-            if let Some(g) = wall_geometry(p.position[i], p.radius[i], wall, lever) {
-                let c = scaled_damping(
-                    self.coeffs.wall(p.phase[i] as usize, wall.material),
-                    self.law.damping,
-                    p.mass[i],
-                );
+            let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+            let (x, r) = (p.position[i], p.radius[i]);
+            if let Some(g) =
+                wall_geometry_in_contact(self.law.normal, x, r, wall, lever, c.pull_off, formed(h))
+            {
+                let c = scaled_damping(c, self.law.damping, p.mass[i]);
                 let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
                 record(i, ContactPartner::Wall(w as usize), g, &c, v_r, h);
             }
         }
         for ([i, j], h) in nl.pairs().zip(nl.pair_histories()) {
             let (i, j) = (i as usize, j as usize);
-            if let Some(g) = pair_geometry_of(&p.position, &p.radius, i, j, lever, &per) {
-                let c = scaled_damping(
-                    self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize),
-                    self.law.damping,
-                    pair_mass(&p.mass, &self.held, i, j),
-                );
+            let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+            let (x, r) = (&p.position, &p.radius);
+            if let Some(g) =
+                pair_geometry_in_contact(self.law.normal, x, r, i, j, lever, &per, c.pull_off, formed(h))
+            {
+                let c = scaled_damping(c, self.law.damping, pair_mass(&p.mass, &self.held, i, j));
                 let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
                 record(i, ContactPartner::Particle(j), g, &c, v_r, h);
             }
@@ -784,21 +797,36 @@ impl Simulation {
             d.elastic += energy;
             d.max_overlap_ratio = d.max_overlap_ratio.max(delta / r_min);
         };
-        for &[i, w] in self.neighbors.wall_pairs() {
+        // A cohesive contact holds beyond the touch (see `contacts`).
+        let (normal, reaches, lever) = (self.law.normal, self.law.normal.reaches(), self.law.lever);
+        let nl = &self.neighbors;
+        for (&[i, w], &h) in nl.wall_pairs().iter().zip(nl.wall_history()) {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
-            if let Some(g) = wall_contact(p.position[i], p.radius[i], wall.point, wall.normal) {
-                let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+            let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+            let (x, r) = (p.position[i], p.radius[i]);
+            let g = if reaches {
+                wall_geometry_in_contact(normal, x, r, wall, lever, c.pull_off, formed(h))
+            } else {
+                wall_contact(x, r, wall.point, wall.normal)
+            };
+            if let Some(g) = g {
                 visit(g.overlap, p.radius[i], normal_spring_energy(self.law.normal, c, g.overlap));
             }
         }
-        for [i, j] in self.neighbors.pairs() {
+        for ([i, j], h) in nl.pairs().zip(nl.pair_histories()) {
             let (i, j) = (i as usize, j as usize);
-            if let Some(g) = pair_contact_separation(
-                self.periodic.min_image(p.position[j] - p.position[i]),
-                p.radius[i],
-                p.radius[j],
-            ) {
-                let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+            let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+            let g = if reaches {
+                let (x, r, per) = (&p.position, &p.radius, &self.periodic);
+                pair_geometry_in_contact(normal, x, r, i, j, lever, per, c.pull_off, formed(h))
+            } else {
+                pair_contact_separation(
+                    self.periodic.min_image(p.position[j] - p.position[i]),
+                    p.radius[i],
+                    p.radius[j],
+                )
+            };
+            if let Some(g) = g {
                 visit(
                     g.overlap,
                     p.radius[i].min(p.radius[j]),
@@ -883,8 +911,9 @@ fn thread_blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usi
 fn sum_floor(law: &ContactLaw, phases: &[Phase], coeffs: &CoeffTable) -> forces::Peak {
     let r = phases.iter().map(|p| p.radius()).fold(0.0, f64::max);
     let power = match law.normal {
-        NormalModel::LinearSpringDashpot => 1.0,
-        NormalModel::Hertz => 1.5,
+        crate::contact::NormalModel::LinearSpringDashpot => 1.0,
+        // Hertz and JKR: a stiffness in N/m^1.5 (JKR's floor ignores its cohesion).
+        _ => 1.5,
     };
     let kn = coeffs.all().map(|c| c.kn).fold(0.0, f64::max);
     forces::peak_floor(kn * r.powf(power), r)

@@ -36,6 +36,15 @@ pub fn collision_time(kn: f64, eta_n: f64, m_eff: f64) -> f64 {
     std::f64::consts::PI / (kn / m_eff - (eta_n / m_eff).powi(2) / 4.0).sqrt()
 }
 
+/// The stiffness MFIX's collision time takes: k_n, or K_n (Hertz, as if linear); for JKR the
+/// Hertz K_n = (4/3)E*·√R* of its elastic part.
+fn linear_stiffness(law: &ContactLaw, c: &crate::contact::ContactCoeffs) -> f64 {
+    match law.normal {
+        NormalModel::LinearSpringDashpot | NormalModel::Hertz => c.kn,
+        NormalModel::Jkr => c.kn * c.r_star.sqrt(),
+    }
+}
+
 /// η_n in kg/s for the phase pair's effective mass, whatever the damping's scaling.
 fn absolute_eta(law: &ContactLaw, c: &crate::contact::ContactCoeffs) -> f64 {
     match law.damping {
@@ -128,6 +137,7 @@ pub fn choose(
     let model = match law.normal {
         NormalModel::LinearSpringDashpot => "linear spring-dashpot k_n",
         NormalModel::Hertz => "Hertzian K_n taken as a linear stiffness, as MFIX does",
+        NormalModel::Jkr => "JKR's Hertzian (4/3)E*√R* taken as a linear stiffness, as MFIX does for Hertz",
     };
     if phases.is_empty() {
         return Err(EngineError::BadReference("at least one phase is needed".into()));
@@ -138,7 +148,7 @@ pub fn choose(
     for m in 0..phases.len() {
         for l in m..phases.len() {
             let c = table.pair(m, l);
-            let t = collision_time(c.kn, absolute_eta(law, c), c.m_eff);
+            let t = collision_time(linear_stiffness(law, c), absolute_eta(law, c), c.m_eff);
             if t < tcoll {
                 tcoll = t;
                 limiting = (m, l);
@@ -176,8 +186,8 @@ pub fn choose(
             if !(dt.is_finite() && dt > 0.0) {
                 return Err(EngineError::invalid("dt", dt, "the time step must be a positive time in s"));
             }
-            let hertz_default = law.normal == NormalModel::Hertz
-                && hertz_default_dt(phases).is_some_and(|d| d.to_bits() == dt.to_bits());
+            let hertz_default =
+                law.normal.elastic() && hertz_default_dt(phases).is_some_and(|d| d.to_bits() == dt.to_bits());
             let text = if hertz_default {
                 // The step a Hertz case without dt gets (the case layer puts it here).
                 let (tr, k) = rayleigh_time(phases).unwrap_or((f64::NAN, 0));
@@ -270,7 +280,7 @@ pub fn stability_limit(
                 reason: format!("collision time {:.4e} s of the {} (limit t_c/5)", best.0, best.1),
             }
         }
-        NormalModel::Hertz => {
+        NormalModel::Hertz | NormalModel::Jkr => {
             let mut best = (f64::INFINITY, String::new());
             for ph in phases {
                 if let (Some(e), Some(nu)) = (ph.youngs_modulus, ph.poisson_ratio) {

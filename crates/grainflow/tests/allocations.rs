@@ -68,6 +68,7 @@ fn flowing_bed(integrator: Integrator, normal: NormalModel) -> Simulation {
     let (law, params) = match normal {
         NormalModel::LinearSpringDashpot => lammps_hooke(),
         NormalModel::Hertz => lammps_mindlin(),
+        NormalModel::Jkr => unreachable!("JKR is not among the laws this test draws"),
     };
     let cfg = chute_config(
         law,

@@ -24,6 +24,7 @@ fn setup(
         NormalModel::Hertz => {
             (vec![elastic_phase("glass", 0.004, 2500.0, 5e6, 0.3)], hertz_params(0.7, 0.7, 0.4))
         }
+        NormalModel::Jkr => unreachable!("JKR is not among the laws this test draws"),
     };
     let lo = Vec3::ZERO;
     let hi = Vec3::new(0.03, 0.06, 0.03);

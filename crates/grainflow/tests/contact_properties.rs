@@ -93,6 +93,7 @@ fn coeffs_for(law: &ContactLaw, r: RawCoeffs) -> ContactCoeffs {
     let kn = match law.normal {
         NormalModel::LinearSpringDashpot => 10f64.powf(3.0 + 5.0 * r.log_kn),
         NormalModel::Hertz => 10f64.powf(8.0 + 3.0 * r.log_kn),
+        NormalModel::Jkr => unreachable!("JKR is not among the laws this test draws"),
     };
     let m = 1e-4;
     let crit = 2.0 * (kn * m).sqrt();
@@ -104,6 +105,7 @@ fn coeffs_for(law: &ContactLaw, r: RawCoeffs) -> ContactCoeffs {
         mu: r.mu,
         mu_roll: 0.0,
         m_eff: m,
+        ..Default::default()
     }
 }
 
@@ -144,6 +146,7 @@ impl PairState {
             (TangentialModel::MfixTotal, _) => s,
             (TangentialModel::IncrementalMindlin, NormalModel::LinearSpringDashpot) => c.kt * s,
             (TangentialModel::IncrementalMindlin, NormalModel::Hertz) => c.kt * self.delta().sqrt() * s,
+            (_, NormalModel::Jkr) => unreachable!("JKR is not among the laws this test draws"),
         }
     }
 }
@@ -165,6 +168,7 @@ fn force_scale(law: &ContactLaw, c: &ContactCoeffs, delta: f64, v_r: Vec3, h: Ve
     let (p, q, k) = match law.normal {
         NormalModel::LinearSpringDashpot => (delta, 1.0, c.kt),
         NormalModel::Hertz => (delta.powf(1.5), delta.powf(0.25), c.kt * delta.sqrt()),
+        NormalModel::Jkr => unreachable!("JKR is not among the laws this test draws"),
     };
     let v = v_r.length();
     let tangential_spring = match law.tangential {
@@ -377,6 +381,7 @@ fn sim_params(law: &ContactLaw, raw: RawCoeffs) -> ContactParams {
             mu_roll: 0.0,
             ..Default::default()
         },
+        NormalModel::Jkr => unreachable!("JKR is not among the laws this test draws"),
     }
 }
 

@@ -40,6 +40,7 @@ fn dem05(normal: NormalModel) -> Simulation {
                 p,
             )
         }
+        NormalModel::Jkr => unreachable!("JKR is not among the laws this test draws"),
     };
     let mut cfg = config(
         ContactLaw::mfix(normal),

@@ -1,14 +1,17 @@
 //! Contact coefficients derived from the inputs (reference: MFIX-DEM model §3).
 
-use super::limits;
-use super::{ContactLaw, NormalDamping, NormalModel};
+use super::ContactLaw;
+#[cfg(test)]
+use super::NormalModel;
+use super::submodel::{ElasticPair, NormalSubModel};
 use crate::error::EngineError;
 use crate::material::{Phase, WallMaterial};
 
 /// Contact inputs for one phase pair or one phase–wall-material pair.
 ///
 /// Which fields are used depends on the normal model: LSD uses `kn`, `kt_fac`, `etat_fac`
-/// and `en`; Hertz uses `en`, `et` and the phases' E and ν. Both use `mu` and `mu_roll`.
+/// and `en`; Hertz uses `en`, `et` and the phases' E and ν; JKR uses `en`, `etat_fac`,
+/// `surface_energy` and the phases' E and ν. All use `mu` and `mu_roll`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactParams {
     /// Normal spring stiffness k_n, N/m (LSD: MFIX `KN` / `KN_W`).
@@ -36,6 +39,8 @@ pub struct ContactParams {
     pub hertz_kn: Option<f64>,
     /// Hertz only: K_t (N/m^1.5) given directly instead of 8G*√R*.
     pub hertz_kt: Option<f64>,
+    /// JKR only: the surface energy γ, J/m² (LAMMPS's: the work of adhesion is 2γ).
+    pub surface_energy: Option<f64>,
 }
 
 impl Default for ContactParams {
@@ -53,6 +58,7 @@ impl Default for ContactParams {
             gamma_t: None,
             hertz_kn: None,
             hertz_kt: None,
+            surface_energy: None,
         }
     }
 }
@@ -60,9 +66,11 @@ impl Default for ContactParams {
 /// Derived coefficients of one contact type, as used in the force loop.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactCoeffs {
-    /// Normal stiffness: k_n (N/m, LSD) or K_n = (4/3)·E*·√R* (N/m^1.5, Hertz).
+    /// Normal stiffness: k_n (N/m, LSD), K_n = (4/3)·E*·√R* (N/m^1.5, Hertz) or (4/3)·E*
+    /// (Pa, JKR: times the contact radius a).
     pub kn: f64,
-    /// Tangential stiffness: k_t = κ·k_n (N/m, LSD) or K_t = 8·G*·√R* (N/m^1.5, Hertz).
+    /// Tangential stiffness: k_t = κ·k_n (N/m, LSD), K_t = 8·G*·√R* (N/m^1.5, Hertz) or 8·G*
+    /// (Pa, JKR: times a).
     pub kt: f64,
     /// Normal damping η_n (kg/s, or kg/(s·m^¼) for Hertz). For damping that depends on the
     /// particles' masses it is per unit mass (`MassVelocity`: γ_n) or per √mass (`Tsuji`:
@@ -76,6 +84,13 @@ pub struct ContactCoeffs {
     pub mu_roll: f64,
     /// Effective mass used for the damping, kg.
     pub m_eff: f64,
+    /// R* of the phases' radii, m (JKR; 0 otherwise).
+    pub r_star: f64,
+    /// Surface energy γ, J/m² (JKR; 0 otherwise).
+    pub surface_energy: f64,
+    /// The pull-off distance δ_c, m: a formed contact holds down to overlap −δ_c (JKR; 0
+    /// otherwise).
+    pub pull_off: f64,
 }
 
 /// η(K, M, e) = 2·√(K·M)·|ln e|/√(π² + (ln e)²) for 0 < e ≤ 1, and 2·√(K·M) for e = 0.
@@ -85,31 +100,6 @@ pub fn damping_coefficient(k: f64, m: f64, e: f64) -> f64 {
     }
     let l = e.ln();
     2.0 * (k * m).sqrt() * l.abs() / (std::f64::consts::PI.powi(2) + l * l).sqrt()
-}
-
-/// η_n for stiffness `k`, effective mass `m` and restitution `e`, by the law's damping rule
-/// (for `Tsuji`, per √mass: α√k; `MassVelocity` is set from γ_n by the caller).
-fn normal_damping(law: &ContactLaw, k: f64, m: f64, e: f64) -> f64 {
-    match law.damping {
-        NormalDamping::Mfix => damping_coefficient(k, m, e),
-        NormalDamping::ExactRestitution => {
-            super::damping::exact_damping_ratio(law.normal, e, law.clip_attraction) * (k * m).sqrt()
-        }
-        NormalDamping::Tsuji => tsuji_alpha(e) * k.sqrt(),
-        NormalDamping::MassVelocity => 0.0,
-    }
-}
-
-/// (γ_n, γ_t) per unit mass for `MassVelocity` damping; γ_t defaults to γ_n/2 (LAMMPS).
-fn mass_velocity(what: &str, p: &ContactParams) -> Result<(f64, f64), EngineError> {
-    let gn = p.gamma_n.ok_or_else(|| EngineError::MissingParameter {
-        what: format!("{what} gamma_n (normal damping per unit mass, 1/s)"),
-        model: "mass_velocity damping".into(),
-    })?;
-    limits::GAMMA.check(what, "gamma_n", gn)?;
-    let gt = p.gamma_t.unwrap_or(0.5 * gn);
-    limits::GAMMA.check(what, "gamma_t", gt)?;
-    Ok((gn, gt))
 }
 
 /// LAMMPS's fit of Tsuji's damping ratio to the restitution coefficient:
@@ -214,24 +204,26 @@ impl CoeffTable {
                 let what = format!("contact '{}'-'{}'", phases[m].name, phases[l].name);
                 let (ma, mb) = (phases[m].mass(), phases[l].mass());
                 let m_eff = ma * mb / (ma + mb);
-                let elastic = match law.normal {
-                    NormalModel::LinearSpringDashpot => None,
-                    NormalModel::Hertz => {
-                        let (ea, na) = elastic_of(
-                            &phases[m].name,
-                            phases[m].youngs_modulus,
-                            phases[m].poisson_ratio,
-                            "phase",
-                        )?;
-                        let (eb, nb) = elastic_of(
-                            &phases[l].name,
-                            phases[l].youngs_modulus,
-                            phases[l].poisson_ratio,
-                            "phase",
-                        )?;
-                        let (ra, rb) = (phases[m].radius(), phases[l].radius());
-                        Some(HertzInputs { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: ra * rb / (ra + rb) })
-                    }
+                let elastic = if law.normal.elastic() {
+                    let model = law.normal_name();
+                    let (ea, na) = elastic_of(
+                        &phases[m].name,
+                        phases[m].youngs_modulus,
+                        phases[m].poisson_ratio,
+                        "phase",
+                        model,
+                    )?;
+                    let (eb, nb) = elastic_of(
+                        &phases[l].name,
+                        phases[l].youngs_modulus,
+                        phases[l].poisson_ratio,
+                        "phase",
+                        model,
+                    )?;
+                    let (ra, rb) = (phases[m].radius(), phases[l].radius());
+                    Some(ElasticPair { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: ra * rb / (ra + rb) })
+                } else {
+                    None
                 };
                 let c = usable(&what, derive(law, &what, p, m_eff, elastic)?)?;
                 pairs[m * n + l] = c;
@@ -243,20 +235,21 @@ impl CoeffTable {
             for w in 0..nw {
                 let p = &wall_params[m * nw + w];
                 let what = format!("contact '{}'-wall '{}'", phases[m].name, wall_materials[w].name);
-                let elastic = match law.normal {
-                    NormalModel::LinearSpringDashpot => None,
-                    NormalModel::Hertz => {
-                        let (ea, na) = elastic_of(
-                            &phases[m].name,
-                            phases[m].youngs_modulus,
-                            phases[m].poisson_ratio,
-                            "phase",
-                        )?;
-                        let wm = &wall_materials[w];
-                        let (eb, nb) =
-                            elastic_of(&wm.name, wm.youngs_modulus, wm.poisson_ratio, "wall material")?;
-                        Some(HertzInputs { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: phases[m].radius() })
-                    }
+                let elastic = if law.normal.elastic() {
+                    let model = law.normal_name();
+                    let (ea, na) = elastic_of(
+                        &phases[m].name,
+                        phases[m].youngs_modulus,
+                        phases[m].poisson_ratio,
+                        "phase",
+                        model,
+                    )?;
+                    let wm = &wall_materials[w];
+                    let (eb, nb) =
+                        elastic_of(&wm.name, wm.youngs_modulus, wm.poisson_ratio, "wall material", model)?;
+                    Some(ElasticPair { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: phases[m].radius() })
+                } else {
+                    None
                 };
                 walls[m * nw + w] = usable(&what, derive(law, &what, p, phases[m].mass(), elastic)?)?;
             }
@@ -297,109 +290,48 @@ impl CoeffTable {
         self.pairs.iter().chain(&self.walls)
     }
 
+    /// The largest pull-off distance of any contact type, m (0 unless the normal model holds
+    /// formed contacts beyond the touch): the neighbour skin must exceed it.
+    pub fn reach(&self) -> f64 {
+        self.pairs.iter().chain(&self.walls).map(|c| c.pull_off).fold(0.0, f64::max)
+    }
+
     /// Number of phases.
     pub fn n_phases(&self) -> usize {
         self.n_phases
     }
 }
 
-struct HertzInputs {
-    e1: f64,
-    nu1: f64,
-    e2: f64,
-    nu2: f64,
-    r_star: f64,
-}
-
-fn elastic_of(name: &str, e: Option<f64>, nu: Option<f64>, kind: &str) -> Result<(f64, f64), EngineError> {
+fn elastic_of(
+    name: &str,
+    e: Option<f64>,
+    nu: Option<f64>,
+    kind: &str,
+    model: &str,
+) -> Result<(f64, f64), EngineError> {
     let e = e.ok_or_else(|| EngineError::MissingParameter {
         what: format!("{kind} '{name}' youngs_modulus"),
-        model: "hertz".into(),
+        model: model.into(),
     })?;
     let nu = nu.ok_or_else(|| EngineError::MissingParameter {
         what: format!("{kind} '{name}' poisson_ratio"),
-        model: "hertz".into(),
+        model: model.into(),
     })?;
     Ok((e, nu))
 }
 
+/// The coefficients of one contact type by the law's normal sub-model, which declares its
+/// parameters, their checks and how the two bodies' values combine.
 fn derive(
     law: &ContactLaw,
     what: &str,
     p: &ContactParams,
     m_eff: f64,
-    hertz: Option<HertzInputs>,
+    elastic: Option<ElasticPair>,
 ) -> Result<ContactCoeffs, EngineError> {
-    limits::EN.check(what, "en", p.en)?;
-    limits::MU.check(what, "mu", p.mu)?;
-    limits::MU_ROLL.check(what, "mu_roll", p.mu_roll)?;
-    match (law.normal, hertz) {
-        (NormalModel::LinearSpringDashpot, _) => {
-            limits::KT_FAC.check(what, "kt_fac", p.kt_fac)?;
-            limits::ETAT_FAC.check(what, "etat_fac", p.etat_fac)?;
-            let kn = p.kn.ok_or_else(|| EngineError::MissingParameter {
-                what: format!("{what} kn (normal stiffness, N/m)"),
-                model: "lsd".into(),
-            })?;
-            limits::KN.check(what, "kn", kn)?;
-            let (eta_n, eta_t) = match law.damping {
-                NormalDamping::MassVelocity => mass_velocity(what, p)?,
-                _ => {
-                    let eta_n = normal_damping(law, kn, m_eff, p.en);
-                    (eta_n, p.etat_fac * eta_n)
-                }
-            };
-            Ok(ContactCoeffs { kn, kt: p.kt_fac * kn, eta_n, eta_t, mu: p.mu, mu_roll: p.mu_roll, m_eff })
-        }
-        (NormalModel::Hertz, Some(h)) => {
-            // MFIX's Hertz damping takes η_t from e_t; the LAMMPS forms do not need it.
-            let et = match law.damping {
-                NormalDamping::Mfix | NormalDamping::ExactRestitution => {
-                    let et = p.et.ok_or_else(|| EngineError::MissingParameter {
-                        what: format!("{what} et (tangential restitution)"),
-                        model: "hertz".into(),
-                    })?;
-                    limits::ET.check(what, "et", et)?;
-                    et
-                }
-                NormalDamping::MassVelocity | NormalDamping::Tsuji => 1.0,
-            };
-            let e_star = 1.0 / ((1.0 - h.nu1 * h.nu1) / h.e1 + (1.0 - h.nu2 * h.nu2) / h.e2);
-            let g1 = h.e1 / (2.0 * (1.0 + h.nu1));
-            let g2 = h.e2 / (2.0 * (1.0 + h.nu2));
-            let g_star = 1.0 / ((2.0 - h.nu1) / g1 + (2.0 - h.nu2) / g2);
-            let sr = h.r_star.sqrt();
-            let kn = p.hertz_kn.unwrap_or(4.0 / 3.0 * e_star * sr);
-            let kt = p.hertz_kt.unwrap_or(8.0 * g_star * sr);
-            for (key, v) in [("hertz_kn", p.hertz_kn), ("hertz_kt", p.hertz_kt)] {
-                if let Some(v) = v {
-                    limits::KN.check(what, key, v)?;
-                }
-            }
-            Ok(ContactCoeffs {
-                kn,
-                kt,
-                eta_n: match law.damping {
-                    NormalDamping::MassVelocity => mass_velocity(what, p)?.0,
-                    _ => normal_damping(law, kn, m_eff, p.en),
-                },
-                eta_t: match law.damping {
-                    NormalDamping::Mfix | NormalDamping::ExactRestitution => {
-                        damping_coefficient(kt, 2.0 / 7.0 * m_eff, et)
-                    }
-                    NormalDamping::Tsuji => p.etat_fac * normal_damping(law, kn, m_eff, p.en),
-                    NormalDamping::MassVelocity => mass_velocity(what, p)?.1,
-                },
-                mu: p.mu,
-                mu_roll: p.mu_roll,
-                m_eff,
-            })
-        }
-        (NormalModel::Hertz, None) => Err(EngineError::MissingParameter {
-            what: format!("{what} elastic constants"),
-            model: "hertz".into(),
-        }),
-    }
+    crate::with_normal_submodel!(law.normal, |N| <N as NormalSubModel>::coefficients(
+        law, what, p, m_eff, elastic
+    ))
 }
 
 #[cfg(test)]

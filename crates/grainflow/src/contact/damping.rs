@@ -18,7 +18,8 @@ use super::NormalModel;
 pub fn restitution(model: NormalModel, alpha: f64, clip: bool) -> f64 {
     let (p, q) = match model {
         NormalModel::LinearSpringDashpot => (1.0, 0.0),
-        NormalModel::Hertz => (1.5, 0.25),
+        // JKR takes Tsuji's damping only; its elastic part is Hertz's far from the pull-off.
+        NormalModel::Hertz | NormalModel::Jkr => (1.5, 0.25),
     };
     // Repulsive force (positive pushes the bodies apart).
     let force = |x: f64, v: f64| {
@@ -63,7 +64,7 @@ pub fn exact_damping_ratio(model: NormalModel, e: f64, clip: bool) -> f64 {
     /// (Hertz?, bits of e, clipped?) → α.
     type Solved = HashMap<(bool, u64, bool), f64>;
     static SOLVED: OnceLock<Mutex<Solved>> = OnceLock::new();
-    let key = (model == NormalModel::Hertz, e.to_bits(), clip);
+    let key = (model != NormalModel::LinearSpringDashpot, e.to_bits(), clip);
     let memo = SOLVED.get_or_init(|| Mutex::new(HashMap::new()));
     if let Some(alpha) = memo.lock().ok().and_then(|m| m.get(&key).copied()) {
         return alpha;

@@ -1,11 +1,14 @@
 //! Contact forces and torques (reference: MFIX-DEM model §4).
 //!
 //! One function, [`contact_force`], serves particle–particle and particle–wall contacts; it is
-//! generic over the normal model and the tangential model so that the force loop is
-//! monomorphised once per law.
+//! generic over the normal and the tangential sub-model types ([`super::submodel`]) so that
+//! the force loop is monomorphised once per law. It forms what every law shares (the normal
+//! and tangential velocities, the history in the tangent plane, the Coulomb cap's choice) and
+//! asks the sub-models for the rest.
 
 use super::geometry::ContactGeometry;
-use super::{ContactCoeffs, ContactLaw, CoulombCap, HistoryFrame, NormalModel, TangentialModel};
+use super::submodel::{NormalSubModel, TangentialSubModel, mark_formed};
+use super::{ContactCoeffs, ContactLaw, CoulombCap, HistoryFrame, NormalModel};
 use crate::math::{Vec3, pick};
 
 /// The forces of one contact on particle i (particle j, if any, gets the opposite force).
@@ -15,8 +18,12 @@ pub struct ContactForce {
     pub normal: Vec3,
     /// Tangential force on i, N.
     pub tangential: Vec3,
-    /// Magnitude of the elastic part of the normal force (k_n·δ or K_n·δ^1.5), N.
+    /// The elastic part of the normal force (k_n·δ, K_n·δ^1.5, or JKR's with its adhesion,
+    /// negative where that wins), N.
     pub elastic_normal: f64,
+    /// The normal load of the rolling torque: `elastic_normal`, or for JKR the critical force
+    /// |F_ne + 2F_c|, N.
+    pub rolling_load: f64,
 }
 
 impl ContactForce {
@@ -72,9 +79,9 @@ pub mod parts {
 ///
 /// `clip` floors the normal force at zero (no attraction at the end of a contact); `cap`
 /// chooses MFIX's or LAMMPS's treatment of a force beyond the Coulomb limit.
-/// `HERTZ` selects the Hertzian normal law and stiffness scaling; `INCREMENTAL` the
-/// incremental Mindlin spring (history = elastic tangential force) instead of MFIX's total
-/// displacement (history = tangential displacement s).
+/// `N` is the normal sub-model (force, stiffness and damping scaling, the Coulomb limit's
+/// normal force); `T` the tangential one (MFIX's total displacement, history = tangential
+/// displacement s, or the incremental Mindlin spring, history = elastic tangential force).
 ///
 /// Per MFIX: trial s = h + Δt·v_t; F_t = −k·s − c·v_t; if |F_t| > μ·|F_n| then
 /// F_t = −μ·|F_n|·s/|s| and s ← (μ·|F_n|/k)·s/|s|; h ← s after every contact step.
@@ -84,7 +91,8 @@ pub mod parts {
 /// (see `forces`). The picked values are the same operations in the same order as a branching
 /// form, so the results do not depend on how the function is compiled.
 #[inline(always)]
-pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
+#[allow(clippy::too_many_arguments)]
+pub fn contact_force<N: NormalSubModel, T: TangentialSubModel>(
     frame: HistoryFrame,
     clip: bool,
     cap: CoulombCap,
@@ -94,14 +102,14 @@ pub fn contact_force<const HERTZ: bool, const INCREMENTAL: bool>(
     history: &mut Vec3,
     dt: f64,
 ) -> ContactForce {
-    contact_force_for::<HERTZ, INCREMENTAL, { parts::ALL }>(frame, clip, cap, c, g, v_r, history, dt)
+    contact_force_for::<N, T, { parts::ALL }>(frame, clip, cap, c, g, v_r, history, dt)
 }
 
 /// [`contact_force`] with only the optional [`parts`] in `PARTS` compiled: `frame` and `cap`
 /// must be among them (the others' values are never formed). The same result, to the bit.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub fn contact_force_for<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
+pub fn contact_force_for<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8>(
     frame: HistoryFrame,
     clip: bool,
     cap: CoulombCap,
@@ -120,17 +128,12 @@ pub fn contact_force_for<const HERTZ: bool, const INCREMENTAL: bool, const PARTS
     let v_t = v_r - v_n * n;
 
     // Normal force and the tangential stiffness/damping in use.
-    let (fn_el, fn_damp, k, damp_t) = if HERTZ {
-        let sd = delta.sqrt();
-        let qd = sd.sqrt();
-        (c.kn * delta * sd, c.eta_n * qd * v_n, c.kt * sd, c.eta_t * qd)
-    } else {
-        (c.kn * delta, c.eta_n * v_n, c.kt, c.eta_t)
-    };
-    let fn_total = fn_el + fn_damp;
+    let np = N::parts(c, delta, v_n);
+    let (fn_el, k, damp_t) = (np.elastic, np.k_t, np.eta_t);
+    let fn_total = fn_el + np.damping;
     let fn_total = if clip && fn_total < 0.0 { 0.0 } else { fn_total };
     let f_n = -fn_total * n;
-    let fn_mag = fn_total.abs();
+    let critical = N::critical(c, fn_el, fn_total);
 
     // The history in the current tangent plane: as stored (MFIX), projected, or projected
     // and rescaled to its stored length (rotated).
@@ -144,7 +147,7 @@ pub fn contact_force_for<const HERTZ: bool, const INCREMENTAL: bool, const PARTS
     };
     let h = pick(frame == HistoryFrame::Mfix, h, pick(frame == HistoryFrame::Project, projected, rotated));
 
-    let limit = c.mu * fn_mag;
+    let limit = c.mu * critical;
     // A constant where only one cap is compiled, so that the other is never formed.
     let lammps = if PARTS & parts::MFIX_CAP == 0 {
         true
@@ -153,43 +156,16 @@ pub fn contact_force_for<const HERTZ: bool, const INCREMENTAL: bool, const PARTS
     } else {
         cap == CoulombCap::Lammps
     };
-    let (f_t, stored) = if INCREMENTAL {
-        // History holds the elastic tangential force.
-        let f_el = h - k * dt * v_t;
-        let trial = f_el - damp_t * v_t;
-        let len = f_el.length();
-        // Beyond the limit: LAMMPS scales the trial force down, MFIX the spring.
-        let lammps_capped = (limit / trial.length()) * trial;
-        let mfix_capped = (limit / len) * f_el;
-        let capped = pick(lammps, lammps_capped, mfix_capped);
-        let capped_stored = pick(lammps, lammps_capped + damp_t * v_t, mfix_capped);
-        let sliding = trial.length_squared() > limit * limit;
-        // |f_el| = 0 exactly when |f_el|² = 0: no square root where only LAMMPS's cap is used.
-        let stuck = f_el.length_squared() == 0.0;
-        (
-            pick(sliding, pick(stuck, Vec3::ZERO, capped), trial),
-            pick(sliding, pick(stuck, Vec3::ZERO, capped_stored), f_el),
-        )
-    } else {
-        // History holds the total tangential displacement.
-        let s = h + dt * v_t;
-        let s = pick(frame == HistoryFrame::Project, s - s.dot(n) * n, s);
-        let trial = -k * s - damp_t * v_t;
-        let len = s.length();
-        let dir = s / len;
-        let lammps_capped = (limit / trial.length()) * trial;
-        let capped = pick(lammps, lammps_capped, -limit * dir);
-        let capped_stored = pick(lammps, -(lammps_capped + damp_t * v_t) / k, (limit / k) * dir);
-        let capped_stored = pick(k > 0.0, capped_stored, Vec3::ZERO);
-        let sliding = trial.length_squared() > limit * limit;
-        let stuck = s.length_squared() == 0.0;
-        (
-            pick(sliding, pick(stuck, Vec3::ZERO, capped), trial),
-            pick(sliding, pick(stuck, Vec3::ZERO, capped_stored), s),
-        )
-    };
-    *history = stored;
-    ContactForce { normal: f_n, tangential: f_t, elastic_normal: fn_el }
+    let (f_t, stored) = T::force(h, n, v_t, k, damp_t, limit, lammps, frame, dt);
+    // A cohesive contact is known by its history where it has no contact flag (module doc of
+    // `submodel`).
+    *history = if N::REACHES { mark_formed(stored) } else { stored };
+    ContactForce {
+        normal: f_n,
+        tangential: f_t,
+        elastic_normal: fn_el,
+        rolling_load: N::rolling_load(fn_el, critical),
+    }
 }
 
 /// Dispatches [`contact_force`] on a runtime [`ContactLaw`]. For tests and one-off use; the
@@ -202,43 +178,16 @@ pub fn contact_force_dyn(
     history: &mut Vec3,
     dt: f64,
 ) -> ContactForce {
-    use NormalModel::*;
-    use TangentialModel::*;
-    match (law.normal, law.tangential) {
-        (LinearSpringDashpot, MfixTotal) => contact_force::<false, false>(
-            law.history,
-            law.clip_attraction,
-            law.coulomb,
-            c,
-            g,
-            v_r,
-            history,
-            dt,
-        ),
-        (LinearSpringDashpot, IncrementalMindlin) => contact_force::<false, true>(
-            law.history,
-            law.clip_attraction,
-            law.coulomb,
-            c,
-            g,
-            v_r,
-            history,
-            dt,
-        ),
-        (Hertz, MfixTotal) => contact_force::<true, false>(
-            law.history,
-            law.clip_attraction,
-            law.coulomb,
-            c,
-            g,
-            v_r,
-            history,
-            dt,
-        ),
-        (Hertz, IncrementalMindlin) => {
-            contact_force::<true, true>(law.history, law.clip_attraction, law.coulomb, c, g, v_r, history, dt)
-        }
-    }
+    crate::with_submodels!(law, |N, T| contact_force::<N, T>(
+        law.history,
+        law.clip_attraction,
+        law.coulomb,
+        c,
+        g,
+        v_r,
+        history,
+        dt
+    ))
 }
 
 /// Rolling-friction torque on a particle spinning at ω: −μ_r·|F_n,elastic|·ω̂ (zero at ω = 0
@@ -249,11 +198,9 @@ pub fn rolling_torque(mu_roll: f64, elastic_normal: f64, omega: Vec3) -> Vec3 {
     pick(mu_roll != 0.0 && w > 0.0, (-mu_roll * elastic_normal / w) * omega, Vec3::ZERO)
 }
 
-/// Elastic energy stored in the normal spring: ½·k_n·δ² (LSD) or (2/5)·K_n·δ^2.5 (Hertz), J.
+/// Energy stored in the normal contact: ½·k_n·δ² (LSD), (2/5)·K_n·δ^2.5 (Hertz), or JKR's
+/// ∫₀^δ F_ne (zero at touch), J.
 #[inline]
 pub fn normal_spring_energy(normal: NormalModel, c: &ContactCoeffs, delta: f64) -> f64 {
-    match normal {
-        NormalModel::LinearSpringDashpot => 0.5 * c.kn * delta * delta,
-        NormalModel::Hertz => 0.4 * c.kn * delta * delta * delta.sqrt(),
-    }
+    crate::with_normal_submodel!(normal, |N| <N as NormalSubModel>::energy(c, delta))
 }

@@ -64,3 +64,5 @@ pub const DIAMETER: Range = range(0.0, true, f64::MAX, false, "must be a positiv
 pub const DENSITY: Range = range(0.0, true, f64::MAX, false, "must be positive (kg/m³)");
 /// Damping per unit mass γ_n, γ_t.
 pub const GAMMA: Range = range(0.0, false, f64::MAX, false, "must be >= 0 (1/s)");
+/// Surface energy γ of a cohesive contact (JKR).
+pub const SURFACE_ENERGY: Range = range(0.0, true, f64::MAX, false, "must be positive (J/m²)");

@@ -3,12 +3,17 @@
 //! - [`geometry`]: overlap, normal and lever arms of a particle pair or a particle and a wall.
 //! - [`coefficients`]: stiffness and damping derived from the inputs, per phase pair and per
 //!   phase–wall-material pair (MFIX's formulas).
-//! - [`law`]: normal force, tangential spring with the Coulomb cap, torques.
+//! - [`submodel`]: the sub-models, one type per category (normal: linear, Hertz, JKR;
+//!   tangential: MFIX's total displacement, incremental Mindlin), each with its parameters,
+//!   touch condition, critical force and history size.
+//! - [`law`]: normal force, tangential spring with the Coulomb cap, torques, generic over the
+//!   sub-models.
 //! - `pair`: the law applied to one pair or wall contact as the force stage gathers it, and the
 //!   effective masses, scaled damping and lever-arm geometry it and the diagnostics share.
 //!
-//! A contact law is chosen once, at set-up, as a [`ContactLaw`]; the force loop is then
-//! monomorphised for it (no dynamic dispatch per contact).
+//! A contact law is chosen once, at set-up, as a [`ContactLaw`]; its normal and tangential
+//! settings name the sub-model types the force loop is then monomorphised for (no dynamic
+//! dispatch per contact).
 
 pub mod coefficients;
 pub mod damping;
@@ -16,6 +21,7 @@ pub mod geometry;
 pub mod law;
 pub mod limits;
 pub(crate) mod pair;
+pub mod submodel;
 
 pub use coefficients::{CoeffTable, ContactCoeffs, ContactParams, damping_coefficient, tsuji_alpha};
 
@@ -28,6 +34,23 @@ pub enum NormalModel {
     /// Hertzian (MFIX `DES_COLL_MODEL = 'HERTZIAN'`):
     /// F_n = −(K_n·δ^1.5 + η_n·δ^0.25·v_n)·n.
     Hertz,
+    /// JKR cohesion, as LAMMPS `pair granular … jkr … damping tsuji`: Hertz-like elasticity
+    /// on the JKR contact radius a(δ) with adhesion, F_n = −((4/3)E*a³/R* − 4√(πγE*)·a^1.5 +
+    /// η_n·√a·v_n)·n; a contact formed at touch holds until the pull-off distance
+    /// ([`submodel::Jkr`]).
+    Jkr,
+}
+
+impl NormalModel {
+    /// True if the model derives its stiffness from Young's moduli and Poisson's ratios.
+    pub fn elastic(&self) -> bool {
+        matches!(self, NormalModel::Hertz | NormalModel::Jkr)
+    }
+
+    /// True if a formed contact holds to a negative overlap (the model's pull-off distance).
+    pub fn reaches(&self) -> bool {
+        crate::with_normal_submodel!(self, |N| <N as submodel::NormalSubModel>::REACHES)
+    }
 }
 
 /// How the tangential spring force is formed.
@@ -142,6 +165,7 @@ impl ContactLaw {
         match self.normal {
             NormalModel::LinearSpringDashpot => "lsd",
             NormalModel::Hertz => "hertz",
+            NormalModel::Jkr => "jkr",
         }
     }
 }

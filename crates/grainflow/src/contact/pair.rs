@@ -13,7 +13,8 @@ use crate::contact::geometry::{
     relative_velocity_of_centres, wall_contact,
 };
 use crate::contact::law::{ContactForce, contact_force_for, parts, rolling_torque};
-use crate::contact::{ContactCoeffs, ContactLaw, LeverArm, NormalDamping};
+use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
+use crate::contact::{ContactCoeffs, ContactLaw, LeverArm, NormalDamping, NormalModel};
 use crate::math::Vec3;
 use crate::wall::Wall;
 
@@ -48,7 +49,7 @@ pub(crate) struct PairInput {
 /// The load of a touching pair and its advanced tangential history. Branch-free (see
 /// [`contact_force`](crate::contact::law::contact_force)).
 #[inline(always)]
-pub(crate) fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
+pub(crate) fn pair_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     p: &PairInput,
@@ -64,13 +65,13 @@ pub(crate) fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: 
     g.lever_i = if radical { g.lever_i } else { p.ra };
     g.lever_j = if radical { g.lever_j } else { p.rb };
     let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, p.wb);
-    let (f, h) = law_force::<HERTZ, INCREMENTAL, PARTS>(law, dt, p, &g, v_r);
+    let (f, h) = law_force::<N, T, PARTS>(law, dt, p, &g, v_r);
     let load = PairLoad {
         f: f.total(),
         ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
-            + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wa),
+            + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wa),
         tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
-            + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wb),
+            + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wb),
     };
     (load, h)
 }
@@ -79,16 +80,16 @@ pub(crate) fn pair_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: 
 /// [`parts::ROLLING`]): [`rolling_torque`] is zero then, and adding a zero keeps the bits of
 /// the sum as they are with it.
 #[inline(always)]
-fn rolling<const PARTS: u8>(mu_roll: f64, elastic_normal: f64, omega: Vec3) -> Vec3 {
+fn rolling<const PARTS: u8>(mu_roll: f64, load: f64, omega: Vec3) -> Vec3 {
     debug_assert!(PARTS & parts::ROLLING != 0 || mu_roll == 0.0);
-    if PARTS & parts::ROLLING != 0 { rolling_torque(mu_roll, elastic_normal, omega) } else { Vec3::ZERO }
+    if PARTS & parts::ROLLING != 0 { rolling_torque(mu_roll, load, omega) } else { Vec3::ZERO }
 }
 
 /// The law's force for a contact of geometry `g` and relative velocity `v_r`, with the
 /// input's coefficients and its damping scaled by the effective mass as the law asks; and the
 /// advanced history.
 #[inline(always)]
-fn law_force<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
+fn law_force<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     p: &PairInput,
@@ -97,7 +98,7 @@ fn law_force<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
 ) -> (ContactForce, Vec3) {
     let c = scaled_damping_for::<PARTS>(&p.c, law.damping, p.m_eff);
     let mut h = p.h;
-    let f = contact_force_for::<HERTZ, INCREMENTAL, PARTS>(
+    let f = contact_force_for::<N, T, PARTS>(
         law.history,
         law.clip_attraction,
         law.coulomb,
@@ -115,7 +116,7 @@ fn law_force<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
 /// overlap in `ra`, the lever arm in `rb`, the particle's velocity and spin in `dv`, `wa`, its
 /// mass in `m_eff`. Branch-free.
 #[inline(always)]
-pub(crate) fn wall_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
+pub(crate) fn wall_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     p: &PairInput,
@@ -123,8 +124,8 @@ pub(crate) fn wall_law<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: 
     let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb, lever_j: 0.0 };
     // v − 0 = v: the same bits as the pair form with the wall at rest.
     let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, Vec3::ZERO);
-    let (f, h) = law_force::<HERTZ, INCREMENTAL, PARTS>(law, dt, p, &g, v_r);
-    let torque = f.torque(g.lever_i, g.normal) + rolling::<PARTS>(p.c.mu_roll, f.elastic_normal, p.wa);
+    let (f, h) = law_force::<N, T, PARTS>(law, dt, p, &g, v_r);
+    let torque = f.torque(g.lever_i, g.normal) + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wa);
     (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
 }
 
@@ -222,6 +223,54 @@ pub(crate) fn pair_geometry_of(
     Some(g)
 }
 
+/// [`pair_geometry_of`] for the law's normal model `normal`: a model that holds a formed
+/// contact (`formed`: its history says so) to its pull-off distance `reach` keeps the pair in
+/// contact there. For the others, [`pair_geometry_of`] itself.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn pair_geometry_in_contact(
+    normal: NormalModel,
+    position: &[Vec3],
+    radius: &[f64],
+    i: usize,
+    j: usize,
+    lever: LeverArm,
+    per: &Periodic,
+    reach: f64,
+    formed: bool,
+) -> Option<ContactGeometry> {
+    crate::with_normal_submodel!(normal, |N| {
+        if !N::REACHES {
+            return pair_geometry_of(position, radius, i, j, lever, per);
+        }
+        let d = per.nearest(position[j] - position[i]);
+        let d2 = d.length_squared();
+        if !(N::touching(d2, radius[i], radius[j], reach, formed) && d2 != 0.0) {
+            return None;
+        }
+        let mut g = pair_geometry(d, radius[i], radius[j]);
+        if lever != LeverArm::RadicalPlane {
+            (g.lever_i, g.lever_j) = (radius[i], radius[j]);
+        }
+        Some(g)
+    })
+}
+
+/// [`wall_geometry`] for the law's normal model, as [`pair_geometry_in_contact`].
+pub(crate) fn wall_geometry_in_contact(
+    normal: NormalModel,
+    x: Vec3,
+    r: f64,
+    wall: &Wall,
+    lever: LeverArm,
+    reach: f64,
+    formed: bool,
+) -> Option<ContactGeometry> {
+    crate::with_normal_submodel!(normal, |N| {
+        let g = wall_geometry_for::<N>(x, r, wall, lever)?;
+        N::wall_touching(g.overlap, reach, formed).then_some(g)
+    })
+}
+
 /// The lever of the tangential force's torque: the geometry's lever, less half the overlap
 /// for LAMMPS's `pair granular` convention.
 #[inline(always)]
@@ -239,6 +288,24 @@ pub(crate) fn wall_geometry(x: Vec3, r: f64, wall: &Wall, lever: LeverArm) -> Op
         g.lever_i = r;
     }
     Some(g)
+}
+
+/// [`wall_geometry`] for the normal model `N`: where a formed contact holds to a negative
+/// overlap (`N::REACHES`), the geometry whatever the overlap's sign (the contact test has
+/// decided that it is in contact).
+#[inline(always)]
+pub(crate) fn wall_geometry_for<N: NormalSubModel>(
+    x: Vec3,
+    r: f64,
+    wall: &Wall,
+    lever: LeverArm,
+) -> Option<ContactGeometry> {
+    if !N::REACHES {
+        return wall_geometry(x, r, wall, lever);
+    }
+    let d = (x - wall.point).dot(wall.normal);
+    let lever_i = if lever != LeverArm::RadicalPlane { r } else { d };
+    Some(ContactGeometry { normal: -wall.normal, overlap: r - d, lever_i, lever_j: 0.0 })
 }
 
 #[cfg(test)]

@@ -9,8 +9,8 @@
 use std::ops::Range;
 
 use super::ForceInputs;
-use crate::contact::geometry::{pair_touching, wall_contact};
 use crate::contact::pair::kept_or_zero;
+use crate::contact::submodel::{NormalSubModel, formed};
 use crate::math::Vec3;
 
 /// From this many particles on, the contact test asks for the data ahead of it
@@ -110,7 +110,7 @@ pub(super) struct Cursor {
 /// written into the next place, which only a touching pair keeps. `acc` are the rows'
 /// accumulators, for [`prefetch_ahead`].
 #[inline(always)]
-pub(super) fn find_contacts(
+pub(super) fn find_contacts<N: NormalSubModel>(
     x: &ForceInputs,
     rows: Range<usize>,
     acc: [&[Vec3]; 2],
@@ -119,18 +119,28 @@ pub(super) fn find_contacts(
     found: &mut [Found; FOUND],
 ) -> usize {
     if x.images.any() {
-        find_contacts_in::<true>(x, rows, acc, cursor, in_contact, found)
+        find_contacts_in::<N, true>(x, rows, acc, cursor, in_contact, found)
     } else {
-        find_contacts_in::<false>(x, rows, acc, cursor, in_contact, found)
+        find_contacts_in::<N, false>(x, rows, acc, cursor, in_contact, found)
+    }
+}
+
+/// The pull-off distance of the pair of slots a, b (for a normal model that reaches beyond
+/// the touch).
+#[inline(always)]
+pub(super) fn pair_reach(x: &ForceInputs, a: usize, b: usize) -> f64 {
+    match x.coeffs.uniform_pair() {
+        Some(c) => c.pull_off,
+        None => x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize).pull_off,
     }
 }
 
 /// [`find_contacts`] for domains with (`PERIODIC`) or without periodic axes: the choice made
-/// once, not per pair. The loop reads each row's partners and contact flags as slices, and the
+/// once, not per pair; the touch condition the normal model `N`'s. The loop reads each row's partners and contact flags as slices, and the
 /// particles below the rows' end through slices of that length, so that it makes no bounds
 /// check per pair.
 #[inline(never)]
-fn find_contacts_in<const PERIODIC: bool>(
+fn find_contacts_in<N: NormalSubModel, const PERIODIC: bool>(
     x: &ForceInputs,
     rows: Range<usize>,
     acc: [&[Vec3]; 2],
@@ -164,7 +174,8 @@ fn find_contacts_in<const PERIODIC: bool>(
             let (keep, fresh) = if b < r1 {
                 let d = position[b] - xa;
                 let d = if PERIODIC { images.nearest_on_periodic_axes(d) } else { d };
-                let touching = pair_touching(d.length_squared(), ra, radius[b]);
+                let reach = if N::REACHES { pair_reach(x, a, b) } else { 0.0 };
+                let touching = N::touching(d.length_squared(), ra, radius[b], reach, *flag);
                 let fresh = !*flag;
                 *flag = touching;
                 (touching, fresh)
@@ -183,9 +194,11 @@ fn find_contacts_in<const PERIODIC: bool>(
 
 /// Lists, as indices into `wall_pairs`, the wall pairs from `at` on that touch, until the list
 /// ends or `found` is full; clears the histories of the others and returns how many it listed.
-/// Like [`find_contacts`], without a branch on the test's outcome.
+/// Like [`find_contacts`], without a branch on the test's outcome; the touch condition the
+/// normal model `N`'s (a wall pair has no contact flag: a formed contact of a model that
+/// reaches beyond the touch is known by its history, `submodel::formed`).
 #[inline(never)]
-pub(super) fn find_wall_contacts(
+pub(super) fn find_wall_contacts<N: NormalSubModel>(
     x: &ForceInputs,
     wall_pairs: &[[u32; 2]],
     at: &mut usize,
@@ -196,7 +209,9 @@ pub(super) fn find_wall_contacts(
     while *at < wall_pairs.len() && n < FOUND {
         let [i, w] = wall_pairs[*at];
         let (i, wall) = (i as usize, &x.walls[w as usize]);
-        let touching = wall_contact(x.position[i], x.radius[i], wall.point, wall.normal).is_some();
+        let overlap = x.radius[i] - (x.position[i] - wall.point).dot(wall.normal);
+        let reach = if N::REACHES { x.coeffs.wall(x.phase[i] as usize, wall.material).pull_off } else { 0.0 };
+        let touching = N::wall_touching(overlap, reach, N::REACHES && formed(hist[*at]));
         hist[*at] = kept_or_zero(hist[*at], touching);
         found[n] = *at;
         n += touching as usize;

@@ -13,12 +13,12 @@ use std::ops::Range;
 use super::detect::Found;
 use super::{Accumulators, CrossingLoad, ForceInputs, Peak, Quanta};
 use crate::boundary::Images;
-use crate::contact::geometry::pair_touching;
 use crate::contact::law::parts;
 use crate::contact::pair::{
-    CommonMass, PairInput, PairLoad, common_pair_mass, kept_or_zero, pair_law, pair_mass, wall_geometry,
+    CommonMass, PairInput, PairLoad, common_pair_mass, kept_or_zero, pair_law, pair_mass, wall_geometry_for,
     wall_law,
 };
+use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw};
 use crate::math::Vec3;
 
@@ -54,8 +54,8 @@ pub(super) struct InputLanes {
     h: Vec3Lanes,
     /// ra, rb, m_eff.
     scalars: [[f64; LANES]; 3],
-    /// kn, kt, eta_n, eta_t, mu, mu_roll.
-    coeffs: [[f64; LANES]; 6],
+    /// kn, kt, eta_n, eta_t, mu, mu_roll, r_star, surface_energy.
+    coeffs: [[f64; LANES]; COEFFS],
 }
 
 impl InputLanes {
@@ -66,7 +66,7 @@ impl InputLanes {
         wb: Vec3Lanes::ZERO,
         h: Vec3Lanes::ZERO,
         scalars: [[0.0; LANES]; 3],
-        coeffs: [[0.0; LANES]; 6],
+        coeffs: [[0.0; LANES]; COEFFS],
     };
 
     /// Sets lane `i` to `p`.
@@ -196,6 +196,7 @@ impl InputLanes {
         let (v, c) = (&self.scalars, &self.coeffs);
         let [ra, rb, m_eff] = [v[0][i], v[1][i], v[2][i]];
         let [kn, kt, eta_n, eta_t, mu, mu_roll] = [c[0][i], c[1][i], c[2][i], c[3][i], c[4][i], c[5][i]];
+        let [r_star, surface_energy] = [c[6][i], c[7][i]];
         PairInput {
             d: self.d.get(i),
             ra,
@@ -204,17 +205,32 @@ impl InputLanes {
             wa: self.wa.get(i),
             wb: self.wb.get(i),
             h: self.h.get(i),
-            c: ContactCoeffs { kn, kt, eta_n, eta_t, mu, mu_roll, m_eff: 0.0 },
+            c: ContactCoeffs {
+                kn,
+                kt,
+                eta_n,
+                eta_t,
+                mu,
+                mu_roll,
+                m_eff: 0.0,
+                r_star,
+                surface_energy,
+                pull_off: 0.0,
+            },
             m_eff,
         }
     }
 }
 
-/// The coefficients the law reads, in the order of [`InputLanes::coeffs`].
+/// The coefficients the law reads, in the order of [`InputLanes::coeffs`] (the pull-off
+/// distance is the contact test's, not the law's).
 #[inline(always)]
-fn coeff_lanes(c: &ContactCoeffs) -> [f64; 6] {
-    [c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll]
+fn coeff_lanes(c: &ContactCoeffs) -> [f64; COEFFS] {
+    [c.kn, c.kt, c.eta_n, c.eta_t, c.mu, c.mu_roll, c.r_star, c.surface_energy]
 }
+
+/// Coefficients in a lane.
+const COEFFS: usize = 8;
 
 /// The loads and advanced histories of a batch, component by component; once computed, the
 /// loads are rounded to the quanta of the sums (`forces::sum`).
@@ -291,12 +307,12 @@ impl Lanes {
     /// rounded for the sums, the peaks raised by those of the `live` lanes; a wall batch with
     /// `WALL`.
     #[inline(always)]
-    fn compute<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+    fn compute<N: NormalSubModel, T: TangentialSubModel, const WALL: bool>(
         &mut self,
         x: &ForceInputs,
         live: &Live,
     ) {
-        contact_loads::<HERTZ, INCREMENTAL, WALL>(
+        contact_loads::<N, T, WALL>(
             &x.law,
             x.coeffs.rolling(),
             x.dt,
@@ -318,7 +334,7 @@ impl Lanes {
     /// `hist` (those of the rows' pairs). A crossing pair takes its load from `crossing`.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn add_loads<const HERTZ: bool, const INCREMENTAL: bool>(
+    pub(super) fn add_loads<N: NormalSubModel, T: TangentialSubModel>(
         &mut self,
         x: &ForceInputs,
         rows: Range<usize>,
@@ -334,7 +350,7 @@ impl Lanes {
         for (l, f) in live.iter_mut().zip(group) {
             *l = if (x.partners[f.k()] as usize) < r1 { 1.0 } else { 0.0 };
         }
-        self.compute::<HERTZ, INCREMENTAL, false>(x, &live);
+        self.compute::<N, T, false>(x, &live);
         // The loads of a row's pairs (a ascending) are summed here and added to the row's
         // accumulators once the row is done (the sums do not depend on their order).
         let mut row = (usize::MAX, Vec3::ZERO, Vec3::ZERO);
@@ -371,7 +387,7 @@ impl Lanes {
     /// the contact test, without a branch on its outcome: every pair takes the next lane, which
     /// only a touching pair keeps.
     #[inline(always)]
-    pub(super) fn crossing_loads<const HERTZ: bool, const INCREMENTAL: bool>(
+    pub(super) fn crossing_loads<N: NormalSubModel, T: TangentialSubModel>(
         &mut self,
         x: &ForceInputs,
         pairs: &[(u32, usize)],
@@ -386,8 +402,9 @@ impl Lanes {
         for (i, &(a, k)) in pairs.iter().enumerate() {
             let (a, b) = (a as usize, x.partners[k] as usize);
             let d = s.separation(a, b);
-            let touching = pair_touching(d.length_squared(), s.radius[a], s.radius[b]);
             let flag = &mut flags[k - k0];
+            let reach = if N::REACHES { super::detect::pair_reach(x, a, b) } else { 0.0 };
+            let touching = N::touching(d.length_squared(), s.radius[a], s.radius[b], reach, *flag);
             let fresh = !*flag;
             *flag = touching;
             loads[i] = None;
@@ -398,7 +415,7 @@ impl Lanes {
         if n == 0 {
             return;
         }
-        self.compute::<HERTZ, INCREMENTAL, false>(x, &first_live(n));
+        self.compute::<N, T, false>(x, &first_live(n));
         for (lane, &i) in kept[..n].iter().enumerate() {
             let k = pairs[i].1;
             hist[k - k0] = self.stored_history(x, lane, self.output.h.get(lane));
@@ -409,7 +426,7 @@ impl Lanes {
     /// As [`add_loads`](Self::add_loads), for the listed wall pairs `group` (indices into
     /// `wall_pairs`, whose histories are `hist`).
     #[inline(always)]
-    pub(super) fn add_wall_loads<const HERTZ: bool, const INCREMENTAL: bool>(
+    pub(super) fn add_wall_loads<N: NormalSubModel, T: TangentialSubModel>(
         &mut self,
         x: &ForceInputs,
         r0: usize,
@@ -422,7 +439,7 @@ impl Lanes {
         for (lane, &j) in group.iter().enumerate() {
             let [i, w] = wall_pairs[j];
             let (i, wall) = (i as usize, &x.walls[w as usize]);
-            if let Some(g) = wall_geometry(x.position[i], x.radius[i], wall, x.law.lever) {
+            if let Some(g) = wall_geometry_for::<N>(x.position[i], x.radius[i], wall, x.law.lever) {
                 live[lane] = 1.0;
                 let input = PairInput {
                     d: g.normal,
@@ -438,7 +455,7 @@ impl Lanes {
                 self.input.set(lane, &input);
             }
         }
-        self.compute::<HERTZ, INCREMENTAL, true>(x, &live);
+        self.compute::<N, T, true>(x, &live);
         for (lane, &j) in group.iter().enumerate() {
             let i = wall_pairs[j][0] as usize;
             let l = self.output.load(lane);
@@ -465,7 +482,7 @@ const MFIX: u8 = parts::MFIX_CAP | parts::RADICAL;
 /// MFIX's law — with only the parts of the law they pick ([`parts`]), and once for any
 /// settings; the values are the same.
 #[inline(always)]
-fn contact_loads<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
+fn contact_loads<N: NormalSubModel, T: TangentialSubModel, const WALL: bool>(
     law: &ContactLaw,
     rolling: bool,
     dt: f64,
@@ -474,12 +491,10 @@ fn contact_loads<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
     output: &mut OutputLanes,
 ) {
     match parts::needed(law, rolling) {
-        parts::LAMMPS_CAP => {
-            loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::LAMMPS_CAP }>(law, dt, q, input, output)
-        }
-        LAMMPS_MINDLIN => loads_widest::<HERTZ, INCREMENTAL, WALL, LAMMPS_MINDLIN>(law, dt, q, input, output),
-        MFIX => loads_widest::<HERTZ, INCREMENTAL, WALL, MFIX>(law, dt, q, input, output),
-        _ => loads_widest::<HERTZ, INCREMENTAL, WALL, { parts::ALL }>(law, dt, q, input, output),
+        parts::LAMMPS_CAP => loads_widest::<N, T, WALL, { parts::LAMMPS_CAP }>(law, dt, q, input, output),
+        LAMMPS_MINDLIN => loads_widest::<N, T, WALL, LAMMPS_MINDLIN>(law, dt, q, input, output),
+        MFIX => loads_widest::<N, T, WALL, MFIX>(law, dt, q, input, output),
+        _ => loads_widest::<N, T, WALL, { parts::ALL }>(law, dt, q, input, output),
     }
 }
 
@@ -487,7 +502,7 @@ fn contact_loads<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool>(
 /// the build does not assume them. Vector and scalar instructions round alike (IEEE 754, no
 /// fused multiply–add), so every copy gives the same bits.
 #[inline(always)]
-fn loads_widest<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, const PARTS: u8>(
+fn loads_widest<N: NormalSubModel, T: TangentialSubModel, const WALL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     q: Option<(Quanta, &Live, &mut PeakLanes)>,
@@ -498,21 +513,21 @@ fn loads_widest<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, co
     #[allow(unsafe_code)]
     if std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the processor has AVX-512F (checked just above).
-        return unsafe { simd::loads_avx512::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output) };
+        return unsafe { simd::loads_avx512::<N, T, WALL, PARTS>(law, dt, q, input, output) };
     }
     #[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
     #[allow(unsafe_code)]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2 (checked just above).
-        return unsafe { simd::loads_avx2::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output) };
+        return unsafe { simd::loads_avx2::<N, T, WALL, PARTS>(law, dt, q, input, output) };
     }
-    loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output)
+    loads_lanes::<N, T, WALL, PARTS>(law, dt, q, input, output)
 }
 
 /// The loads of the batch; with `q` (the quanta, the count of live lanes and the peaks),
 /// rounded for the sums (`forces::sum`) and the peaks raised.
 #[inline(always)]
-fn loads_lanes<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, const PARTS: u8>(
+fn loads_lanes<N: NormalSubModel, T: TangentialSubModel, const WALL: bool, const PARTS: u8>(
     law: &ContactLaw,
     dt: f64,
     q: Option<(Quanta, &Live, &mut PeakLanes)>,
@@ -522,11 +537,8 @@ fn loads_lanes<const HERTZ: bool, const INCREMENTAL: bool, const WALL: bool, con
     let law = *law;
     for i in 0..LANES {
         let p = input.get(i);
-        let load = if WALL {
-            wall_law::<HERTZ, INCREMENTAL, PARTS>(&law, dt, &p)
-        } else {
-            pair_law::<HERTZ, INCREMENTAL, PARTS>(&law, dt, &p)
-        };
+        let load =
+            if WALL { wall_law::<N, T, PARTS>(&law, dt, &p) } else { pair_law::<N, T, PARTS>(&law, dt, &p) };
         output.set(i, load);
     }
     if let Some((q, live, peak)) = q {
@@ -541,8 +553,8 @@ mod simd {
 
     #[target_feature(enable = "avx512f")]
     pub(super) fn loads_avx512<
-        const HERTZ: bool,
-        const INCREMENTAL: bool,
+        N: NormalSubModel,
+        T: TangentialSubModel,
         const WALL: bool,
         const PARTS: u8,
     >(
@@ -552,24 +564,19 @@ mod simd {
         input: &InputLanes,
         output: &mut OutputLanes,
     ) {
-        loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output)
+        loads_lanes::<N, T, WALL, PARTS>(law, dt, q, input, output)
     }
 
     #[cfg(not(target_feature = "avx2"))]
     #[target_feature(enable = "avx2")]
-    pub(super) fn loads_avx2<
-        const HERTZ: bool,
-        const INCREMENTAL: bool,
-        const WALL: bool,
-        const PARTS: u8,
-    >(
+    pub(super) fn loads_avx2<N: NormalSubModel, T: TangentialSubModel, const WALL: bool, const PARTS: u8>(
         law: &ContactLaw,
         dt: f64,
         q: Option<(Quanta, &Live, &mut PeakLanes)>,
         input: &InputLanes,
         output: &mut OutputLanes,
     ) {
-        loads_lanes::<HERTZ, INCREMENTAL, WALL, PARTS>(law, dt, q, input, output)
+        loads_lanes::<N, T, WALL, PARTS>(law, dt, q, input, output)
     }
 }
 
@@ -624,7 +631,7 @@ impl<'a> PairData<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::{CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel};
+    use crate::contact::{CoulombCap, HistoryFrame, LeverArm, NormalDamping};
 
     /// A small deterministic generator (xorshift64*), enough to spread inputs over their ranges.
     struct Rng(u64);
@@ -662,6 +669,11 @@ mod tests {
                 mu: if i % 3 == 0 { 0.0 } else { rng.range(0.01, 1.0) },
                 mu_roll: if i % 2 == 0 { 0.0 } else { rng.range(0.0, 1e-4) },
                 m_eff: 0.0,
+                // JKR's (the other laws do not read them); drawn from no random numbers, so
+                // that the other laws' inputs are as before.
+                r_star: ra * rb / (ra + rb),
+                surface_energy: 1e-3 * (1 + i) as f64,
+                pull_off: 0.0,
             };
             let p = PairInput {
                 d,
@@ -686,7 +698,7 @@ mod tests {
     /// The bits of the pair and wall loads of `input` by every copy of the loop for `PARTS`
     /// that is built and that this processor runs: the build's own, AVX2, AVX-512.
     #[allow(unsafe_code)]
-    fn every_copy<const HERTZ: bool, const INCREMENTAL: bool, const PARTS: u8>(
+    fn every_copy<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8>(
         law: &ContactLaw,
         dt: f64,
         input: &InputLanes,
@@ -704,9 +716,9 @@ mod tests {
             "the build's instruction set",
             run(&|out, wall| {
                 if wall {
-                    loads_lanes::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, None, input, out)
+                    loads_lanes::<N, T, true, PARTS>(law, dt, None, input, out)
                 } else {
-                    loads_lanes::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, None, input, out)
+                    loads_lanes::<N, T, false, PARTS>(law, dt, None, input, out)
                 }
             }),
         )];
@@ -717,9 +729,9 @@ mod tests {
                 "AVX2",
                 run(&|out, wall| unsafe {
                     if wall {
-                        simd::loads_avx2::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, None, input, out)
+                        simd::loads_avx2::<N, T, true, PARTS>(law, dt, None, input, out)
                     } else {
-                        simd::loads_avx2::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, None, input, out)
+                        simd::loads_avx2::<N, T, false, PARTS>(law, dt, None, input, out)
                     }
                 }),
             ));
@@ -731,9 +743,9 @@ mod tests {
                 "AVX-512",
                 run(&|out, wall| unsafe {
                     if wall {
-                        simd::loads_avx512::<HERTZ, INCREMENTAL, true, PARTS>(law, dt, None, input, out)
+                        simd::loads_avx512::<N, T, true, PARTS>(law, dt, None, input, out)
                     } else {
-                        simd::loads_avx512::<HERTZ, INCREMENTAL, false, PARTS>(law, dt, None, input, out)
+                        simd::loads_avx512::<N, T, false, PARTS>(law, dt, None, input, out)
                     }
                 }),
             ));
@@ -745,9 +757,8 @@ mod tests {
     /// lane, whichever instruction set computes the batch (scalar, AVX2, AVX-512 where the
     /// processor has them). This is what makes results independent of the machine's vector
     /// width, and equal to the particle-by-particle form of the law.
-    fn batches_equal_lane_by_lane<const HERTZ: bool, const INCREMENTAL: bool>(normal: NormalModel) {
-        let tangential =
-            if INCREMENTAL { TangentialModel::IncrementalMindlin } else { TangentialModel::MfixTotal };
+    fn batches_equal_lane_by_lane<N: NormalSubModel, T: TangentialSubModel>() {
+        let (normal, tangential) = (N::MODEL, T::MODEL);
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
         let mut cases = 0;
         for history in [HistoryFrame::Mfix, HistoryFrame::Project, HistoryFrame::Rotate] {
@@ -786,19 +797,14 @@ mod tests {
                                 // turning this loop into vector code as well), every part of
                                 // the law compiled.
                                 let p = std::hint::black_box(input.get(i));
-                                scalar.set(i, pair_law::<HERTZ, INCREMENTAL, { parts::ALL }>(&law, dt, &p));
-                                wall_scalar
-                                    .set(i, wall_law::<HERTZ, INCREMENTAL, { parts::ALL }>(&law, dt, &p));
+                                scalar.set(i, pair_law::<N, T, { parts::ALL }>(&law, dt, &p));
+                                wall_scalar.set(i, wall_law::<N, T, { parts::ALL }>(&law, dt, &p));
                             }
                             let expected = [bits(&scalar), bits(&wall_scalar)];
                             let mut batch = OutputLanes::ZERO;
-                            contact_loads::<HERTZ, INCREMENTAL, false>(
-                                &law, rolling, dt, None, &input, &mut batch,
-                            );
+                            contact_loads::<N, T, false>(&law, rolling, dt, None, &input, &mut batch);
                             assert_eq!(bits(&batch), expected[0], "{law:?}");
-                            contact_loads::<HERTZ, INCREMENTAL, true>(
-                                &law, rolling, dt, None, &input, &mut batch,
-                            );
+                            contact_loads::<N, T, true>(&law, rolling, dt, None, &input, &mut batch);
                             assert_eq!(bits(&batch), expected[1], "{law:?} (walls)");
                             // Every loop compiled for parts that include the law's, on every
                             // instruction set.
@@ -809,15 +815,11 @@ mod tests {
                                 }
                                 let copies = match p {
                                     parts::LAMMPS_CAP => {
-                                        every_copy::<HERTZ, INCREMENTAL, { parts::LAMMPS_CAP }>(
-                                            &law, dt, &input,
-                                        )
+                                        every_copy::<N, T, { parts::LAMMPS_CAP }>(&law, dt, &input)
                                     }
-                                    LAMMPS_MINDLIN => {
-                                        every_copy::<HERTZ, INCREMENTAL, LAMMPS_MINDLIN>(&law, dt, &input)
-                                    }
-                                    MFIX => every_copy::<HERTZ, INCREMENTAL, MFIX>(&law, dt, &input),
-                                    _ => every_copy::<HERTZ, INCREMENTAL, { parts::ALL }>(&law, dt, &input),
+                                    LAMMPS_MINDLIN => every_copy::<N, T, LAMMPS_MINDLIN>(&law, dt, &input),
+                                    MFIX => every_copy::<N, T, MFIX>(&law, dt, &input),
+                                    _ => every_copy::<N, T, { parts::ALL }>(&law, dt, &input),
                                 };
                                 for (copy, got) in copies {
                                     assert_eq!(got, expected, "{law:?}, parts {p:#b}, {copy}");
@@ -834,9 +836,12 @@ mod tests {
 
     #[test]
     fn batched_loads_equal_the_scalar_law_on_every_instruction_set() {
-        batches_equal_lane_by_lane::<false, false>(NormalModel::LinearSpringDashpot);
-        batches_equal_lane_by_lane::<false, true>(NormalModel::LinearSpringDashpot);
-        batches_equal_lane_by_lane::<true, false>(NormalModel::Hertz);
-        batches_equal_lane_by_lane::<true, true>(NormalModel::Hertz);
+        use crate::contact::submodel::{Hertz, IncrementalMindlin, Jkr, LinearSpringDashpot, MfixTotal};
+        batches_equal_lane_by_lane::<LinearSpringDashpot, MfixTotal>();
+        batches_equal_lane_by_lane::<LinearSpringDashpot, IncrementalMindlin>();
+        batches_equal_lane_by_lane::<Hertz, MfixTotal>();
+        batches_equal_lane_by_lane::<Hertz, IncrementalMindlin>();
+        batches_equal_lane_by_lane::<Jkr, MfixTotal>();
+        batches_equal_lane_by_lane::<Jkr, IncrementalMindlin>();
     }
 }

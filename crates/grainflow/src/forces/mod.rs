@@ -42,7 +42,8 @@
 //!
 //! ## Where things are
 //! This module is the stage's driver: its inputs and outputs, `serial` and `parallel`, and
-//! the walk of one block (walls, arriving crossing pairs, own rows). `plan` cuts the blocks
+//! the walk of one block (walls, arriving crossing pairs, own rows), all generic over the
+//! law's normal and tangential sub-model types (`contact::submodel`). `plan` cuts the blocks
 //! and lists the crossing pairs; `detect` is the contact test; `lanes` gathers the touching
 //! pairs into batches, computes their loads and adds them. The law of one contact, which the
 //! batches apply lane by lane, is in `contact::pair`.
@@ -57,6 +58,7 @@ use std::ops::Range;
 use crate::boundary::Images;
 pub(crate) use crate::contact::pair::CommonMass;
 use crate::contact::pair::PairLoad;
+use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::contact::{CoeffTable, ContactLaw};
 use crate::math::Vec3;
 use crate::threads::split_at_ends;
@@ -113,13 +115,13 @@ type CrossingLoad = Option<PairLoad>;
 
 /// Evaluates every contact into `out` on one thread. With `clock`, returns the seconds spent on
 /// the wall contacts (0 otherwise).
-pub(crate) fn serial<const HERTZ: bool, const INCREMENTAL: bool>(
+pub(crate) fn serial<N: NormalSubModel, T: TangentialSubModel>(
     x: &ForceInputs,
     out: ForceOutputs,
     clock: bool,
 ) -> f64 {
     let n = x.position.len();
-    let (walls, peak) = block::<HERTZ, INCREMENTAL>(
+    let (walls, peak) = block::<N, T>(
         clock,
         x,
         0..n,
@@ -150,7 +152,7 @@ pub(crate) struct ThreadWork {
 /// Evaluates every contact into `out` on the blocks of `plan`, in parallel on the current
 /// rayon pool, block t on thread t (see [`crate::threads`]). Bit-identical to [`serial`]. With
 /// `clock`, returns how long the threads worked (zero otherwise).
-pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
+pub(crate) fn parallel<N: NormalSubModel, T: TangentialSubModel>(
     x: &ForceInputs,
     plan: &mut ForcePlan,
     out: ForceOutputs,
@@ -183,7 +185,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
                 lanes.input.fill_coeffs(c);
             }
             for (pairs, loads) in crossing[c0..cuts[t]].chunks(LANES).zip(loads.chunks_mut(LANES)) {
-                lanes.crossing_loads::<HERTZ, INCREMENTAL>(x, pairs, k0, hist, flags, loads);
+                lanes.crossing_loads::<N, T>(x, pairs, k0, hist, flags, loads);
             }
             (since(t0), lanes.peak())
         })
@@ -203,7 +205,7 @@ pub(crate) fn parallel<const HERTZ: bool, const INCREMENTAL: bool>(
         let rows = blocks[t].clone();
         let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
         let t0 = clock.then(std::time::Instant::now);
-        let (walls, peak) = block::<HERTZ, INCREMENTAL>(
+        let (walls, peak) = block::<N, T>(
             clock,
             x,
             rows,
@@ -249,7 +251,7 @@ enum Incoming<'a> {
 /// their crossing pairs in list order. Returns the seconds spent on the walls (with `clock`;
 /// 0 otherwise) and the peaks of the loads.
 #[inline(always)]
-fn block<const HERTZ: bool, const INCREMENTAL: bool>(
+fn block<N: NormalSubModel, T: TangentialSubModel>(
     clock: bool,
     x: &ForceInputs,
     rows: Range<usize>,
@@ -272,9 +274,9 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
     let mut at = 0;
     let mut found_walls = [0usize; FOUND];
     while at < wall_pairs.len() {
-        let n = find_wall_contacts(x, wall_pairs, &mut at, whist, &mut found_walls);
+        let n = find_wall_contacts::<N>(x, wall_pairs, &mut at, whist, &mut found_walls);
         for group in found_walls[..n].chunks(LANES) {
-            lanes.add_wall_loads::<HERTZ, INCREMENTAL>(x, r0, wall_pairs, group, &mut acc, whist);
+            lanes.add_wall_loads::<N, T>(x, r0, wall_pairs, group, &mut acc, whist);
         }
     }
     let wall_seconds = t0.map_or(0.0, |t| t.elapsed().as_secs_f64());
@@ -300,9 +302,10 @@ fn block<const HERTZ: bool, const INCREMENTAL: bool>(
         lanes.input.fill_coeffs(c);
     }
     while cursor.a < r1 {
-        let n = find_contacts(x, r0..r1, [&*acc.force, &*acc.torque], &mut cursor, in_contact, &mut found);
+        let n =
+            find_contacts::<N>(x, r0..r1, [&*acc.force, &*acc.torque], &mut cursor, in_contact, &mut found);
         for group in found[..n].chunks(LANES) {
-            lanes.add_loads::<HERTZ, INCREMENTAL>(x, r0..r1, group, &mut crossing, &mut acc, hist);
+            lanes.add_loads::<N, T>(x, r0..r1, group, &mut crossing, &mut acc, hist);
         }
     }
     acc.note_peak(lanes.peak());
