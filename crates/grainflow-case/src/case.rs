@@ -869,6 +869,23 @@ fn validate<'h>(
             ));
         }
     }
+    let resort = match &praw.resort {
+        None => grainflow::ResortRule::Auto,
+        Some(crate::raw::RawResort::Word(w)) if w == "auto" => grainflow::ResortRule::Auto,
+        Some(crate::raw::RawResort::Word(w)) if w == "never" => grainflow::ResortRule::Never,
+        Some(crate::raw::RawResort::Steps(k)) if *k >= 1 => grainflow::ResortRule::Every(*k as u64),
+        Some(other) => {
+            return Err(CaseError::invalid(
+                "[particles]",
+                "resort",
+                match other {
+                    crate::raw::RawResort::Word(w) => format!("\"{w}\""),
+                    crate::raw::RawResort::Steps(k) => k.to_string(),
+                },
+                "must be \"auto\", \"never\" or a number of steps >= 1",
+            ));
+        }
+    };
     let particles = Particles::from_init(&init);
     // A large bed's inputs are as large as its state: let them go before the checks below.
     drop(init);
@@ -1037,6 +1054,7 @@ fn validate<'h>(
         skin,
         motion,
         periodic,
+        resort,
     };
     Ok(Case {
         title: raw.title,

@@ -328,9 +328,25 @@ pub struct RawParticles {
     /// beyond rounding of sums.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub order: Option<String>,
+    /// Re-sorting during the run along a space-filling curve, so that a flowing bed keeps the
+    /// memory order of a fresh one: "auto" (when the order has decayed: the neighbour pairs lie
+    /// twice as far apart in memory as after the last sort), "never", or every N steps.
+    /// Default "auto". Results do not depend on it (bit for bit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub resort: Option<RawResort>,
     /// Particles listed inline.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub list: Vec<RawParticle>,
+}
+
+/// `[particles] resort`: a word or a step count.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum RawResort {
+    /// "auto" or "never".
+    Word(String),
+    /// Every so many steps.
+    Steps(i64),
 }
 
 /// `[[particles.list]]`

@@ -486,7 +486,8 @@ pub struct Health {
 pub fn health_problem(sim: &Simulation, health: Health) -> Option<String> {
     let p = sim.particles();
     let step = sim.step_index();
-    for i in 0..p.len() {
+    // In id order: the problem named is the same however the particles are stored.
+    for i in p.id_order() {
         let (x, v, w) = (p.position[i], p.velocity[i], p.omega[i]);
         if !(x.is_finite() && v.is_finite() && w.is_finite()) {
             return Some(format!(
@@ -603,7 +604,10 @@ fn run_simulation(
             let name = format!("particles_{:09}.csv", sim.step_index());
             folder.record(&Path::new("snapshots").join(&name))?;
             let path = snap_dir.join(name);
-            write_atomic(&path, snapshot_csv(sim.particles()).as_bytes()).map_err(io_err(&path))?;
+            // In id order: the file does not depend on how the particles are stored.
+            let p = sim.particles();
+            write_atomic(&path, snapshot_csv(&p.gathered(&p.id_order())).as_bytes())
+                .map_err(io_err(&path))?;
             files.push(path);
         }
         Ok(d)
@@ -619,9 +623,8 @@ fn run_simulation(
             for kind in ["particles", "contacts"] {
                 folder.record(&Path::new("vtk").join(format!("{kind}_{:09}.vtp", sim.step_index())))?;
             }
-            series
-                .write(sim.step_index(), sim.time(), sim.particles(), &sim.contacts())
-                .map_err(io_err(&vtk_dir))?;
+            let (particles, contacts) = sim.in_id_order();
+            series.write(sim.step_index(), sim.time(), &particles, &contacts).map_err(io_err(&vtk_dir))?;
         }
         Ok(())
     };

@@ -229,11 +229,13 @@ pub fn run_model(spec: RunSpec) -> Result<ModelRun, VerifyError> {
         case.config.motion.clear();
     }
     let mut sim = Simulation::new(case.config, case.particles)?;
-    let initial = sim.particles().clone();
+    // Particles by id, before and after: the run may move them to other slots (re-sorting).
+    let by_id = |s: &Simulation| s.particles().gathered(&s.particles().id_order());
+    let initial = by_id(&sim);
     let start = Instant::now();
     sim.run_to_end();
     let wall_seconds = start.elapsed().as_secs_f64();
-    let p = sim.particles();
+    let p = &by_id(&sim);
     let mut impacts: Vec<Impact> =
         (0..p.len()).filter(|&i| p.phase[i] == 0).map(|i| impact(&initial, p, i)).collect();
     impacts.sort_by(|a, b| {

@@ -245,7 +245,10 @@ pub fn adams_bashforth(p: &mut Particles, pass: &Pass, first: bool) {
     let (gravity, h) = (pass.gravity, 0.5 * pass.dt);
     for_slots(p, pass, None, |mut s, _| {
         s.each(gravity, |s, i, a, alpha| {
-            let (a_prev, alpha_prev) = if first { (a, alpha) } else { (s.a_prev[i], s.alpha_prev[i]) };
+            // A particle without a history yet (inserted since: NaN) takes its first step as
+            // every particle took the run's first.
+            let fresh = first || s.a_prev[i].x.is_nan();
+            let (a_prev, alpha_prev) = if fresh { (a, alpha) } else { (s.a_prev[i], s.alpha_prev[i]) };
             let v0 = s.v[i];
             let v1 = v0 + h * (3.0 * a - a_prev);
             s.x[i] += h * (v0 + v1);

@@ -52,7 +52,9 @@ pub use material::{Phase, WallMaterial};
 pub use math::Vec3;
 pub use motion::{MotionRule, PrescribedMotion};
 pub use observe::Diagnostics;
-pub use simulation::{ContactInfo, ContactPartner, MemoryUse, Simulation, SimulationConfig, StageTimes};
+pub use simulation::{
+    ContactInfo, ContactPartner, MemoryUse, ResortRule, Simulation, SimulationConfig, StageTimes,
+};
 pub use state::Particles;
 pub use timestep::{TimeStepChoice, TimeStepRule};
 pub use wall::Wall;

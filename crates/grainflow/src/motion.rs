@@ -35,8 +35,10 @@ pub struct PrescribedMotion {
 /// A rule resolved to particle slots.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ResolvedMotion {
-    slot: usize,
-    leader: Option<usize>,
+    /// The particle's slot, and its leader's (kept up to date when particles move to other
+    /// slots).
+    pub(crate) slot: usize,
+    pub(crate) leader: Option<usize>,
     axes: [bool; 3],
     anchor: Vec3,
 }

@@ -4,8 +4,10 @@
 //! The list holds every particle pair closer than R_i + R_j + skin and every particle–wall pair
 //! closer than R + skin, so between rebuilds no contact can be missed. Each entry carries the
 //! contact's tangential history; on a rebuild, entries in contact that persist keep it
-//! (matched by the slots of the two particles, or the slot and the wall index — slots never
-//! change during a run), new entries start from zero.
+//! (matched by the slots of the two particles, or the slot and the wall index), new entries
+//! start from zero. When the simulation moves particles to other slots (a re-sort, an
+//! insertion or removal), it takes the list's state by particle ids and puts it back under the
+//! new slots ([`NeighborList::state`], [`NeighborList::set_state`]), so no history is lost.
 //!
 //! Each pair also carries a flag: whether it touched at the last force evaluation. A pair's
 //! stored history counts only while the flag is set (it is zero otherwise), so the contact test
@@ -120,6 +122,28 @@ impl NeighborList {
     pub fn exclude_pairs_among(&mut self, marked: Vec<bool>) {
         self.excluded = if marked.iter().any(|&m| m) { marked } else { Vec::new() };
         self.built = false;
+    }
+
+    /// Replaces the marks of [`exclude_pairs_among`](Self::exclude_pairs_among) by the same
+    /// marks under new slots (the list stays valid: the pairs it leaves out are the same).
+    pub(crate) fn remap_excluded(&mut self, marked: Vec<bool>) {
+        self.excluded = if marked.iter().any(|&m| m) { marked } else { Vec::new() };
+    }
+
+    /// How far apart in memory the two particles of a pair lie, on average over the list's
+    /// pairs (slots): a bed whose order has decayed since it was sorted shows it here.
+    pub fn mean_slot_gap(&self) -> f64 {
+        let n = self.partners.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let total: u64 = self
+            .offsets
+            .windows(2)
+            .enumerate()
+            .map(|(a, w)| self.partners[w[0]..w[1]].iter().map(|&b| b as u64 - a as u64).sum::<u64>())
+            .sum();
+        total as f64 / n as f64
     }
 
     /// The skin distance, m.

@@ -19,6 +19,9 @@ use crate::state::Particles;
 use crate::timestep::{self, TimeStepChoice, TimeStepRule};
 use crate::wall::Wall;
 
+mod population;
+pub use population::ResortRule;
+
 /// Standard gravity, m/s² (MFIX's default, along −y).
 pub const STANDARD_GRAVITY: f64 = 9.80665;
 
@@ -78,6 +81,9 @@ pub struct SimulationConfig {
     pub motion: Vec<PrescribedMotion>,
     /// Periodic axes of the domain box, if any.
     pub periodic: Option<Periodic>,
+    /// When the particles are re-sorted along a space-filling curve during the run (results
+    /// do not depend on it).
+    pub resort: ResortRule,
 }
 
 /// A running simulation.
@@ -130,6 +136,10 @@ pub struct Simulation {
     peak_floor: forces::Peak,
     /// Force evaluations whose loads grew beyond what their quanta sum exactly.
     inexact_sums: u64,
+    /// When and how the particles were last re-sorted.
+    sort: population::SortState,
+    /// The particle count the slot facts (held, free runs, blocks) were derived for.
+    slot_count: usize,
 }
 
 impl Simulation {
@@ -232,6 +242,7 @@ impl Simulation {
         neighbors.exclude_pairs_among(held.clone());
         let held = if held.iter().any(|&h| h) { held } else { Vec::new() };
         let peak_floor = sum_floor(&config.law, &config.phases, &coeffs);
+        let n_particles = particles.len();
         Ok(Simulation {
             particles,
             phases: config.phases,
@@ -261,6 +272,8 @@ impl Simulation {
             load_peak: None,
             peak_floor,
             inexact_sums: 0,
+            sort: population::SortState { rule: config.resort, ..Default::default() },
+            slot_count: n_particles,
         })
     }
 
@@ -269,7 +282,10 @@ impl Simulation {
         &self.particles
     }
 
-    /// The particles, for user hooks that change the state between steps.
+    /// The particles, for user hooks that change the state between steps: their values, or
+    /// (with [`Particles::push`]) new particles at the end, as [`insert`](Self::insert) adds
+    /// them but without its checks. Removing particles or moving them to other slots goes
+    /// through [`remove_where`](Self::remove_where) and [`sort_spatially`](Self::sort_spatially).
     pub fn particles_mut(&mut self) -> &mut Particles {
         self.forces_current = false;
         self.common = None;
@@ -511,6 +527,11 @@ impl Simulation {
     /// (velocity Verlet only), the second half kick and the periodic wrap are left pending for
     /// the next step.
     fn step_on(&mut self, par: bool, defer: bool) {
+        if self.particles.len() != self.slot_count {
+            // Particles were pushed through `particles_mut`.
+            self.adopt_pushed();
+        }
+        self.resort_if_due(par);
         let start = self.timing.map(|t| (std::time::Instant::now(), t));
         let dt = self.time_step.dt;
         let g = self.gravity;
@@ -582,6 +603,18 @@ impl Simulation {
                 (now.neighbor - before.neighbor) + (now.walls - before.walls) + (now.pairs - before.pairs);
             now.integrate += (t0.elapsed().as_secs_f64() - forces).max(0.0);
         }
+    }
+
+    /// Takes in particles pushed through `particles_mut` since the slot facts were derived.
+    fn adopt_pushed(&mut self) {
+        let n = self.particles.len();
+        let p = &mut self.particles;
+        if !p.accel_prev.is_empty() {
+            p.accel_prev.resize(n, Vec3::splat(f64::NAN));
+            p.alpha_prev.resize(n, Vec3::splat(f64::NAN));
+        }
+        self.forces_current = false;
+        self.derive_slot_facts();
     }
 
     /// The pending second half kick and periodic wrap, on their own.
@@ -769,7 +802,13 @@ impl Simulation {
             }
         }
         for ([i, j], h) in nl.pairs().zip(nl.pair_histories()) {
-            let (i, j) = (i as usize, j as usize);
+            // Seen from the particle with the lower id, whichever slot is lower: the contact
+            // then reads the same however the particles are stored.
+            let (i, j, h) = if p.id[i as usize] < p.id[j as usize] {
+                (i as usize, j as usize, h)
+            } else {
+                (j as usize, i as usize, -h)
+            };
             let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
             let (x, r) = (&p.position, &p.radius);
             if let Some(g) =
@@ -783,18 +822,49 @@ impl Simulation {
         out
     }
 
+    /// [`contacts`](Self::contacts) and the particles, both in the order of the particles'
+    /// ids (the contacts by the ids of their particle, then of their partner, walls first):
+    /// what outputs write, the same however the particles are stored. A contact's slots are
+    /// those of the returned particles.
+    pub fn in_id_order(&self) -> (Particles, Vec<ContactInfo>) {
+        let p = &self.particles;
+        let order = p.id_order();
+        let mut new_of = vec![0usize; p.len()];
+        for (k, &i) in order.iter().enumerate() {
+            new_of[i] = k;
+        }
+        let mut contacts = self.contacts();
+        for c in &mut contacts {
+            c.particle = new_of[c.particle];
+            if let ContactPartner::Particle(j) = c.other {
+                c.other = ContactPartner::Particle(new_of[j]);
+            }
+        }
+        let key = |c: &ContactInfo| match c.other {
+            ContactPartner::Wall(w) => (c.particle, 0, w),
+            ContactPartner::Particle(j) => (c.particle, 1, j),
+        };
+        contacts.sort_unstable_by_key(key);
+        (p.gathered(&order), contacts)
+    }
+
     /// Energies, contacts and overlaps of the current state.
+    ///
+    /// The sums do not depend on the order the particles are stored in
+    /// ([`crate::observe::order_free_sum`]).
     pub fn diagnostics(&self) -> Diagnostics {
+        use crate::observe::order_free_sum;
         let p = &self.particles;
         let mut d = Diagnostics { time: self.time(), step: self.step, ..Default::default() };
-        for i in 0..p.len() {
-            d.kinetic_translational += 0.5 * p.mass[i] * p.velocity[i].length_squared();
-            d.kinetic_rotational += 0.5 * p.inertia[i] * p.omega[i].length_squared();
-            d.potential -= p.mass[i] * self.gravity.dot(p.position[i]);
-        }
+        let n = p.len();
+        let per = |f: &dyn Fn(usize) -> f64| order_free_sum(&(0..n).map(f).collect::<Vec<f64>>());
+        d.kinetic_translational = per(&|i| 0.5 * p.mass[i] * p.velocity[i].length_squared());
+        d.kinetic_rotational = per(&|i| 0.5 * p.inertia[i] * p.omega[i].length_squared());
+        d.potential = per(&|i| -(p.mass[i] * self.gravity.dot(p.position[i])));
+        let mut elastic = Vec::new();
         let mut visit = |delta: f64, r_min: f64, energy: f64| {
             d.contacts += 1;
-            d.elastic += energy;
+            elastic.push(energy);
             d.max_overlap_ratio = d.max_overlap_ratio.max(delta / r_min);
         };
         // A cohesive contact holds beyond the touch (see `contacts`).
@@ -834,6 +904,7 @@ impl Simulation {
                 );
             }
         }
+        d.elastic = order_free_sum(&elastic);
         d
     }
 }

@@ -1,8 +1,9 @@
 //! Particle state as a structure of arrays.
 //!
 //! Every per-particle field is its own `Vec`; index `i` is the particle's current slot, `id[i]`
-//! its stable identity. Slots do not change during a run (the neighbour list keys contact
-//! history by slot pairs); checkpoints name the pairs by ids.
+//! its identity. A slot is only storage: the simulation moves particles to other slots when it
+//! re-sorts them, inserts or removes some, and remaps everything kept by slot (contact
+//! histories, prescribed motion) as it does; checkpoints and outputs name particles by ids.
 
 use crate::math::{Vec3, sphere_inertia, sphere_mass};
 
@@ -136,6 +137,36 @@ impl Particles {
         v3.iter().map(|v| v.capacity() * std::mem::size_of::<Vec3>()).sum::<usize>()
             + f.iter().map(|v| v.capacity() * 8).sum::<usize>()
             + (self.id.capacity() + self.phase.capacity()) * 4
+    }
+
+    /// The particles of slots `order`, in that order (a permutation of the slots, or some of
+    /// them): slot `k` of the result is slot `order[k]` of `self`.
+    pub fn gathered(&self, order: &[usize]) -> Particles {
+        fn pick<T: Copy>(v: &[T], order: &[usize]) -> Vec<T> {
+            if v.is_empty() { Vec::new() } else { order.iter().map(|&i| v[i]).collect() }
+        }
+        Particles {
+            id: pick(&self.id, order),
+            phase: pick(&self.phase, order),
+            radius: pick(&self.radius, order),
+            mass: pick(&self.mass, order),
+            inertia: pick(&self.inertia, order),
+            position: pick(&self.position, order),
+            velocity: pick(&self.velocity, order),
+            omega: pick(&self.omega, order),
+            force: pick(&self.force, order),
+            torque: pick(&self.torque, order),
+            accel_prev: pick(&self.accel_prev, order),
+            alpha_prev: pick(&self.alpha_prev, order),
+        }
+    }
+
+    /// The slots in the order of the particles' ids (for outputs that must not depend on how
+    /// the particles are stored).
+    pub fn id_order(&self) -> Vec<usize> {
+        let mut order: Vec<usize> = (0..self.len()).collect();
+        order.sort_unstable_by_key(|&i| self.id[i]);
+        order
     }
 
     /// Zeroes the force and torque accumulators.

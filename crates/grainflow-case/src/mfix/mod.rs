@@ -1231,6 +1231,7 @@ impl Translator<'_> {
             max_initial_overlap: None,
             max_overlap: None,
             order: None,
+            resort: None,
             list: Vec::new(),
         };
         let mut extra_source = String::new();

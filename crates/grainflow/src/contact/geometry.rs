@@ -18,7 +18,8 @@ pub struct ContactGeometry {
 /// Pair geometry if particles i and j touch, with MFIX's test d² ≤ (R_i + R_j − 1e-15)².
 ///
 /// The contact point lies on the radical plane: a_i = (d² + R_i² − R_j²)/(2d), a_j = d − a_i
-/// (for equal radii a_i = a_j = R − δ/2, not R).
+/// (for equal radii a_i = a_j = R − δ/2, not R), formed as d/2 ± (R_i − R_j)(R_i + R_j)/(2d)
+/// so that the pair seen from j gives a_j and a_i to the bit.
 #[inline(always)]
 pub fn pair_contact(xi: Vec3, xj: Vec3, ri: f64, rj: f64) -> Option<ContactGeometry> {
     pair_contact_separation(xj - xi, ri, rj)
@@ -46,10 +47,11 @@ pub fn pair_touching(d2: f64, ri: f64, rj: f64) -> bool {
 /// `dvec` = x_j − x_i. Branch-free.
 #[inline(always)]
 pub fn pair_geometry(dvec: Vec3, ri: f64, rj: f64) -> ContactGeometry {
-    let d2 = dvec.length_squared();
-    let d = d2.sqrt();
-    let lever_i = (d2 + ri * ri - rj * rj) / (2.0 * d);
-    ContactGeometry { normal: dvec / d, overlap: ri + rj - d, lever_i, lever_j: d - lever_i }
+    let d = dvec.length_squared().sqrt();
+    // Odd in (i, j): swapping the particles negates `t` exactly.
+    let t = (ri - rj) * (ri + rj) / (2.0 * d);
+    let half = 0.5 * d;
+    ContactGeometry { normal: dvec / d, overlap: ri + rj - d, lever_i: half + t, lever_j: half - t }
 }
 
 /// [`pair_geometry`] with the lever arms left at zero (for a law that takes them from the

@@ -70,6 +70,7 @@ pub fn config(
         skin: None,
         motion: Vec::new(),
         periodic: None,
+        resort: grainflow::ResortRule::Never,
     }
 }
 

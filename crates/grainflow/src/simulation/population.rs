@@ -1,0 +1,295 @@
+//! Particles that come and go: insertion, removal and re-sorting between steps.
+//!
+//! A particle's identity is its id; its slot (its index in the particle arrays) is only where
+//! it is stored. Whatever moves particles to other slots goes through
+//! [`Simulation::rearrange`], which carries every fact kept by slot along: the contact and
+//! wall histories (taken from the neighbour list by slot, put back under the new slots), the
+//! prescribed-motion rules, the held particles, the runs of integrated slots, the thread
+//! blocks and the common mass. Since the force stage's sums do not depend on their order
+//! (`forces::sum`), a run gives the same bits with or without re-sorting, and a particle
+//! inserted mid-run moves as one present from the start would.
+
+use super::Simulation;
+use crate::error::EngineError;
+use crate::forces::ForcePlan;
+use crate::math::Vec3;
+use crate::motion;
+use crate::state::ParticleInit;
+
+/// When the simulation re-sorts its particles along a space-filling curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ResortRule {
+    /// Never (the order of the input, or of the set-up's spatial sort, is kept).
+    Never,
+    /// When the memory order has decayed: at the first step after a neighbour-list build
+    /// whose pairs lie, on average, more than twice as far apart in memory as just after the
+    /// last sort (and at least 100 steps after it).
+    #[default]
+    Auto,
+    /// Every so many steps.
+    Every(u64),
+}
+
+/// What [`Simulation::rearrange`] needs to remember between sorts.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct SortState {
+    pub rule: ResortRule,
+    /// The step of the last sort (or of the start).
+    pub last_step: u64,
+    /// The mean slot gap of the list's pairs after the last sort (None: not measured yet).
+    pub gap_after: Option<f64>,
+    /// The neighbour-list build whose gap was last looked at.
+    pub build_seen: u64,
+    /// Sorts so far.
+    pub sorts: u64,
+}
+
+impl Simulation {
+    /// Moves the particles to new slots: slot `k` takes the particle of slot `order[k]`. A
+    /// slot not in `order` is removed with everything of its particle (its contacts' and wall
+    /// contacts' histories). `order` must name each slot at most once.
+    pub(crate) fn rearrange(&mut self, order: &[usize]) -> Result<(), EngineError> {
+        let n_old = self.particles.len();
+        const GONE: u32 = u32::MAX;
+        let mut new_of = vec![GONE; n_old];
+        for (k, &old) in order.iter().enumerate() {
+            if old >= n_old || new_of[old] != GONE {
+                return Err(EngineError::BadReference(format!(
+                    "internal error: slot {old} is named twice or does not exist in a rearrangement"
+                )));
+            }
+            new_of[old] = k as u32;
+        }
+        if let Some(r) =
+            self.motion.iter().find(|r| new_of[r.slot] == GONE || r.leader.is_some_and(|l| new_of[l] == GONE))
+        {
+            let id =
+                self.particles.id[if new_of[r.slot] == GONE { r.slot } else { r.leader.unwrap_or(r.slot) }];
+            return Err(EngineError::BadReference(format!(
+                "particle {id} is under prescribed motion (or leads a particle that is): it cannot be removed"
+            )));
+        }
+        if self.kick_pending {
+            return Err(EngineError::BadReference(
+                "internal error: particles rearranged with a half kick pending".into(),
+            ));
+        }
+        // The neighbour list's pairs under the new slots (pairs of a removed particle go with
+        // it; `set_state` turns the pairs now stored the other way round, negating their
+        // histories, and puts the list in its order).
+        let mut state = self.neighbors.state();
+        let keep_pair = |a: u32, b: u32| new_of[a as usize] != GONE && new_of[b as usize] != GONE;
+        let (pairs, pair_history): (Vec<[u32; 2]>, Vec<Vec3>) = state
+            .pairs
+            .iter()
+            .zip(&state.pair_history)
+            .filter(|([a, b], _)| keep_pair(*a, *b))
+            .map(|(&[a, b], &h)| ([new_of[a as usize], new_of[b as usize]], h))
+            .unzip();
+        let (wall_pairs, wall_history): (Vec<[u32; 2]>, Vec<Vec3>) = state
+            .wall_pairs
+            .iter()
+            .zip(&state.wall_history)
+            .filter(|([i, _], _)| new_of[*i as usize] != GONE)
+            .map(|(&[i, w], &h)| ([new_of[i as usize], w], h))
+            .unzip();
+        (state.pairs, state.pair_history, state.wall_pairs, state.wall_history) =
+            (pairs, pair_history, wall_pairs, wall_history);
+        if state.reference.len() == n_old {
+            state.reference = order.iter().map(|&i| state.reference[i]).collect();
+        } else {
+            state.built = false;
+        }
+        self.particles = self.particles.gathered(order);
+        let n = self.particles.len();
+        self.neighbors.set_state(state, n, self.walls.len()).map_err(|e| {
+            EngineError::BadReference(format!(
+                "internal error: the neighbour list does not survive a rearrangement: {e}"
+            ))
+        })?;
+        for r in &mut self.motion {
+            r.slot = new_of[r.slot] as usize;
+            r.leader = r.leader.map(|l| new_of[l] as usize);
+        }
+        self.derive_slot_facts();
+        Ok(())
+    }
+
+    /// Derives again everything kept by slot from the particles and the motion rules: the
+    /// held slots (and the pairs the neighbour list leaves out), the runs of integrated slots,
+    /// the common mass, the thread blocks.
+    pub(super) fn derive_slot_facts(&mut self) {
+        let n = self.particles.len();
+        self.slot_count = n;
+        let held = motion::held(&self.motion, n);
+        self.neighbors.remap_excluded(held.clone());
+        self.held = if held.iter().any(|&h| h) { held } else { Vec::new() };
+        self.free = motion::free_runs(&self.motion, n);
+        self.common = None;
+        self.plan = ForcePlan::default();
+    }
+
+    /// Adds particles between steps. Each needs an id no particle has, a phase of the case, a positive radius and
+    /// density, and finite position, velocity and spin. They are appended in the order given;
+    /// an inserted particle moves exactly as one present from the start in the same state
+    /// would (with Adams–Bashforth, it takes its first step as the run's first step was
+    /// taken). Overlaps with particles or walls are not checked: an overlapping particle is
+    /// pushed out by the contact law.
+    pub fn insert(&mut self, new: &[ParticleInit]) -> Result<(), EngineError> {
+        if self.kick_pending {
+            return Err(EngineError::BadReference(
+                "internal error: insertion with a half kick pending".into(),
+            ));
+        }
+        let mut ids: Vec<u32> = self.particles.id.iter().chain(new.iter().map(|q| &q.id)).copied().collect();
+        ids.sort_unstable();
+        if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+            return Err(EngineError::BadReference(format!("particle id {} is used twice", w[0])));
+        }
+        let mut added = crate::state::Particles::from_init(new);
+        super::check_particles(&added, self.phases.len())?;
+        if let Some(q) = new.iter().find(|q| !(q.density.is_finite() && q.density > 0.0)) {
+            return Err(EngineError::invalid(
+                format!("particle {} density", q.id),
+                q.density,
+                "a density must be positive, in kg/m³",
+            ));
+        }
+        let ab = !self.particles.accel_prev.is_empty();
+        if ab {
+            // No history yet: the first step is taken as the run's first (see `integrate`).
+            added.accel_prev = vec![Vec3::splat(f64::NAN); added.len()];
+            added.alpha_prev = vec![Vec3::splat(f64::NAN); added.len()];
+        }
+        let p = &mut self.particles;
+        p.id.extend_from_slice(&added.id);
+        p.phase.extend_from_slice(&added.phase);
+        p.radius.extend_from_slice(&added.radius);
+        p.mass.extend_from_slice(&added.mass);
+        p.inertia.extend_from_slice(&added.inertia);
+        p.position.extend_from_slice(&added.position);
+        p.velocity.extend_from_slice(&added.velocity);
+        p.omega.extend_from_slice(&added.omega);
+        p.force.extend_from_slice(&added.force);
+        p.torque.extend_from_slice(&added.torque);
+        p.accel_prev.extend_from_slice(&added.accel_prev);
+        p.alpha_prev.extend_from_slice(&added.alpha_prev);
+        // The forces held are those of the particles before: evaluated again before they act.
+        self.forces_current = false;
+        self.derive_slot_facts();
+        Ok(())
+    }
+
+    /// Removes the particles with the given ids between steps (with their contacts'
+    /// histories); returns how many there were. Particles under prescribed motion cannot be
+    /// removed.
+    pub fn remove_ids(&mut self, ids: &[u32]) -> Result<usize, EngineError> {
+        let mut gone: Vec<u32> = ids.to_vec();
+        gone.sort_unstable();
+        self.remove_where(|p, i| gone.binary_search(&p.id[i]).is_ok())
+    }
+
+    /// Removes the particles (slots `i` of the particle arrays) for which `leaving` is true,
+    /// between steps; returns how many.
+    pub fn remove_where(
+        &mut self,
+        mut leaving: impl FnMut(&crate::state::Particles, usize) -> bool,
+    ) -> Result<usize, EngineError> {
+        let n = self.particles.len();
+        let order: Vec<usize> = (0..n).filter(|&i| !leaving(&self.particles, i)).collect();
+        let removed = n - order.len();
+        if removed > 0 {
+            self.rearrange(&order)?;
+            // The remaining particles' forces are those with the removed ones.
+            self.forces_current = false;
+        }
+        Ok(removed)
+    }
+
+    /// Sets when the particles are re-sorted during the run (see [`ResortRule`]).
+    pub fn set_resort(&mut self, rule: ResortRule) {
+        self.sort.rule = rule;
+    }
+
+    /// Re-sorts done so far.
+    pub fn resorts(&self) -> u64 {
+        self.sort.sorts
+    }
+
+    /// Sorts the particles along a space-filling curve (Morton order of cells of the
+    /// neighbour cut-off's size, ties by id), so that particles near each other in space are
+    /// near each other in memory. The results of the run do not change.
+    pub fn sort_spatially(&mut self) -> Result<(), EngineError> {
+        let order = morton_order(&self.particles.position, &self.particles.id, self.cell_size());
+        self.rearrange(&order)?;
+        self.sort.last_step = self.step;
+        self.sort.gap_after = None;
+        self.sort.sorts += 1;
+        Ok(())
+    }
+
+    /// The side of the cells the sort orders by: the neighbour cut-off of the largest
+    /// particles.
+    fn cell_size(&self) -> f64 {
+        let c = 2.0 * self.particles.max_radius() + self.neighbors.skin();
+        if c.is_finite() && c > 0.0 { c } else { 1.0 }
+    }
+
+    /// Re-sorts if the rule says it is time (between steps).
+    pub(super) fn resort_if_due(&mut self, par: bool) {
+        let due = match self.sort.rule {
+            ResortRule::Never => false,
+            ResortRule::Every(k) => k > 0 && self.step >= self.sort.last_step + k,
+            ResortRule::Auto => {
+                let builds = self.neighbors.stats().builds;
+                if builds == self.sort.build_seen || !self.neighbors.is_built() {
+                    false
+                } else {
+                    self.sort.build_seen = builds;
+                    let gap = self.neighbors.mean_slot_gap();
+                    match self.sort.gap_after {
+                        None => {
+                            self.sort.gap_after = Some(gap);
+                            false
+                        }
+                        Some(g0) => gap > 2.0 * g0.max(1.0) && self.step >= self.sort.last_step + 100,
+                    }
+                }
+            }
+        };
+        if due {
+            if self.kick_pending {
+                self.finish_kick(par);
+            }
+            // Cannot fail: a permutation of every slot keeps every rule's particle.
+            let _ = self.sort_spatially();
+        }
+    }
+}
+
+/// The slots in Morton (Z-curve) order of the cells of side `cell` their positions lie in,
+/// ties broken by id: a function of the positions and ids alone.
+fn morton_order(x: &[Vec3], id: &[u32], cell: f64) -> Vec<usize> {
+    let lo = x.iter().fold(Vec3::splat(f64::INFINITY), |m, p| m.min(*p));
+    // 21 bits a coordinate: 2 million cells along each axis.
+    let coord = |v: f64, l: f64| (((v - l) / cell).floor().clamp(0.0, (1 << 21) as f64 - 1.0)) as u64;
+    let spread = |mut v: u64| {
+        v &= 0x1f_ffff;
+        v = (v | v << 32) & 0x001f_0000_0000_ffff;
+        v = (v | v << 16) & 0x001f_0000_ff00_00ff;
+        v = (v | v << 8) & 0x100f_00f0_0f00_f00f;
+        v = (v | v << 4) & 0x10c3_0c30_c30c_30c3;
+        v = (v | v << 2) & 0x1249_2492_4924_9249;
+        v
+    };
+    let mut keys: Vec<(u64, u32, usize)> = x
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let m = spread(coord(p.x, lo.x)) | spread(coord(p.y, lo.y)) << 1 | spread(coord(p.z, lo.z)) << 2;
+            (m, id[i], i)
+        })
+        .collect();
+    keys.sort_unstable();
+    keys.into_iter().map(|k| k.2).collect()
+}
