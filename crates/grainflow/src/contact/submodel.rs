@@ -12,7 +12,7 @@
 //! branch-free, so the batch loop over contacts (and its AVX2 and AVX-512 copies) still
 //! compiles to vector code for each law.
 //!
-//! **Damping and rolling stay selectors** ([`NormalDamping`], [`LeverArm`], `law::parts`)
+//! **Damping and rolling stay selectors** ([`NormalDamping`], [`LeverArm`](super::LeverArm), `law::parts`)
 //! rather than types. Their variants differ in a scale (×m_eff, ×√m_eff, ×1) or a lever arm,
 //! formed for every variant and picked without a branch, and the `parts` bits already compile
 //! out the costly ones (a square root for Tsuji, the rolling torque) where a law cannot pick
