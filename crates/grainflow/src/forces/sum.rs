@@ -43,10 +43,13 @@ impl Quantum {
     /// evaluation, at least `floor`.
     pub(crate) fn for_peak(peak: f64, floor: f64) -> Quantum {
         let p = if peak.is_finite() { peak.max(floor) } else { floor };
-        // 2^⌈log₂ p⌉, kept within the normal numbers.
-        let exponent = p.log2().ceil().clamp(-900.0, 900.0) as i32;
-        let q = 2f64.powi(exponent - 41);
-        Quantum { rounder: ROUNDER * q, limit: 2f64.powi(exponent) * GROWTH }
+        // ⌈log₂ p⌉ from the bits (no logarithm in a step's overhead), kept where 2^(e − 80)
+        // and 2^(e + 10) are normal numbers.
+        let bits = p.to_bits();
+        let exponent = ((bits >> 52) & 0x7ff) as i32 - 1023;
+        let exponent = (exponent + (bits & ((1 << 52) - 1) != 0) as i32).clamp(-900, 900);
+        let q = pow2(exponent - 41);
+        Quantum { rounder: ROUNDER * q, limit: pow2(exponent) * GROWTH }
     }
 
     /// `v` rounded to a multiple of the quantum (exactly so while |v| < 2⁵¹·Q).
@@ -70,6 +73,11 @@ impl Quantum {
             *v = self.round(*v);
         }
     }
+}
+
+/// 2^k for a normal result (k in −1022..=1023).
+fn pow2(k: i32) -> f64 {
+    f64::from_bits(((k + 1023) as u64) << 52)
 }
 
 /// The quanta of one force evaluation: forces and torques.
