@@ -161,6 +161,23 @@ impl Particles {
         }
     }
 
+    /// Appends the particles of `other` (same fields; its Adams–Bashforth history only if this
+    /// set keeps one).
+    pub fn append(&mut self, other: &Particles) {
+        self.id.extend_from_slice(&other.id);
+        self.phase.extend_from_slice(&other.phase);
+        self.radius.extend_from_slice(&other.radius);
+        self.mass.extend_from_slice(&other.mass);
+        self.inertia.extend_from_slice(&other.inertia);
+        self.position.extend_from_slice(&other.position);
+        self.velocity.extend_from_slice(&other.velocity);
+        self.omega.extend_from_slice(&other.omega);
+        self.force.extend_from_slice(&other.force);
+        self.torque.extend_from_slice(&other.torque);
+        self.accel_prev.extend_from_slice(&other.accel_prev);
+        self.alpha_prev.extend_from_slice(&other.alpha_prev);
+    }
+
     /// The slots in the order of the particles' ids (for outputs that must not depend on how
     /// the particles are stored).
     pub fn id_order(&self) -> Vec<usize> {

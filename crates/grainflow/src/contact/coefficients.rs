@@ -197,6 +197,11 @@ impl CoeffTable {
                 n * nw
             )));
         }
+        // E and ν of phase k, for the models that take them.
+        let phase_elastic = |k: usize| {
+            let ph = &phases[k];
+            elastic_of(&ph.name, ph.youngs_modulus, ph.poisson_ratio, "phase", law.normal_name())
+        };
         let mut pairs = vec![ContactCoeffs::default(); n * n];
         for m in 0..n {
             for l in m..n {
@@ -205,21 +210,7 @@ impl CoeffTable {
                 let (ma, mb) = (phases[m].mass(), phases[l].mass());
                 let m_eff = ma * mb / (ma + mb);
                 let elastic = if law.normal.elastic() {
-                    let model = law.normal_name();
-                    let (ea, na) = elastic_of(
-                        &phases[m].name,
-                        phases[m].youngs_modulus,
-                        phases[m].poisson_ratio,
-                        "phase",
-                        model,
-                    )?;
-                    let (eb, nb) = elastic_of(
-                        &phases[l].name,
-                        phases[l].youngs_modulus,
-                        phases[l].poisson_ratio,
-                        "phase",
-                        model,
-                    )?;
+                    let ((ea, na), (eb, nb)) = (phase_elastic(m)?, phase_elastic(l)?);
                     let (ra, rb) = (phases[m].radius(), phases[l].radius());
                     Some(ElasticPair { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: ra * rb / (ra + rb) })
                 } else {
@@ -236,15 +227,9 @@ impl CoeffTable {
                 let p = &wall_params[m * nw + w];
                 let what = format!("contact '{}'-wall '{}'", phases[m].name, wall_materials[w].name);
                 let elastic = if law.normal.elastic() {
-                    let model = law.normal_name();
-                    let (ea, na) = elastic_of(
-                        &phases[m].name,
-                        phases[m].youngs_modulus,
-                        phases[m].poisson_ratio,
-                        "phase",
-                        model,
-                    )?;
+                    let (ea, na) = phase_elastic(m)?;
                     let wm = &wall_materials[w];
+                    let model = law.normal_name();
                     let (eb, nb) =
                         elastic_of(&wm.name, wm.youngs_modulus, wm.poisson_ratio, "wall material", model)?;
                     Some(ElasticPair { e1: ea, nu1: na, e2: eb, nu2: nb, r_star: phases[m].radius() })

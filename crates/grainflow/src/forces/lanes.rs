@@ -351,9 +351,6 @@ impl Lanes {
             *l = if (x.partners[f.k()] as usize) < r1 { 1.0 } else { 0.0 };
         }
         self.compute::<N, T, false>(x, &live);
-        // The loads of a row's pairs (a ascending) are summed here and added to the row's
-        // accumulators once the row is done (the sums do not depend on their order).
-        let mut row = (usize::MAX, Vec3::ZERO, Vec3::ZERO);
         for (i, f) in group.iter().enumerate() {
             let (a, b, k) = (f.a as usize, x.partners[f.k()] as usize, f.k());
             let l = if b < r1 {
@@ -367,17 +364,7 @@ impl Lanes {
                     _ => continue,
                 }
             };
-            if a != row.0 {
-                if row.0 != usize::MAX {
-                    acc.add::<false>(row.0 - r0, row.1, row.2);
-                }
-                row = (a, Vec3::ZERO, Vec3::ZERO);
-            }
-            row.1 += l.f;
-            row.2 += l.ta;
-        }
-        if row.0 != usize::MAX {
-            acc.add::<false>(row.0 - r0, row.1, row.2);
+            acc.add::<false>(a - r0, l.f, l.ta);
         }
     }
 

@@ -161,19 +161,7 @@ impl Simulation {
             added.accel_prev = vec![Vec3::splat(f64::NAN); added.len()];
             added.alpha_prev = vec![Vec3::splat(f64::NAN); added.len()];
         }
-        let p = &mut self.particles;
-        p.id.extend_from_slice(&added.id);
-        p.phase.extend_from_slice(&added.phase);
-        p.radius.extend_from_slice(&added.radius);
-        p.mass.extend_from_slice(&added.mass);
-        p.inertia.extend_from_slice(&added.inertia);
-        p.position.extend_from_slice(&added.position);
-        p.velocity.extend_from_slice(&added.velocity);
-        p.omega.extend_from_slice(&added.omega);
-        p.force.extend_from_slice(&added.force);
-        p.torque.extend_from_slice(&added.torque);
-        p.accel_prev.extend_from_slice(&added.accel_prev);
-        p.alpha_prev.extend_from_slice(&added.alpha_prev);
+        self.particles.append(&added);
         // The forces held are those of the particles before: evaluated again before they act.
         self.forces_current = false;
         self.derive_slot_facts();
