@@ -12,8 +12,11 @@
 //!
 //! ## One time step, module by module
 //! 1. [`neighbor`] — broad phase: linked cells with a skin give the candidate pairs and
-//!    particle–wall pairs; contact history survives rebuilds, keyed by slot pairs (slots do not
-//!    change during a run; checkpoints name the pairs by particle ids).
+//!    particle–wall pairs; contact history survives rebuilds and re-sorts. A particle's
+//!    identity is its id: a slot is only where it is stored, changed only by insertion,
+//!    removal and re-sorting ([`Simulation::insert`], [`Simulation::remove_ids`],
+//!    [`Simulation::sort_spatially`]), which carry every history with its particles;
+//!    checkpoints name the pairs by ids.
 //! 2. [`contact`] — fine phase and contact laws: geometry, normal and tangential forces, Coulomb
 //!    cap, torques ([`contact::law`]), coefficients derived from the inputs
 //!    ([`contact::coefficients`]).

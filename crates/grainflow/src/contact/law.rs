@@ -24,6 +24,12 @@ pub struct ContactForce {
     /// The normal load of the rolling torque: `elastic_normal`, or for JKR the critical force
     /// |F_ne + 2F_c|, N.
     pub rolling_load: f64,
+    /// The Coulomb limit μ·F_c, N: the tangential force's magnitude never exceeds it (to
+    /// rounding).
+    pub limit: f64,
+    /// An upper bound of the total force's magnitude (to rounding), |F_n| + the Coulomb
+    /// limit, N.
+    pub bound: f64,
 }
 
 impl ContactForce {
@@ -165,6 +171,8 @@ pub fn contact_force_for<N: NormalSubModel, T: TangentialSubModel, const PARTS: 
         tangential: f_t,
         elastic_normal: fn_el,
         rolling_load: N::rolling_load(fn_el, critical),
+        limit,
+        bound: fn_total.abs() + limit,
     }
 }
 

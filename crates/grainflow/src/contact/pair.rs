@@ -27,6 +27,21 @@ pub(crate) struct PairLoad {
     pub tb: Vec3,
 }
 
+/// Upper bounds of the magnitudes of a contact's force and of each of its torques (to
+/// rounding), N and N·m: what the sums' quanta are chosen from (`forces::sum`), cheaper to
+/// track than the largest components themselves.
+pub(crate) type LoadBound = [f64; 2];
+
+/// The torque bound of a contact with force `f` and torque levers `levers`: the longer lever
+/// times the Coulomb limit, plus the rolling torque's size where `PARTS` has rolling friction.
+#[inline(always)]
+fn torque_bound<const PARTS: u8>(f: &ContactForce, mu_roll: f64, levers: [f64; 2]) -> f64 {
+    let (a, b) = (levers[0].abs(), levers[1].abs());
+    let lever = if a > b { a } else { b };
+    let rolling = if PARTS & parts::ROLLING != 0 { mu_roll.abs() * f.rolling_load.abs() } else { 0.0 };
+    lever * f.limit + rolling
+}
+
 /// What the force law needs of one touching pair (a, b), gathered from the particle arrays.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PairInput {
@@ -53,7 +68,7 @@ pub(crate) fn pair_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8
     law: &ContactLaw,
     dt: f64,
     p: &PairInput,
-) -> (PairLoad, Vec3) {
+) -> (PairLoad, Vec3, LoadBound) {
     debug_assert!(PARTS & parts::RADICAL != 0 || law.lever != LeverArm::RadicalPlane);
     let mut g = if PARTS & parts::RADICAL != 0 {
         pair_geometry(p.d, p.ra, p.rb)
@@ -66,14 +81,14 @@ pub(crate) fn pair_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8
     g.lever_j = if radical { g.lever_j } else { p.rb };
     let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, p.wb);
     let (f, h) = law_force::<N, T, PARTS>(law, dt, p, &g, v_r);
+    let levers =
+        [torque_lever(law.lever, g.lever_i, g.overlap), torque_lever(law.lever, g.lever_j, g.overlap)];
     let load = PairLoad {
         f: f.total(),
-        ta: f.torque(torque_lever(law.lever, g.lever_i, g.overlap), g.normal)
-            + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wa),
-        tb: f.torque(torque_lever(law.lever, g.lever_j, g.overlap), g.normal)
-            + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wb),
+        ta: f.torque(levers[0], g.normal) + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wa),
+        tb: f.torque(levers[1], g.normal) + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wb),
     };
-    (load, h)
+    (load, h, [f.bound, torque_bound::<PARTS>(&f, p.c.mu_roll, levers)])
 }
 
 /// The rolling torque, or zero where no contact has rolling friction (`PARTS` without
@@ -120,13 +135,14 @@ pub(crate) fn wall_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8
     law: &ContactLaw,
     dt: f64,
     p: &PairInput,
-) -> (PairLoad, Vec3) {
+) -> (PairLoad, Vec3, LoadBound) {
     let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb, lever_j: 0.0 };
     // v − 0 = v: the same bits as the pair form with the wall at rest.
     let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, Vec3::ZERO);
     let (f, h) = law_force::<N, T, PARTS>(law, dt, p, &g, v_r);
     let torque = f.torque(g.lever_i, g.normal) + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wa);
-    (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h)
+    let bound = [f.bound, torque_bound::<PARTS>(&f, p.c.mu_roll, [g.lever_i, 0.0])];
+    (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h, bound)
 }
 
 /// `h` if `keep`, else zero: a history kept or cleared by a bit mask (a select here compiles

@@ -15,8 +15,8 @@ use super::{Accumulators, CrossingLoad, ForceInputs, Peak, Quanta};
 use crate::boundary::Images;
 use crate::contact::law::parts;
 use crate::contact::pair::{
-    CommonMass, PairInput, PairLoad, common_pair_mass, kept_or_zero, pair_law, pair_mass, wall_geometry_for,
-    wall_law,
+    CommonMass, LoadBound, PairInput, PairLoad, common_pair_mass, kept_or_zero, pair_law, pair_mass,
+    wall_geometry_for, wall_law,
 };
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw};
@@ -240,29 +240,41 @@ struct OutputLanes {
     ta: Vec3Lanes,
     tb: Vec3Lanes,
     h: Vec3Lanes,
+    /// Each lane's bounds of its force's and its torques' magnitudes ([`LoadBound`]).
+    bound: [[f64; LANES]; 2],
 }
 
 impl OutputLanes {
-    const ZERO: OutputLanes =
-        OutputLanes { f: Vec3Lanes::ZERO, ta: Vec3Lanes::ZERO, tb: Vec3Lanes::ZERO, h: Vec3Lanes::ZERO };
+    const ZERO: OutputLanes = OutputLanes {
+        f: Vec3Lanes::ZERO,
+        ta: Vec3Lanes::ZERO,
+        tb: Vec3Lanes::ZERO,
+        h: Vec3Lanes::ZERO,
+        bound: [[0.0; LANES]; 2],
+    };
 
     #[inline(always)]
-    fn set(&mut self, i: usize, (l, h): (PairLoad, Vec3)) {
+    fn set(&mut self, i: usize, (l, h, b): (PairLoad, Vec3, LoadBound)) {
         self.f.set(i, l.f);
         self.ta.set(i, l.ta);
         self.tb.set(i, l.tb);
         self.h.set(i, h);
+        self.bound[0][i] = b[0];
+        self.bound[1][i] = b[1];
     }
 
     /// Rounds the loads to the quanta `q`, raising the lanes' peaks `peak` (force, torque) by
-    /// the loads of the lanes where `live` is 1 (0: a lane that holds what an earlier batch
-    /// left, or a crossing pair's, which the pass over the crossing pairs computed).
+    /// the load bounds of the lanes where `live` is 1 (0: a lane that holds what an earlier
+    /// batch left, or a crossing pair's, which the pass over the crossing pairs computed).
     #[inline(always)]
     fn round(&mut self, q: Quanta, live: &Live, peak: &mut PeakLanes) {
         for k in 0..3 {
-            q.force.round_all(&mut self.f.0[k], live, &mut peak[0]);
-            q.torque.round_all(&mut self.ta.0[k], live, &mut peak[1]);
-            q.torque.round_all(&mut self.tb.0[k], live, &mut peak[1]);
+            q.force.round_all(&mut self.f.0[k]);
+            q.torque.round_all(&mut self.ta.0[k]);
+            q.torque.round_all(&mut self.tb.0[k]);
+        }
+        for (peak, bound) in peak.iter_mut().zip(&self.bound) {
+            raise_peaks(peak, bound, live);
         }
     }
 
@@ -273,7 +285,18 @@ impl OutputLanes {
     }
 }
 
-/// The largest force and torque components, lane by lane, of the loads of the batches so far.
+/// Raises each `peak[i]` to `bound[i]` where `live[i]` is 1. A loop that compiles to vector
+/// instructions (no branch, and every lane's peak stored); a NaN bound leaves the peak as it
+/// is.
+#[inline(always)]
+fn raise_peaks(peak: &mut [f64; LANES], bound: &[f64; LANES], live: &Live) {
+    for ((p, &b), &m) in peak.iter_mut().zip(bound).zip(live) {
+        let b = b * m;
+        *p = if b > *p { b } else { *p };
+    }
+}
+
+/// The largest force and torque bounds, lane by lane, of the loads of the batches so far.
 type PeakLanes = [[f64; LANES]; 2];
 
 /// 1 for the lanes of a batch that hold a load of this evaluation's own, 0 for the others.
@@ -298,7 +321,7 @@ impl Lanes {
         Lanes { input: InputLanes::ZERO, output: OutputLanes::ZERO, peak: [[0.0; LANES]; 2] }
     }
 
-    /// The largest force and torque components of the loads computed so far.
+    /// The largest force and torque bounds of the loads computed so far.
     pub(super) fn peak(&self) -> Peak {
         self.peak.map(|lanes| lanes.iter().fold(0.0, |m: f64, &v| if v > m { v } else { m }))
     }

@@ -9,12 +9,16 @@
 //! (AMBER's GPU engine sums its forces in 64-bit integers for the same reason), carried in
 //! `f64`s so that it costs two additions a component and no conversions.
 //!
-//! The quantum follows the loads: each evaluation takes it from the largest load component of
-//! the evaluation before (`peak`; a maximum, so the same in any order too), as
-//! `Q = 2^⌈log₂ peak⌉ · 2⁻⁴¹`. A load is then resolved to 2⁻⁴² of the largest load of the
-//! system (a bed's weakest contacts to its strongest as double precision resolves one in 10¹²
-//! or so), and the sums stay exact while a load grows less than 2¹⁰-fold from one evaluation to
-//! the next and a particle's sum stays below 2¹²·peak. A force stage that exceeds that is
+//! The quantum follows the loads: each evaluation takes it from the peak of the evaluation
+//! before (`peak`; a maximum, so the same in any order too), as `Q = 2^⌈log₂ peak⌉ · 2⁻⁴¹`.
+//! The peak is that of bounds the law gives with each load rather than of the loads'
+//! components, which would cost a comparison per component: a force's magnitude is at most
+//! |F_n| + μ·F_c (the tangential force never exceeds its Coulomb limit), a torque's at most
+//! the longer lever arm times μ·F_c plus the rolling torque's size. A load is then resolved to
+//! about 2⁻⁴² of the largest load of the system (a bed's weakest contacts to its strongest as
+//! double precision resolves one in 10¹² or so), and the sums stay exact while a load grows
+//! less than 2¹⁰-fold from one evaluation to the next and a particle's sum stays below
+//! 2¹²·peak. A force stage that exceeds that is
 //! counted ([`Quanta::exceeded_by`]): its sums are still correctly rounded, but may depend on
 //! their order. The peak is part of the state (checkpoints carry it). Before any contact, the
 //! quantum is that of a floor, 2⁻⁴⁰ of the case's reference force (the normal force at an
@@ -58,18 +62,10 @@ impl Quantum {
         (v + self.rounder) - self.rounder
     }
 
-    /// Rounds every value of `values` in place, and raises each `peak[i]` to |values[i]| where
-    /// `live[i]` is 1 (0: a lane whose value is not a load of this evaluation). A loop that
-    /// compiles to vector instructions (no branch, and every lane's peak stored).
+    /// Rounds every value of `values` in place: a loop that compiles to vector instructions.
     #[inline(always)]
-    pub(crate) fn round_all<const N: usize>(
-        self,
-        values: &mut [f64; N],
-        live: &[f64; N],
-        peak: &mut [f64; N],
-    ) {
-        for ((v, m), p) in values.iter_mut().zip(live).zip(peak.iter_mut()) {
-            *p = p.max(v.abs() * m);
+    pub(crate) fn round_all<const N: usize>(self, values: &mut [f64; N]) {
+        for v in values.iter_mut() {
             *v = self.round(*v);
         }
     }
@@ -107,7 +103,9 @@ impl Quanta {
     /// True when an evaluation with these quanta had loads as large as `peak`: beyond what
     /// they sum exactly (see the module doc).
     pub(crate) fn exceeded_by(&self, peak: Peak) -> bool {
-        !(peak[0] < self.force.limit && peak[1] < self.torque.limit)
+        // The bounds hold to a few roundings: a margin of 2⁻⁴⁰ covers them.
+        const MARGIN: f64 = 1.0 + 1.0 / (1u64 << 40) as f64;
+        !(peak[0] * MARGIN < self.force.limit && peak[1] * MARGIN < self.torque.limit)
     }
 }
 
