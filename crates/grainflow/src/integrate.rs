@@ -144,24 +144,18 @@ impl<'a> Slots<'a> {
     }
 
     /// Calls `body(self, i, a, α)` for every slot i in order, with a = F/m + g and α = T/I.
-    /// The loop is written out once for common inverses and once for each slot's own, so that
-    /// each stays vector code.
+    /// One call of `body` in the loop, so that it is inlined; the choice between common
+    /// inverses and each slot's own does not change within the loop, so the compiler takes it
+    /// out and each loop stays vector code.
     #[inline(always)]
     fn each(&mut self, gravity: Vec3, mut body: impl FnMut(&mut Self, usize, Vec3, Vec3)) {
-        match self.inverses {
-            Some((inv_m, inv_i)) => {
-                for i in 0..self.v.len() {
-                    let (a, alpha) = (self.f[i] * inv_m + gravity, self.t[i] * inv_i);
-                    body(self, i, a, alpha);
-                }
-            }
-            None => {
-                for i in 0..self.v.len() {
-                    let (a, alpha) =
-                        (self.f[i] * (1.0 / self.m[i]) + gravity, self.t[i] * (1.0 / self.inertia[i]));
-                    body(self, i, a, alpha);
-                }
-            }
+        let inverses = self.inverses;
+        for i in 0..self.v.len() {
+            let (inv_m, inv_i) = match inverses {
+                Some(common) => common,
+                None => (1.0 / self.m[i], 1.0 / self.inertia[i]),
+            };
+            body(self, i, self.f[i] * inv_m + gravity, self.t[i] * inv_i);
         }
     }
 }

@@ -108,10 +108,10 @@ pub struct Simulation {
     periodic: Periodic,
     /// Slots held fixed by prescribed motion (empty if none).
     held: Vec<bool>,
-    /// The mass all particles have and the moment of inertia all have, each if they have the
-    /// same (`None` inside when they differ); `None` outside when not known (the particles were
-    /// lent out for changes since).
-    common: Option<(Option<f64>, Option<f64>)>,
+    /// The mass all particles have (`.0`, if they have the same) and the mass and moment of
+    /// inertia all integrated particles have (`.1`, if they have the same); `None` outside when
+    /// not known (the particles were lent out for changes since).
+    common: Option<Common>,
     /// Runs of slots that are integrated (every slot not under prescribed motion).
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
@@ -128,6 +128,8 @@ pub struct Simulation {
     pool: Option<std::sync::Arc<rayon::ThreadPool>>,
     /// Blocks of the parallel force stage.
     plan: ForcePlan,
+    /// The force stage's working memory on one thread.
+    scratch: Box<forces::Scratch>,
     /// The largest force and torque components of the last force evaluation's loads, from
     /// which the next takes the quanta of its order-free sums (`forces::sum`); `None` before
     /// the first.
@@ -269,6 +271,7 @@ impl Simulation {
             timing: None,
             pool: None,
             plan: ForcePlan::default(),
+            scratch: forces::Scratch::new(),
             load_peak: None,
             peak_floor,
             inexact_sums: 0,
@@ -680,19 +683,26 @@ impl Simulation {
     /// The mass every particle has and the moment of inertia every particle has, each if all
     /// have the same (to the bit); found once and kept until the particles are lent out for
     /// changes.
-    fn common(&mut self) -> (Option<f64>, Option<f64>) {
-        let p = &self.particles;
+    fn common(&mut self) -> Common {
+        let (p, free) = (&self.particles, &self.free);
+        /// The value all of `a` have, to the bit, if they have one.
+        fn same(mut a: impl Iterator<Item = f64>) -> Option<f64> {
+            let x = a.next()?;
+            a.all(|y| y.to_bits() == x.to_bits()).then_some(x)
+        }
         *self.common.get_or_insert_with(|| {
-            let same =
-                |a: &[f64]| a.first().copied().filter(|x| a.iter().all(|y| y.to_bits() == x.to_bits()));
-            (same(&p.mass), same(&p.inertia))
+            let slots = || free.iter().flat_map(|r| r.clone());
+            let free_mass = same(slots().map(|i| p.mass[i]));
+            let free_inertia = same(slots().map(|i| p.inertia[i]));
+            (same(p.mass.iter().copied()), free_mass.zip(free_inertia))
         })
     }
 
-    /// The mass and moment of inertia of every particle, if all have the same.
+    /// The mass and moment of inertia of every integrated particle (every one not under
+    /// prescribed motion), if all have the same: the integration then multiplies by one
+    /// inverse of each instead of dividing for each particle.
     fn common_mass_and_inertia(&mut self) -> Option<(f64, f64)> {
-        let (m, i) = self.common();
-        m.zip(i)
+        self.common().1
     }
 
     /// The force stage for one law; with `par`, on the thread pool.
@@ -751,7 +761,8 @@ impl Simulation {
         let work = match blocks {
             Some((pool, plan)) => pool.install(|| forces::parallel::<N, T>(&x, plan, out, timed)),
             None => {
-                forces::ThreadWork { walls: forces::serial::<N, T>(&x, out, timed), ..Default::default() }
+                let walls = forces::serial::<N, T>(&x, out, timed, &mut self.scratch);
+                forces::ThreadWork { walls, ..Default::default() }
             }
         };
         if quanta.exceeded_by(peak) {
@@ -972,6 +983,10 @@ pub struct ContactInfo {
 /// The blocks by which the per-particle stages share the `n` slots out over the threads: the
 /// force stage's ([`ForcePlan::blocks_for`]), so that each particle is integrated on the thread
 /// that computes its contacts; none (one thread) without `par` or before the first plan.
+/// The mass all particles have, if they have the same; the mass and moment of inertia all
+/// integrated particles have, if they have the same.
+type Common = (Option<f64>, Option<(f64, f64)>);
+
 fn thread_blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usize>] {
     if par { plan.blocks_for(n) } else { &[] }
 }

@@ -321,6 +321,11 @@ impl Lanes {
         Lanes { input: InputLanes::ZERO, output: OutputLanes::ZERO, peak: [[0.0; LANES]; 2] }
     }
 
+    /// Forgets the peaks of the batches so far (a new evaluation begins).
+    pub(super) fn clear_peaks(&mut self) {
+        self.peak = [[0.0; LANES]; 2];
+    }
+
     /// The largest force and torque bounds of the loads computed so far.
     pub(super) fn peak(&self) -> Peak {
         self.peak.map(|lanes| lanes.iter().fold(0.0, |m: f64, &v| if v > m { v } else { m }))

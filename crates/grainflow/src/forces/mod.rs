@@ -119,9 +119,11 @@ pub(crate) fn serial<N: NormalSubModel, T: TangentialSubModel>(
     x: &ForceInputs,
     out: ForceOutputs,
     clock: bool,
+    scratch: &mut Scratch,
 ) -> f64 {
     let n = x.position.len();
     let (walls, peak) = block::<N, T>(
+        scratch,
         clock,
         x,
         0..n,
@@ -206,6 +208,7 @@ pub(crate) fn parallel<N: NormalSubModel, T: TangentialSubModel>(
         let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
         let t0 = clock.then(std::time::Instant::now);
         let (walls, peak) = block::<N, T>(
+            &mut Scratch::fresh(),
             clock,
             x,
             rows,
@@ -238,6 +241,41 @@ fn per_thread(n: usize, part: impl Fn(usize) -> f64) -> (f64, f64) {
     (total / threads as f64, (0..threads).map(of).fold(0.0, f64::max))
 }
 
+/// The working memory of a block's force stage: the batch lanes and the lists of touching
+/// pairs. Kept from one evaluation to the next where one block does all the work, so that a
+/// small system's step does not spend its time clearing them.
+pub(crate) struct Scratch {
+    lanes: Lanes,
+    found: [Found; FOUND],
+    found_walls: [usize; FOUND],
+}
+
+impl Scratch {
+    /// A cleared scratch, where it is made (a thread's block takes one on its stack: no
+    /// allocation in a step).
+    fn fresh() -> Scratch {
+        Scratch { lanes: Lanes::new(), found: [Found::default(); FOUND], found_walls: [0; FOUND] }
+    }
+
+    /// A cleared scratch on the heap, to be kept.
+    pub(crate) fn new() -> Box<Scratch> {
+        Box::new(Scratch::fresh())
+    }
+}
+
+/// A copy starts afresh: the scratch holds nothing between evaluations that is needed.
+impl Clone for Scratch {
+    fn clone(&self) -> Self {
+        Scratch::fresh()
+    }
+}
+
+impl std::fmt::Debug for Scratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Scratch")
+    }
+}
+
 /// Crossing pairs that arrive at a block from rows below it.
 #[derive(Clone, Copy)]
 enum Incoming<'a> {
@@ -251,7 +289,9 @@ enum Incoming<'a> {
 /// their crossing pairs in list order. Returns the seconds spent on the walls (with `clock`;
 /// 0 otherwise) and the peaks of the loads.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn block<N: NormalSubModel, T: TangentialSubModel>(
+    scratch: &mut Scratch,
     clock: bool,
     x: &ForceInputs,
     rows: Range<usize>,
@@ -269,12 +309,12 @@ fn block<N: NormalSubModel, T: TangentialSubModel>(
     acc.torque.fill(Vec3::ZERO);
     // Walls first, as MFIX does: the touching wall pairs listed, then their loads computed a
     // batch at a time and added in list order.
-    let mut lanes = Lanes::new();
+    let Scratch { lanes, found, found_walls } = scratch;
+    lanes.clear_peaks();
     let wall_pairs = &x.wall_pairs[w0..w0 + whist.len()];
     let mut at = 0;
-    let mut found_walls = [0usize; FOUND];
     while at < wall_pairs.len() {
-        let n = find_wall_contacts::<N>(x, wall_pairs, &mut at, whist, &mut found_walls);
+        let n = find_wall_contacts::<N>(x, wall_pairs, &mut at, whist, found_walls);
         for group in found_walls[..n].chunks(LANES) {
             lanes.add_wall_loads::<N, T>(x, r0, wall_pairs, group, &mut acc, whist);
         }
@@ -295,15 +335,12 @@ fn block<N: NormalSubModel, T: TangentialSubModel>(
     // pairs, which lists the touching ones; then their loads, computed a batch at a time and
     // added in list order.
     let mut cursor = Cursor { a: r0, k: x.offsets[r0] };
-    let mut found = [Found::default(); FOUND];
     let mut crossing = own_crossing.iter();
-    let mut lanes = Lanes::new();
     if let Some(c) = x.coeffs.uniform_pair() {
         lanes.input.fill_coeffs(c);
     }
     while cursor.a < r1 {
-        let n =
-            find_contacts::<N>(x, r0..r1, [&*acc.force, &*acc.torque], &mut cursor, in_contact, &mut found);
+        let n = find_contacts::<N>(x, r0..r1, [&*acc.force, &*acc.torque], &mut cursor, in_contact, found);
         for group in found[..n].chunks(LANES) {
             lanes.add_loads::<N, T>(x, r0..r1, group, &mut crossing, &mut acc, hist);
         }
