@@ -6,6 +6,8 @@
 //!   topology — per triangle its unit normal, edges and neighbours; per edge its vertices,
 //!   triangles and [`EdgeKind`]; per vertex its triangles — derived once at load, in flat
 //!   vectors with `u32` indices.
+//! - [`contact`]: the closest point of a point on a triangle and the contacts of one sphere
+//!   with the mesh, each particle–surface contact counted once.
 //!
 //! A triangle's normal follows its winding (right hand: corners a, b, c give
 //! (b − a) × (c − a)); it points to the side the particles are expected on. Open meshes
@@ -19,7 +21,10 @@
 //! is a function of the file alone.
 
 pub mod build;
+pub mod contact;
 pub mod load;
+
+pub use contact::{ClosestPoint, MeshContact, Primitive, Region, closest_point_on_triangle, sphere_contacts};
 
 use crate::math::Vec3;
 use std::fmt;
