@@ -2,7 +2,7 @@
 //!
 //! - [`load`]: STL (ASCII and binary) and Wavefront OBJ input, with a load-time transform
 //!   ([`MeshTransform`]) from file units and axes to the case's.
-//! - [`Mesh`] (this module, built in `build`): the welded, validated, indexed mesh and its
+//! - [`Mesh`] (this module, built in [`build`]): the welded, validated, indexed mesh and its
 //!   topology — per triangle its unit normal, edges and neighbours; per edge its vertices,
 //!   triangles and [`EdgeKind`]; per vertex its triangles — derived once at load, in flat
 //!   vectors with `u32` indices.
@@ -47,8 +47,9 @@ pub enum EdgeKind {
 }
 
 /// Two triangles meeting at an edge are coplanar when their normals' dot product exceeds this
-/// (an angle below about 1.4e-5 rad): far above the rounding of a normal computed from
-/// coordinates, far below any bend a CAD model means.
+/// (an angle below about 1.4e-5 rad): far above the rounding of a triangle's normal (about
+/// ε·|x|/h for a triangle h high among coordinates of magnitude |x|, so 1.4e-5 only for
+/// slivers 1e-11·|x| high), far below any bend a CAD model means.
 pub const FLAT_COS: f64 = 1.0 - 1e-10;
 
 /// One edge of the mesh.
