@@ -27,6 +27,8 @@
 //! 6. [`observe`] — energies, contact counts and overlaps for output.
 //!
 //! [`Simulation`] ties the stages together; [`timestep`] holds MFIX's time-step rule.
+//! [`mesh`] holds the geometry of triangle-mesh walls (STL and OBJ input, topology, sphere–mesh
+//! contacts), which the time step does not use yet.
 
 pub mod boundary;
 pub mod checkpoint;
@@ -36,6 +38,7 @@ pub mod forces;
 pub mod integrate;
 pub mod material;
 pub mod math;
+pub mod mesh;
 pub mod motion;
 pub mod neighbor;
 pub mod observe;
