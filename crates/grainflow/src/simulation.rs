@@ -245,7 +245,7 @@ impl Simulation {
         let held = if held.iter().any(|&h| h) { held } else { Vec::new() };
         let peak_floor = sum_floor(&config.law, &config.phases, &coeffs);
         let n_particles = particles.len();
-        Ok(Simulation {
+        let mut sim = Simulation {
             particles,
             phases: config.phases,
             walls: config.walls,
@@ -277,7 +277,9 @@ impl Simulation {
             inexact_sums: 0,
             sort: population::SortState { rule: config.resort, ..Default::default() },
             slot_count: n_particles,
-        })
+        };
+        sim.put_prescribed_last()?;
+        Ok(sim)
     }
 
     /// The particles.

@@ -238,7 +238,8 @@ fn a_second_contact_starts_from_a_zero_spring() {
                 omega: p.omega[i],
             })
             .collect();
-        assert!(between[1].omega != Vec3::ZERO, "{integrator:?}: the first contact loaded no spring");
+        let mover = between.iter().find(|q| q.id == 2).expect("particle 2");
+        assert!(mover.omega != Vec3::ZERO, "{integrator:?}: the first contact loaded no spring");
         let mut fresh = make(&between);
         // The second contact, side by side, to its end.
         let (mut second, mut ended) = (false, false);

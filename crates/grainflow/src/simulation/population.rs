@@ -165,7 +165,31 @@ impl Simulation {
         // The forces held are those of the particles before: evaluated again before they act.
         self.forces_current = false;
         self.derive_slot_facts();
-        Ok(())
+        self.put_prescribed_last()
+    }
+
+    /// Slots `order` with the particles under prescribed motion moved after the others, each
+    /// group in its order: the integrated slots are then one run, which the integrators take
+    /// in one loop (no result depends on the slots).
+    fn prescribed_last(&self, mut order: Vec<usize>) -> Vec<usize> {
+        if self.motion.is_empty() {
+            return order;
+        }
+        let mut prescribed = vec![false; self.particles.len()];
+        for r in &self.motion {
+            prescribed[r.slot] = true;
+        }
+        order.sort_by_key(|&s| prescribed[s]);
+        order
+    }
+
+    /// Moves the particles under prescribed motion after the others, if they are not there.
+    pub(super) fn put_prescribed_last(&mut self) -> Result<(), EngineError> {
+        if self.free.len() <= 1 && self.free.first().is_none_or(|r| r.start == 0) {
+            return Ok(());
+        }
+        let order = self.prescribed_last((0..self.particles.len()).collect());
+        self.rearrange(&order)
     }
 
     /// Removes the particles with the given ids between steps (with their contacts'
@@ -206,10 +230,11 @@ impl Simulation {
 
     /// Sorts the particles along a space-filling curve (Morton order of cells of the
     /// neighbour cut-off's size, ties by id), so that particles near each other in space are
-    /// near each other in memory. The results of the run do not change.
+    /// near each other in memory; particles under prescribed motion after the others. The
+    /// results of the run do not change.
     pub fn sort_spatially(&mut self) -> Result<(), EngineError> {
         let order = morton_order(&self.particles.position, &self.particles.id, self.cell_size());
-        self.rearrange(&order)?;
+        self.rearrange(&self.prescribed_last(order))?;
         self.sort.last_step = self.step;
         self.sort.gap_after = None;
         self.sort.sorts += 1;
