@@ -22,9 +22,11 @@
 
 pub mod build;
 pub mod contact;
+pub mod grid;
 pub mod load;
 
 pub use contact::{ClosestPoint, MeshContact, Primitive, Region, closest_point_on_triangle, sphere_contacts};
+pub use grid::TriangleGrid;
 
 use crate::math::Vec3;
 use std::fmt;
@@ -354,4 +356,12 @@ impl Default for MeshTransform {
     fn default() -> Self {
         MeshTransform { scale: 1.0, rotation_deg: [0.0; 3], translation: Vec3::ZERO, flip_normals: false }
     }
+}
+
+/// A triangle-mesh wall of a simulation: its surface and its material (an index into the
+/// simulation's wall materials). Immovable.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshWall {
+    pub mesh: Mesh,
+    pub material: usize,
 }

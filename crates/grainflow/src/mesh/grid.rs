@@ -1,0 +1,170 @@
+//! Triangles binned in a uniform grid, so that the triangles near a particle are found in time
+//! that depends on the triangles near it, not on the mesh's size.
+
+use super::Mesh;
+use super::contact::closest_point_on_triangle;
+use crate::math::Vec3;
+
+/// At most this many cells a triangle (on average): coarser cells where the mesh's bounding
+/// box holds few triangles (a large plate of two triangles), so the grid's memory stays
+/// proportional to the mesh.
+const CELLS_PER_TRIANGLE: usize = 8;
+
+/// A mesh's triangles binned in cubic cells: each cell lists the triangles whose bounding
+/// boxes meet it.
+#[derive(Debug, Clone)]
+pub struct TriangleGrid {
+    lo: Vec3,
+    cell: f64,
+    dims: [usize; 3],
+    /// Triangles of cell c: `triangles[start[c]..start[c + 1]]`, ascending.
+    start: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+impl TriangleGrid {
+    /// Bins `mesh`'s triangles in cells of side at least `cell` (m; the neighbour cut-off),
+    /// coarser where the mesh is large and has few triangles.
+    pub fn new(mesh: &Mesh, cell: f64) -> TriangleGrid {
+        let (lo, hi) = mesh.bounds();
+        let span = (hi - lo).max(Vec3::splat(0.0));
+        let budget = (CELLS_PER_TRIANGLE * mesh.triangle_count()).max(64) as f64;
+        let mut cell = if cell.is_finite() && cell > 0.0 { cell } else { span.max_element().max(1.0) };
+        let count = |c: f64| span.to_array().map(|s| (s / c).floor() as usize + 1);
+        while count(cell).iter().map(|&n| n as f64).product::<f64>() > budget {
+            cell *= 2.0;
+        }
+        let dims = count(cell);
+        let n_cells = dims[0] * dims[1] * dims[2];
+        let index = |c: [usize; 3]| (c[2] * dims[1] + c[1]) * dims[0] + c[0];
+        let cell_of = |x: Vec3| {
+            let r = ((x - lo) / cell).to_array();
+            std::array::from_fn(|k| (r[k].floor().max(0.0) as usize).min(dims[k] - 1))
+        };
+        // Counting sort of (cell, triangle) pairs.
+        let boxes: Vec<([usize; 3], [usize; 3])> = (0..mesh.triangle_count() as u32)
+            .map(|t| {
+                let [a, b, c] = mesh.corners(t);
+                (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)))
+            })
+            .collect();
+        let each_cell = |(l, h): &([usize; 3], [usize; 3]), f: &mut dyn FnMut(usize)| {
+            for z in l[2]..=h[2] {
+                for y in l[1]..=h[1] {
+                    for x in l[0]..=h[0] {
+                        f(index([x, y, z]));
+                    }
+                }
+            }
+        };
+        let mut start = vec![0u32; n_cells + 1];
+        for b in &boxes {
+            each_cell(b, &mut |c| start[c + 1] += 1);
+        }
+        for c in 0..n_cells {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut triangles = vec![0u32; start[n_cells] as usize];
+        for (t, b) in boxes.iter().enumerate() {
+            each_cell(b, &mut |c| {
+                triangles[fill[c] as usize] = t as u32;
+                fill[c] += 1;
+            });
+        }
+        TriangleGrid { lo, cell, dims, start, triangles }
+    }
+
+    /// Appends to `out`, ascending and each once, the triangles of `mesh` (the mesh this grid
+    /// was made of) closer to `centre` than `reach` (m). `out` is cleared first.
+    pub fn near(&self, mesh: &Mesh, centre: Vec3, reach: f64, out: &mut Vec<u32>) {
+        out.clear();
+        let lo = ((centre - Vec3::splat(reach) - self.lo) / self.cell).to_array();
+        let hi = ((centre + Vec3::splat(reach) - self.lo) / self.cell).to_array();
+        let mut range = [(0usize, 0usize); 3];
+        for k in 0..3 {
+            // Outside the grid on an axis (or not a number): no triangle is near.
+            if !(hi[k] >= 0.0 && lo[k] < self.dims[k] as f64) {
+                return;
+            }
+            range[k] = (lo[k].max(0.0) as usize, (hi[k] as usize).min(self.dims[k] - 1));
+        }
+        for z in range[2].0..=range[2].1 {
+            for y in range[1].0..=range[1].1 {
+                for x in range[0].0..=range[0].1 {
+                    let c = (z * self.dims[1] + y) * self.dims[0] + x;
+                    out.extend_from_slice(
+                        &self.triangles[self.start[c] as usize..self.start[c + 1] as usize],
+                    );
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out.retain(|&t| {
+            let q = closest_point_on_triangle(centre, mesh.corners(t)).point;
+            (centre - q).length_squared() < reach * reach
+        });
+    }
+
+    /// Heap bytes of the grid.
+    pub fn heap_bytes(&self) -> usize {
+        (self.start.capacity() + self.triangles.capacity()) * 4
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::MeshTransform;
+
+    /// A flat n×n grid of squares (two triangles each) on z = 0 over [0, 1]².
+    fn floor(n: usize) -> Mesh {
+        let mut v = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                v.push(Vec3::new(i as f64 / n as f64, j as f64 / n as f64, 0.0));
+            }
+        }
+        let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                t.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                t.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+        Mesh::from_indexed("floor", &v, &t, &MeshTransform::default()).expect("a valid floor")
+    }
+
+    /// The grid finds exactly the triangles a search over all of them finds.
+    #[test]
+    fn near_triangles_are_those_of_a_full_search() {
+        let mesh = floor(20);
+        for cell in [0.01, 0.05, 0.3, 5.0] {
+            let grid = TriangleGrid::new(&mesh, cell);
+            let mut got = Vec::new();
+            for k in 0..200 {
+                let f = |s: u64| ((k as u64 * 2654435761 + s * 40503) % 1000) as f64 / 1000.0;
+                let c = Vec3::new(1.2 * f(1) - 0.1, 1.2 * f(2) - 0.1, 0.2 * f(3) - 0.1);
+                let reach = 0.01 + 0.1 * f(4);
+                grid.near(&mesh, c, reach, &mut got);
+                let want: Vec<u32> = (0..mesh.triangle_count() as u32)
+                    .filter(|&t| {
+                        let q = closest_point_on_triangle(c, mesh.corners(t)).point;
+                        (c - q).length_squared() < reach * reach
+                    })
+                    .collect();
+                assert_eq!(got, want, "cell {cell}, centre {c}, reach {reach}");
+            }
+        }
+    }
+
+    /// A large plate of two triangles gets few cells, whatever the cell asked for.
+    #[test]
+    fn cells_stay_proportional_to_the_triangles() {
+        let mesh = floor(1);
+        let grid = TriangleGrid::new(&mesh, 1e-6);
+        assert!(grid.dims.iter().product::<usize>() <= CELLS_PER_TRIANGLE * 2 * 64);
+    }
+}
