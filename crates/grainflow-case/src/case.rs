@@ -1043,6 +1043,7 @@ fn validate<'h>(
         phases,
         wall_materials,
         walls,
+        meshes: Vec::new(),
         law,
         pair_params,
         wall_params,

@@ -28,7 +28,8 @@
 //!
 //! [`Simulation`] ties the stages together; [`timestep`] holds MFIX's time-step rule.
 //! [`mesh`] holds the geometry of triangle-mesh walls (STL and OBJ input, topology, sphere–mesh
-//! contacts), which the time step does not use yet.
+//! contacts, triangle grids); the force evaluation takes the meshes of
+//! [`SimulationConfig::meshes`] after the pairs.
 
 pub mod boundary;
 pub mod checkpoint;

@@ -12,6 +12,7 @@ use crate::forces::{self, ForcePlan};
 use crate::integrate::{self, Integrator};
 use crate::material::{Phase, WallMaterial};
 use crate::math::Vec3;
+use crate::mesh::MeshWall;
 use crate::motion::{self, PrescribedMotion, ResolvedMotion};
 use crate::neighbor::NeighborList;
 use crate::observe::Diagnostics;
@@ -19,6 +20,7 @@ use crate::state::Particles;
 use crate::timestep::{self, TimeStepChoice, TimeStepRule};
 use crate::wall::Wall;
 
+mod meshes;
 mod population;
 pub use population::ResortRule;
 
@@ -59,6 +61,8 @@ pub struct SimulationConfig {
     pub wall_materials: Vec<WallMaterial>,
     /// Walls.
     pub walls: Vec<Wall>,
+    /// Triangle-mesh walls.
+    pub meshes: Vec<MeshWall>,
     /// The contact law.
     pub law: ContactLaw,
     /// Contact inputs per phase pair, in MFIX's upper-triangle order (1-1, 1-2, …, 2-2, …).
@@ -92,6 +96,9 @@ pub struct Simulation {
     particles: Particles,
     phases: Vec<Phase>,
     walls: Vec<Wall>,
+    meshes: Vec<MeshWall>,
+    /// The mesh walls' candidates and contact histories.
+    mesh_stage: meshes::MeshStage,
     law: ContactLaw,
     coeffs: CoeffTable,
     integrator: Integrator,
@@ -177,6 +184,17 @@ impl Simulation {
         if config.phases.is_empty() {
             return Err(EngineError::BadReference("at least one phase is needed".into()));
         }
+        if let Some(m) = config.meshes.iter().find(|m| m.material >= config.wall_materials.len()) {
+            return Err(EngineError::BadReference(format!(
+                "mesh '{}' uses wall material {} but only {} are defined",
+                m.mesh.name(),
+                m.material,
+                config.wall_materials.len()
+            )));
+        }
+        if config.meshes.len() > u32::MAX as usize {
+            return Err(EngineError::BadReference("too many meshes".into()));
+        }
         for w in &config.walls {
             if w.material >= config.wall_materials.len() {
                 return Err(EngineError::BadReference(format!(
@@ -249,6 +267,8 @@ impl Simulation {
             particles,
             phases: config.phases,
             walls: config.walls,
+            meshes: config.meshes,
+            mesh_stage: meshes::MeshStage::default(),
             law: config.law,
             coeffs,
             integrator: config.integrator,
@@ -459,7 +479,7 @@ impl Simulation {
     pub fn heap_bytes(&self) -> MemoryUse {
         MemoryUse {
             particles: self.particles.heap_bytes(),
-            neighbors: self.neighbors.heap_bytes(),
+            neighbors: self.neighbors.heap_bytes() + self.mesh_stage.heap_bytes(),
             threads: self.plan.heap_bytes(),
         }
     }
@@ -767,6 +787,7 @@ impl Simulation {
                 forces::ThreadWork { walls, ..Default::default() }
             }
         };
+        self.mesh_loads::<N, T>(quanta, advance_history, &mut peak);
         if quanta.exceeded_by(peak) {
             self.inexact_sums += 1;
         }
@@ -948,7 +969,8 @@ pub struct StageTimes {
 pub struct MemoryUse {
     /// Particle state.
     pub particles: usize,
-    /// Neighbour list, contact histories and their scratch space.
+    /// Neighbour list, contact histories (mesh contacts' and the meshes' triangle grids
+    /// included) and their scratch space.
     pub neighbors: usize,
     /// Blocks and crossing pairs of the parallel force stage.
     pub threads: usize,

@@ -67,7 +67,7 @@ use detect::{Cursor, FOUND, Found, find_contacts, find_wall_contacts};
 use lanes::{LANES, Lanes};
 pub(crate) use plan::ForcePlan;
 pub use plan::{BLOCKS_PER_THREAD, MIN_PARALLEL_PARTICLES};
-pub(crate) use sum::{Accumulators, Peak, Quanta, max_peak, peak_floor};
+pub(crate) use sum::{Accumulators, Peak, Quanta, Quantum, max_peak, peak_floor};
 
 /// Read-only inputs of the force stage.
 pub(crate) struct ForceInputs<'a> {

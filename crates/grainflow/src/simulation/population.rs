@@ -111,6 +111,7 @@ impl Simulation {
             r.slot = new_of[r.slot] as usize;
             r.leader = r.leader.map(|l| new_of[l] as usize);
         }
+        self.mesh_stage.remap(&new_of);
         self.derive_slot_facts();
         Ok(())
     }

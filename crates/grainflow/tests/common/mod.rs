@@ -59,6 +59,7 @@ pub fn config(
         phases,
         wall_materials,
         walls,
+        meshes: Vec::new(),
         law,
         pair_params,
         wall_params,
