@@ -21,9 +21,10 @@ use thiserror::Error;
 /// and particle–wall pairs named by particle ids, so that a checkpoint does not depend on the
 /// order the particles are stored in; 4: the last force evaluation's load peaks, from which the
 /// next takes the quanta of its sums, and the count of evaluations with inexact sums, after
-/// the flags). A checkpoint of format 2 or 3 continues with the quanta of its first evaluation
-/// taken afresh: not bit for bit as the run that wrote it would have gone on.
-pub const FORMAT_VERSION: u32 = 4;
+/// the flags; 5: the mesh-wall contacts' histories, at the end). A checkpoint of format 2 or 3
+/// continues with the quanta of its first evaluation taken afresh: not bit for bit as the run
+/// that wrote it would have gone on.
+pub const FORMAT_VERSION: u32 = 5;
 /// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
@@ -270,6 +271,8 @@ struct Payload {
     particles: Particles,
     neighbors: NeighborState,
     anchors: Vec<Vec3>,
+    /// The mesh-wall contacts: (particle id, mesh), triangle, normal, history.
+    mesh_contacts: (Vec<[u32; 2]>, Vec<u32>, Vec<Vec3>, Vec<Vec3>),
 }
 
 impl Payload {
@@ -321,6 +324,16 @@ impl Payload {
             reference: d.vec3s("reference positions")?,
         };
         let anchors = d.vec3s("motion anchors")?;
+        let mesh_contacts = if version >= 5 {
+            (
+                d.pairs("mesh contacts")?,
+                d.u32s("mesh contact triangles")?,
+                d.vec3s("mesh contact normals")?,
+                d.vec3s("mesh contact histories")?,
+            )
+        } else {
+            Default::default()
+        };
         let mut neighbors = neighbors;
         if version >= 3 {
             ids_to_slots(&p.id, &mut neighbors)?;
@@ -336,6 +349,7 @@ impl Payload {
             particles: p,
             neighbors,
             anchors,
+            mesh_contacts,
         })
     }
 }
@@ -382,6 +396,7 @@ impl Simulation {
             + (8 + 24 * walls)
             + (8 + 24 * nl.reference().len())
             + (8 + 24 * self.motion_anchors().len())
+            + (8 + 8 + 8 + 8 + (8 + 4 + 24 + 24) * self.mesh_histories().len())
     }
 
     /// Streams the checkpoint to `w` (no copy of the state in memory: a large state can go
@@ -426,6 +441,11 @@ impl Simulation {
         e.vec3s(nl.wall_history())?;
         e.vec3s(nl.reference())?;
         e.vec3s(&self.motion_anchors())?;
+        let mesh = self.mesh_histories();
+        e.pairs(mesh.len(), mesh.iter().map(|h| [id(h.slot), h.mesh]))?;
+        e.u32s(&mesh.iter().map(|h| h.triangle).collect::<Vec<_>>())?;
+        e.vec3s_from(mesh.iter().map(|h| h.normal))?;
+        e.vec3s_from(mesh.iter().map(|h| h.h))?;
         // The header announced the payload's length before it was written.
         if e.written != payload {
             return Err(io::Error::other(format!(
@@ -456,15 +476,6 @@ impl Simulation {
         size: u64,
         case_hash: Option<&str>,
     ) -> Result<Simulation, RestoreError> {
-        // A checkpoint does not carry mesh-wall contacts yet: a restart would start their
-        // springs from zero, unlike the run it continues.
-        if !config.meshes.is_empty() {
-            return Err(CheckpointError::Mismatch(
-                "checkpoints do not carry mesh-wall contacts yet: a case with meshes cannot be restarted"
-                    .into(),
-            )
-            .into());
-        }
         // Shorter than a signature, or another one: not a checkpoint (a failing read is
         // reported as such).
         let mut magic = [0u8; 8];
@@ -534,6 +545,7 @@ impl Simulation {
             anchors,
             run_id,
             sums,
+            mesh_contacts,
             ..
         } = payload;
         let mut sim = Simulation::unbuilt(config, particles)?;
@@ -541,6 +553,7 @@ impl Simulation {
         sim.set_sums_state(sums.0, sums.1);
         sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
             .map_err(CheckpointError::Mismatch)?;
+        sim.set_mesh_histories(mesh_contacts).map_err(CheckpointError::Mismatch)?;
         Ok(sim)
     }
 }

@@ -22,6 +22,7 @@ use crate::wall::Wall;
 
 mod meshes;
 mod population;
+
 pub use population::ResortRule;
 
 /// Standard gravity, m/s² (MFIX's default, along −y).

@@ -73,6 +73,54 @@ impl MeshStage {
 }
 
 impl Simulation {
+    /// The mesh-wall contacts' histories, by (slot, mesh, triangle).
+    pub(crate) fn mesh_histories(&self) -> &[MeshHistory] {
+        &self.mesh_stage.history
+    }
+
+    /// Restores the mesh-wall contacts' histories of a checkpoint: (particle id, mesh),
+    /// triangle, normal and history of each.
+    pub(crate) fn set_mesh_histories(
+        &mut self,
+        (owners, triangles, normals, h): (Vec<[u32; 2]>, Vec<u32>, Vec<Vec3>, Vec<Vec3>),
+    ) -> Result<(), String> {
+        let n = owners.len();
+        if triangles.len() != n || normals.len() != n || h.len() != n {
+            return Err("the mesh contacts' lists have different lengths".into());
+        }
+        let mut by_id: Vec<(u32, u32)> =
+            self.particles.id.iter().enumerate().map(|(s, &id)| (id, s as u32)).collect();
+        by_id.sort_unstable();
+        let mut history = Vec::with_capacity(n);
+        for k in 0..n {
+            let [id, mesh] = owners[k];
+            let slot = by_id
+                .binary_search_by_key(&id, |e| e.0)
+                .map(|j| by_id[j].1)
+                .map_err(|_| format!("a mesh contact names particle {id}, which the case does not have"))?;
+            let fits = self
+                .meshes
+                .get(mesh as usize)
+                .is_some_and(|m| (triangles[k] as usize) < m.mesh.triangle_count());
+            if !fits {
+                return Err(format!(
+                    "a mesh contact names triangle {} of mesh {mesh}, which the case does not have",
+                    triangles[k]
+                ));
+            }
+            history.push(MeshHistory { slot, mesh, triangle: triangles[k], normal: normals[k], h: h[k] });
+        }
+        history.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
+        if history
+            .windows(2)
+            .any(|w| (w[0].slot, w[0].mesh, w[0].triangle) == (w[1].slot, w[1].mesh, w[1].triangle))
+        {
+            return Err("a mesh contact appears twice".into());
+        }
+        self.mesh_stage.history = history;
+        Ok(())
+    }
+
     /// The candidates of every slot, found again if the neighbour list was rebuilt since.
     fn update_mesh_candidates(&mut self) {
         let build = self.neighbors.stats().builds;
