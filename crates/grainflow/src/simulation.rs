@@ -939,6 +939,9 @@ impl Simulation {
                 );
             }
         }
+        self.visit_mesh_contacts(|i, overlap, c| {
+            visit(overlap, p.radius[i], normal_spring_energy(self.law.normal, c, overlap));
+        });
         d.elastic = order_free_sum(&elastic);
         d
     }

@@ -100,6 +100,20 @@ fn side_by_side(
         mesh.step();
         worst = worst.max(differ(&plane, &mesh));
         touched += (plane.particles().position[0].z < 5e-4) as usize;
+        // The diagnostics see the mesh contact as the plane's: the same count, and the elastic
+        // energy and largest overlap ratio to 1e-9 relative. The overlap r − z (1e-8 to 1e-6 m)
+        // is formed from z ≈ r = 5e-4 m, so it is known only to ~ε·r ≈ 1e-19 m, ~1e-11 of it,
+        // and the energy (∝ δ² or δ^2.5) to ~3e-11.
+        let (a, b) = (plane.diagnostics(), mesh.diagnostics());
+        assert_eq!(a.contacts, b.contacts, "contact counts differ");
+        let rel = |x: f64, y: f64| if x == y { 0.0 } else { (x - y).abs() / x.abs().max(y.abs()) };
+        assert!(rel(a.elastic, b.elastic) < 1e-9, "elastic energy {} vs {}", a.elastic, b.elastic);
+        assert!(
+            rel(a.max_overlap_ratio, b.max_overlap_ratio) < 1e-9,
+            "overlap ratio {} vs {}",
+            a.max_overlap_ratio,
+            b.max_overlap_ratio
+        );
     }
     (worst, touched)
 }

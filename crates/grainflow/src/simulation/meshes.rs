@@ -121,6 +121,49 @@ impl Simulation {
         Ok(())
     }
 
+    /// Calls `visit(slot, overlap)` for every mesh-wall contact of the current state, with the
+    /// candidates of the last evaluation (none before the first), for diagnostics: as the next
+    /// evaluation would find them (a cohesive contact formed at the last evaluation holds to
+    /// its pull-off distance).
+    pub(super) fn visit_mesh_contacts(
+        &self,
+        mut visit: impl FnMut(usize, f64, &crate::contact::ContactCoeffs),
+    ) {
+        let (st, p) = (&self.mesh_stage, &self.particles);
+        if self.meshes.is_empty() || st.start.len() != p.len() + 1 {
+            return;
+        }
+        let reaches = self.law.normal.reaches();
+        let (mut contacts, mut triangles) = (Vec::new(), Vec::new());
+        for i in 0..p.len() {
+            let cands = &st.candidates[st.start[i] as usize..st.start[i + 1] as usize];
+            for (m, MeshWall { mesh, material }) in self.meshes.iter().enumerate() {
+                triangles.clear();
+                triangles.extend(cands.iter().filter(|c| c.0 == m as u32).map(|c| c.1));
+                if triangles.is_empty() {
+                    continue;
+                }
+                let c = self.coeffs.wall(p.phase[i] as usize, *material);
+                let reach = if reaches { c.pull_off } else { 0.0 };
+                contacts.clear();
+                sphere_contacts(mesh, &triangles, p.position[i], p.radius[i] + reach, &mut contacts);
+                for k in &contacts {
+                    let overlap = k.overlap - reach;
+                    let formed = || {
+                        st.history
+                            .binary_search_by_key(&(i as u32, m as u32, k.triangle), |h| {
+                                (h.slot, h.mesh, h.triangle)
+                            })
+                            .is_ok()
+                    };
+                    if overlap >= 0.0 || (reaches && formed()) {
+                        visit(i, overlap, c);
+                    }
+                }
+            }
+        }
+    }
+
     /// The candidates of every slot, found again if the neighbour list was rebuilt since.
     fn update_mesh_candidates(&mut self) {
         let build = self.neighbors.stats().builds;
