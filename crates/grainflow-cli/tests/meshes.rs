@@ -102,7 +102,13 @@ const MESH: &str = "[[meshes]]\nname = \"floor\"\nfile = \"floor.stl\"\n";
 
 fn run(dir: &Path, text: &str) -> Output {
     std::fs::write(dir.join("case.toml"), text).expect("write case");
-    grainflow().arg("run").arg(dir.join("case.toml")).arg("--out").arg(dir.join("out")).output().expect("runs")
+    grainflow()
+        .arg("run")
+        .arg(dir.join("case.toml"))
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .expect("runs")
 }
 
 /// The time series' rows (step, time, kinetic_translational, kinetic_rotational, potential,
@@ -204,7 +210,8 @@ fn bad_mesh_input_exits_2_with_its_message() {
         &["[[meshes]] 'floor': `file`: nowhere.stl: cannot read it"],
     );
     // Garbage bytes named .stl: neither a binary STL's size nor an ASCII STL's `solid`.
-    std::fs::write(d.join("garbage.stl"), b"\x89PNG\r\n\x1a\n not a mesh at all \x00\x01\x02").expect("write");
+    std::fs::write(d.join("garbage.stl"), b"\x89PNG\r\n\x1a\n not a mesh at all \x00\x01\x02")
+        .expect("write");
     refused(
         d,
         &case("[[meshes]]\nname = \"floor\"\nfile = \"garbage.stl\"\n", 0.05),
