@@ -1161,7 +1161,7 @@ enum MeshLoadError {
 impl MeshLoadError {
     fn into_case_error(self, table: &str) -> CaseError {
         match self {
-            MeshLoadError::Mesh(source) => CaseError::Mesh { table: table.into(), source },
+            MeshLoadError::Mesh(e) => CaseError::Mesh { table: table.into(), source: Box::new(e) },
             MeshLoadError::Case(e) => e,
         }
     }

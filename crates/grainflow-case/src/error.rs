@@ -57,7 +57,7 @@ pub enum CaseError {
         /// The table, e.g. `[[meshes]] 'floor'`.
         table: String,
         /// What is wrong with the file.
-        source: grainflow::mesh::MeshError,
+        source: Box<grainflow::mesh::MeshError>,
     },
     /// Particles and walls are placed so that the run cannot start well (outside the domain,
     /// behind a wall, overlapping too much).
