@@ -10,6 +10,7 @@ use grainflow::contact::{
     ContactLaw, ContactParams, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel,
     TangentialModel,
 };
+use grainflow::mesh::{Mesh, MeshError, MeshTransform, MeshWall, TriangleGrid, closest_point_on_triangle};
 use grainflow::simulation::STANDARD_GRAVITY;
 use grainflow::state::ParticleInit;
 use grainflow::{
@@ -112,7 +113,21 @@ pub(crate) fn from_raw_opened(
         drop(h);
         Ok(input::Stream::new(std::io::BufReader::new(Hashing { inner: reader, hasher: &hasher }), name))
     };
-    let mut case = validate(raw, &hashing_open)?;
+    // Mesh files are read whole, as bytes (a binary STL is not text), and hashed the same way.
+    let hashing_read = |name: &str| -> Result<Vec<u8>, CaseError> {
+        use std::io::Read;
+        let mut bytes = Vec::new();
+        open(name)?
+            .read_to_end(&mut bytes)
+            .map_err(|source| CaseError::Read { path: name.into(), source })?;
+        let mut h = hasher.borrow_mut();
+        h.update(b"\0file\0");
+        h.update(name.as_bytes());
+        h.update(b"\0");
+        h.update(&bytes);
+        Ok(bytes)
+    };
+    let mut case = validate(raw, &hashing_open, &hashing_read)?;
     case.hash = hasher.into_inner().finalize().iter().map(|b| format!("{b:02x}")).collect();
     Ok(case)
 }
@@ -228,6 +243,7 @@ fn vec3(a: [f64; 3], table: &str, key: &str) -> Result<Vec3, CaseError> {
 fn validate<'h>(
     raw: RawCase,
     open: &dyn Fn(&str) -> Result<input::Stream<'h>, CaseError>,
+    read_bytes: &dyn Fn(&str) -> Result<Vec<u8>, CaseError>,
 ) -> Result<Case, CaseError> {
     let mut warnings = Vec::new();
     match raw.version {
@@ -451,6 +467,58 @@ fn validate<'h>(
         }
         walls.push(Wall::plane(name, point, normal, material_index(&w.material, &table, "material")?));
     }
+    let mut meshes: Vec<MeshWall> = Vec::new();
+    let mut mesh_names: Vec<String> = Vec::new();
+    for (k, m) in raw.meshes.iter().enumerate() {
+        let table = format!("[[meshes]] #{}", k + 1);
+        let name = require(m.name.clone(), &table, "name", "a unique mesh name, for messages")?;
+        let table = format!("[[meshes]] '{name}'");
+        if mesh_names.contains(&name) {
+            return Err(CaseError::invalid(
+                &table,
+                "name",
+                format!("\"{name}\""),
+                "mesh names must be unique",
+            ));
+        }
+        let file = require(
+            m.file.clone(),
+            &table,
+            "file",
+            "the mesh file (.stl or .obj), relative to the case file",
+        )?;
+        let material = material_index(&m.material, &table, "material")?;
+        let scale = m.scale.unwrap_or(1.0);
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(CaseError::invalid(
+                &table,
+                "scale",
+                scale,
+                "must be a positive, finite number of metres per file unit (1e-3 for millimetres)",
+            ));
+        }
+        let rotation = vec3(m.rotate.unwrap_or([0.0; 3]), &table, "rotate")?;
+        let translation = vec3(m.translate.unwrap_or([0.0; 3]), &table, "translate")?;
+        let transform = MeshTransform {
+            scale,
+            rotation_deg: rotation.to_array(),
+            translation,
+            flip_normals: m.flip_normals.unwrap_or(false),
+        };
+        let mesh = load_mesh(&file, &transform, read_bytes).map_err(|e| e.into_case_error(&table))?;
+        if mesh.outside_box(min, max) {
+            let (lo, hi) = mesh.bounds();
+            return Err(CaseError::Geometry(format!(
+                "{table}: mesh '{name}' lies outside the domain [{:?}, {:?}] (its bounding box after the transform is [{:?}, {:?}] m); check `scale`, `rotate` and `translate`, or enlarge [domain]",
+                min.to_array(),
+                max.to_array(),
+                lo.to_array(),
+                hi.to_array()
+            )));
+        }
+        meshes.push(MeshWall { mesh, material });
+        mesh_names.push(name);
+    }
 
     // Contact law and tables.
     let contact = require(raw.contact, "top level", "[contact]", "the contact model and its parameters")?;
@@ -548,7 +616,7 @@ fn validate<'h>(
                 &format!("Poisson's ratio, required by the {model} model"),
             )?;
         }
-        if !walls.is_empty() {
+        if !walls.is_empty() || !meshes.is_empty() {
             for m in &wall_materials {
                 let table = format!("[[wall_materials]] '{}'", m.name);
                 require(
@@ -612,7 +680,7 @@ fn validate<'h>(
         }
         *slot = Some(t);
     }
-    let nw = if walls.is_empty() { 0 } else { wall_materials.len() };
+    let nw = if walls.is_empty() && meshes.is_empty() { 0 } else { wall_materials.len() };
     let mut wall_tables: Vec<Option<&RawContactParams>> = vec![None; n * nw];
     for t in &contact.walls {
         let table = "[[contact.walls]]";
@@ -1021,7 +1089,7 @@ fn validate<'h>(
         ));
     }
     grainflow::motion::check_rules(&motion).map_err(|e| CaseError::Geometry(format!("[[motion]]: {e}")))?;
-    check_geometry(&particles, &walls, (min, max), max_overlap)?;
+    check_geometry(&particles, &walls, &meshes, &mesh_names, (min, max), max_overlap)?;
     if let Some(per) = &periodic {
         let skin = skin.unwrap_or_else(|| grainflow::simulation::default_skin(particles.max_radius()));
         per.check(particles.max_radius(), skin, &walls)?;
@@ -1043,7 +1111,7 @@ fn validate<'h>(
         phases,
         wall_materials,
         walls,
-        meshes: Vec::new(),
+        meshes,
         law,
         pair_params,
         wall_params,
@@ -1084,6 +1152,44 @@ fn sort_into_bins(init: &mut [ParticleInit], lo: Vec3, bin: f64) {
     init.sort_by_cached_key(|p| (key(p.position), p.id));
 }
 
+/// Why a mesh could not be loaded: the file could not be read, or it is not a usable mesh.
+enum MeshLoadError {
+    Mesh(MeshError),
+    Case(CaseError),
+}
+
+impl MeshLoadError {
+    fn into_case_error(self, table: &str) -> CaseError {
+        match self {
+            MeshLoadError::Mesh(e) => CaseError::Mesh { table: table.into(), source: Box::new(e) },
+            MeshLoadError::Case(e) => e,
+        }
+    }
+}
+
+/// The mesh in `file` (named as in the case file, read through `read_bytes`), an STL or OBJ
+/// file by its extension as [`Mesh::load`] decides; a file that cannot be read is a
+/// [`MeshError::Read`] naming it.
+fn load_mesh(
+    file: &str,
+    transform: &MeshTransform,
+    read_bytes: &dyn Fn(&str) -> Result<Vec<u8>, CaseError>,
+) -> Result<Mesh, MeshLoadError> {
+    let ext = Path::new(file).extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let parse: fn(&str, &[u8], &MeshTransform) -> Result<Mesh, MeshError> = match ext.as_deref() {
+        Some("stl") => Mesh::from_stl,
+        Some("obj") => Mesh::from_obj,
+        _ => return Err(MeshLoadError::Mesh(MeshError::Format { file: file.into() })),
+    };
+    let bytes = read_bytes(file).map_err(|e| match e {
+        CaseError::Read { source, .. } => {
+            MeshLoadError::Mesh(MeshError::Read { file: file.into(), reason: source.to_string() })
+        }
+        other => MeshLoadError::Case(other),
+    })?;
+    parse(file, &bytes, transform).map_err(MeshLoadError::Mesh)
+}
+
 /// Default of `[particles] max_initial_overlap`.
 pub const DEFAULT_MAX_INITIAL_OVERLAP: f64 = 0.05;
 
@@ -1093,9 +1199,14 @@ pub const DEFAULT_MAX_OVERLAP: f64 = 0.5;
 /// Particles must start inside the domain box, in front of every wall, and overlap no wall
 /// or other particle by more than `max_overlap` of the (smaller) radius: a larger overlap
 /// releases a burst of elastic energy at the first step.
+///
+/// A mesh has no "behind" (a sheet may be touched from either side): only the overlap is
+/// checked, as the distance from the centre to the nearest triangle.
 fn check_geometry(
     p: &Particles,
     walls: &[Wall],
+    meshes: &[MeshWall],
+    mesh_names: &[String],
     (lo, hi): (Vec3, Vec3),
     max_overlap: f64,
 ) -> Result<(), CaseError> {
@@ -1131,6 +1242,29 @@ fn check_geometry(
                     w.name,
                     overlap,
                     overlap / p.radius[i]
+                )));
+            }
+        }
+    }
+    let mut near = Vec::new();
+    for (MeshWall { mesh, .. }, name) in meshes.iter().zip(mesh_names) {
+        let grid = TriangleGrid::new(mesh, 2.0 * p.max_radius());
+        for i in 0..p.len() {
+            let (x, r) = (p.position[i], p.radius[i]);
+            // The triangles closer than r·(1 − max_overlap): those overlapped by more than the
+            // limit (none when the limit is the whole radius or more).
+            grid.near(mesh, x, r * (1.0 - max_overlap), &mut near);
+            let closest = near
+                .iter()
+                .map(|&t| (t, (x - closest_point_on_triangle(x, mesh.corners(t)).point).length()))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((t, d)) = closest {
+                let overlap = r - d;
+                return Err(CaseError::Geometry(format!(
+                    "{} overlaps mesh '{name}' (triangle {t}) by {:.3e} m = {:.3} of its radius; the limit is [particles] max_initial_overlap = {max_overlap}",
+                    at(i),
+                    overlap,
+                    overlap / r
                 )));
             }
         }

@@ -50,6 +50,15 @@ pub enum CaseError {
         /// What is wrong and what is expected.
         message: String,
     },
+    /// A `[[meshes]]` file that cannot be read or is not a usable mesh; the mesh error's
+    /// message names the file and, where it can, the line or triangle at fault.
+    #[error("{table}: `file`: {source}")]
+    Mesh {
+        /// The table, e.g. `[[meshes]] 'floor'`.
+        table: String,
+        /// What is wrong with the file.
+        source: Box<grainflow::mesh::MeshError>,
+    },
     /// Particles and walls are placed so that the run cannot start well (outside the domain,
     /// behind a wall, overlapping too much).
     #[error("{0}")]

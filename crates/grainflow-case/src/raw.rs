@@ -28,6 +28,9 @@ pub struct RawCase {
     /// Extra infinite plane walls.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub walls: Vec<RawWall>,
+    /// Triangle-mesh walls read from STL or OBJ files.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub meshes: Vec<RawMesh>,
     /// The contact model and its parameters. Required.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact: Option<RawContact>,
@@ -147,6 +150,37 @@ pub struct RawWall {
     /// Wall material name. Default: the first wall material.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
+}
+
+/// `[[meshes]]`: a triangle-mesh wall, immovable, read from an STL (ASCII or binary) or OBJ
+/// file. Its coordinates become the case's by p′ = R·(s·p) + t: `scale` first, then `rotate`
+/// (about x, then y, then z), then `translate`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawMesh {
+    /// Name for messages. Required, unique among the meshes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The mesh file (`.stl` or `.obj`), relative to the case file's folder. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// Wall material name. Default: the first wall material.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    /// Metres per file unit (1e-3 for a file in millimetres), > 0. Default 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    /// Rotations about the x, y and z axes, degrees, applied in that order after `scale`.
+    /// Default [0, 0, 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<[f64; 3]>,
+    /// Translation, m, applied last. Default [0, 0, 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub translate: Option<[f64; 3]>,
+    /// Reverse every triangle's winding, turning its normal round (a file whose normals point
+    /// away from the particles). Default false.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flip_normals: Option<bool>,
 }
 
 /// `[contact]`

@@ -35,6 +35,7 @@ fn every_case_file_key_is_documented_and_every_documented_key_exists() {
         "phases",
         "wall_materials",
         "walls",
+        "meshes",
         "contact",
         "particle",
         "wall",

@@ -412,6 +412,7 @@ impl Translator<'_> {
                 .collect(),
             wall_materials,
             walls: Vec::new(),
+            meshes: Vec::new(),
             contact: Some(contact.0),
             time: Some(time),
             neighbor,

@@ -1,0 +1,172 @@
+//! `[[meshes]]` tables: the transform, the material, the case hash over the mesh files, and the
+//! table's own checks.
+
+use std::path::Path;
+
+/// A case in `dir` with one particle high above z = 0 and the given `[[meshes]]` (and other)
+/// tables; `extra` is appended as written.
+fn write_case(dir: &Path, extra: &str) -> std::path::PathBuf {
+    let text = format!(
+        r#"version = 1
+[domain]
+min = [-0.1, -0.1, -0.1]
+max = [0.1, 0.1, 0.1]
+walls = false
+[[phases]]
+name = "grain"
+diameter = 0.01
+density = 2600.0
+[[wall_materials]]
+name = "steel"
+[[wall_materials]]
+name = "glass"
+[contact.particle]
+kn = 1.0e4
+[contact.wall]
+kn = 1.0e4
+[time]
+t_stop = 0.001
+[[particles.list]]
+phase = "grain"
+position = [0.0, 0.0, 0.05]
+{extra}
+"#
+    );
+    let path = dir.join("case.toml");
+    std::fs::write(&path, text).expect("write case");
+    path
+}
+
+/// A 100 mm square in the file's x-y plane, corners at 0 and 100 (millimetres), as one OBJ
+/// quad (split into two triangles) wound counter-clockwise seen from +z.
+const SQUARE_MM: &str = "# square\nv 0 0 0\nv 100 0 0\nv 100 100 0\nv 0 100 0\nf 1 2 3 4\n";
+
+#[test]
+fn the_transform_scales_rotates_and_translates_in_that_order() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let case = write_case(
+        dir.path(),
+        "[[meshes]]\nname = \"plate\"\nfile = \"square.obj\"\nmaterial = \"glass\"\nscale = 1e-3\n\
+         rotate = [0.0, 0.0, 90.0]\ntranslate = [0.05, -0.05, -0.02]\nflip_normals = true\n",
+    );
+    let c = grainflow_case::load(&case).expect("valid case");
+    assert_eq!(c.config.meshes.len(), 1);
+    let m = &c.config.meshes[0];
+    // "glass" is the second wall material.
+    assert_eq!(m.material, 1);
+    // Scaled to [0, 0.1]² m, turned a quarter about z ((x, y) → (−y, x)) to x ∈ [−0.1, 0],
+    // y ∈ [0, 0.1], then moved by (0.05, −0.05, −0.02): [−0.05, 0.05]² at z = −0.02. A quarter
+    // turn is exact; 1e-3 · 100 rounds, hence 1e-15 m.
+    let (lo, hi) = m.mesh.bounds();
+    for (got, want) in lo.to_array().into_iter().zip([-0.05, -0.05, -0.02]) {
+        assert!((got - want).abs() < 1e-15, "lower corner {lo:?}");
+    }
+    for (got, want) in hi.to_array().into_iter().zip([0.05, 0.05, -0.02]) {
+        assert!((got - want).abs() < 1e-15, "upper corner {hi:?}");
+    }
+    // Two triangles of the quad, wound from +z in the file: flipped, their normals point −z.
+    assert_eq!(m.mesh.triangle_count(), 2);
+    for n in m.mesh.normals() {
+        assert!((n.z + 1.0).abs() < 1e-15, "normal {n:?}");
+    }
+}
+
+#[test]
+fn the_material_defaults_to_the_first_wall_material() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let case = write_case(dir.path(), "[[meshes]]\nname = \"plate\"\nfile = \"square.obj\"\nscale = 1e-3\n");
+    let c = grainflow_case::load(&case).expect("valid case");
+    assert_eq!(c.config.meshes[0].material, 0);
+    // Both wall materials are kept for the mesh (no plane walls: without the mesh they would
+    // be dropped, as they are for a case with no walls at all).
+    assert_eq!(c.config.wall_materials.len(), 2);
+    // Unflipped, the normals follow the file's winding: +z.
+    assert!(c.config.meshes[0].mesh.normals().iter().all(|n| n.z == 1.0));
+}
+
+#[test]
+fn the_case_hash_follows_the_mesh_files_contents() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mesh = dir.path().join("square.obj");
+    std::fs::write(&mesh, SQUARE_MM).expect("write mesh");
+    let case = write_case(dir.path(), "[[meshes]]\nname = \"plate\"\nfile = \"square.obj\"\nscale = 1e-3\n");
+    let h1 = grainflow_case::load(&case).expect("valid").hash;
+    // The same inputs, the same hash.
+    assert_eq!(grainflow_case::load(&case).expect("valid").hash, h1);
+    // The same case text with a different square (99 mm): another hash.
+    std::fs::write(&mesh, SQUARE_MM.replace("100", "99")).expect("write mesh");
+    let h2 = grainflow_case::load(&case).expect("valid").hash;
+    assert_ne!(h1, h2, "the hash must change with the mesh file");
+    // A comment only changes the bytes, not the mesh: still another hash (the hash is of the
+    // inputs, not of their meaning).
+    std::fs::write(&mesh, format!("# edited\n{SQUARE_MM}")).expect("write mesh");
+    let h3 = grainflow_case::load(&case).expect("valid").hash;
+    assert!(h3 != h1 && h3 != h2);
+}
+
+fn refused(extra: &str, files: &[(&str, &str)], expect: &[&str]) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    for (name, text) in files {
+        std::fs::write(dir.path().join(name), text).expect("write");
+    }
+    let case = write_case(dir.path(), extra);
+    let e = grainflow_case::load(&case).expect_err("must be refused").to_string();
+    for x in expect {
+        assert!(e.contains(x), "expected `{x}` in: {e}");
+    }
+}
+
+#[test]
+fn the_table_checks_its_keys() {
+    let sq = [("square.obj", SQUARE_MM)];
+    refused("[[meshes]]\nfile = \"square.obj\"\n", &sq, &["[[meshes]] #1", "missing required key `name`"]);
+    refused("[[meshes]]\nname = \"a\"\n", &sq, &["[[meshes]] 'a'", "missing required key `file`"]);
+    refused(
+        "[[meshes]]\nname = \"a\"\nfile = \"square.obj\"\nscale = 1e-3\n\
+         [[meshes]]\nname = \"a\"\nfile = \"square.obj\"\nscale = 1e-3\n",
+        &sq,
+        &["[[meshes]] 'a'", "mesh names must be unique"],
+    );
+    refused(
+        "[[meshes]]\nname = \"a\"\nfile = \"square.ply\"\n",
+        &[("square.ply", "ply\n")],
+        &["[[meshes]] 'a': `file`: square.ply: unknown mesh format"],
+    );
+    refused(
+        "[[meshes]]\nname = \"a\"\nfile = \"square.obj\"\nrotate = [0.0, nan, 0.0]\n",
+        &sq,
+        &["[[meshes]] 'a'", "`rotate`", "finite"],
+    );
+    // A file that parses but is not a valid mesh: the library's message, with its line.
+    refused(
+        "[[meshes]]\nname = \"a\"\nfile = \"bad.obj\"\n",
+        &[("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n")],
+        &["[[meshes]] 'a': `file`: bad.obj", "vertex index 3 is out of range"],
+    );
+}
+
+#[test]
+fn elastic_models_need_the_mesh_materials_moduli() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let text = std::fs::read_to_string(write_case(dir.path(), "")).expect("read");
+    // The Hertz model with phase moduli, no wall moduli, no plane walls, one mesh: the mesh's
+    // contacts need the wall material's E and ν.
+    let text = text
+        .replace("density = 2600.0", "density = 2600.0\nyoungs_modulus = 1e8\npoisson_ratio = 0.3")
+        .replace(
+            "[contact.particle]\nkn = 1.0e4",
+            "[contact]\nmodel = \"hertz\"\n[contact.particle]\net = 0.9",
+        )
+        .replace("[contact.wall]\nkn = 1.0e4", "[contact.wall]\net = 0.9");
+    let case = dir.path().join("hertz.toml");
+    std::fs::write(&case, format!("{text}[[meshes]]\nname = \"a\"\nfile = \"square.obj\"\nscale = 1e-3\n"))
+        .expect("write");
+    let e = grainflow_case::load(&case).expect_err("no wall moduli").to_string();
+    assert!(e.contains("[[wall_materials]] 'steel'") && e.contains("youngs_modulus"), "{e}");
+    // Without the mesh the same case runs: no walls, so no wall moduli are needed.
+    std::fs::write(&case, &text).expect("write");
+    grainflow_case::load(&case).expect("no walls, no wall moduli needed");
+}
