@@ -18,9 +18,9 @@ use crate::contact::LeverArm;
 use crate::contact::law::parts;
 use crate::contact::pair::{PairInput, wall_law};
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
-use crate::forces::{Peak, Quanta, Quantum};
+use crate::forces::{Peak, Quanta, Quantum, max_peak};
 use crate::math::Vec3;
-use crate::mesh::{MeshContact, MeshWall, TriangleGrid, sphere_contacts};
+use crate::mesh::{Mesh, MeshContact, MeshWall, TriangleGrid, sphere_contacts};
 
 /// A contact's normal may turn this far (cosine) from one evaluation to the next and still
 /// carry its history to another triangle: 60°.
@@ -57,6 +57,30 @@ impl MeshStage {
             + self.start.capacity() * 4
             + self.candidates.capacity() * 8
             + self.history.capacity() * std::mem::size_of::<MeshHistory>()
+    }
+
+    /// Fills `contacts` with the contacts of slot `i` (centre `centre`, radius `r`) with mesh
+    /// `m` among its candidates, found within `r + reach` (`reach`: a cohesive law's pull-off
+    /// distance, else 0; a contact's overlap with the radius is its `overlap − reach`).
+    /// `triangles` is scratch.
+    #[allow(clippy::too_many_arguments)]
+    fn contacts_of(
+        &self,
+        i: usize,
+        (m, mesh): (usize, &Mesh),
+        centre: Vec3,
+        r: f64,
+        reach: f64,
+        triangles: &mut Vec<u32>,
+        contacts: &mut Vec<MeshContact>,
+    ) {
+        let cands = &self.candidates[self.start[i] as usize..self.start[i + 1] as usize];
+        triangles.clear();
+        triangles.extend(cands.iter().filter(|c| c.0 == m as u32).map(|c| c.1));
+        contacts.clear();
+        if !triangles.is_empty() {
+            sphere_contacts(mesh, triangles, centre, r + reach, contacts);
+        }
     }
 
     /// Slots renumbered: slot `k` is now what slot `order[k]` was (`new_of[old]`, `u32::MAX`
@@ -136,17 +160,18 @@ impl Simulation {
         let reaches = self.law.normal.reaches();
         let (mut contacts, mut triangles) = (Vec::new(), Vec::new());
         for i in 0..p.len() {
-            let cands = &st.candidates[st.start[i] as usize..st.start[i + 1] as usize];
             for (m, MeshWall { mesh, material }) in self.meshes.iter().enumerate() {
-                triangles.clear();
-                triangles.extend(cands.iter().filter(|c| c.0 == m as u32).map(|c| c.1));
-                if triangles.is_empty() {
-                    continue;
-                }
                 let c = self.coeffs.wall(p.phase[i] as usize, *material);
                 let reach = if reaches { c.pull_off } else { 0.0 };
-                contacts.clear();
-                sphere_contacts(mesh, &triangles, p.position[i], p.radius[i] + reach, &mut contacts);
+                st.contacts_of(
+                    i,
+                    (m, mesh),
+                    p.position[i],
+                    p.radius[i],
+                    reach,
+                    &mut triangles,
+                    &mut contacts,
+                );
                 for k in &contacts {
                     let overlap = k.overlap - reach;
                     let formed = || {
@@ -213,23 +238,24 @@ impl Simulation {
         let mut o = 0;
         for i in 0..p.len() {
             let o0 = o;
-            while o < old.len() && (old[o].slot as usize) < i + 1 {
+            while o < old.len() && old[o].slot as usize <= i {
                 o += 1;
             }
             let mine = &old[o0..o];
             claimed.clear();
             claimed.resize(mine.len(), false);
-            let cands = &st.candidates[st.start[i] as usize..st.start[i + 1] as usize];
             for (m, MeshWall { mesh, material }) in meshes.iter().enumerate() {
-                triangles.clear();
-                triangles.extend(cands.iter().filter(|c| c.0 == m as u32).map(|c| c.1));
-                if triangles.is_empty() {
-                    continue;
-                }
                 let c = coeffs.wall(p.phase[i] as usize, *material);
                 let reach = if N::REACHES { c.pull_off } else { 0.0 };
-                contacts.clear();
-                sphere_contacts(mesh, &triangles, p.position[i], p.radius[i] + reach, &mut contacts);
+                st.contacts_of(
+                    i,
+                    (m, mesh),
+                    p.position[i],
+                    p.radius[i],
+                    reach,
+                    &mut triangles,
+                    &mut contacts,
+                );
                 for k in contacts.iter() {
                     let overlap = k.overlap - reach;
                     let own = mine.iter().position(|h| h.mesh == m as u32 && h.triangle == k.triangle);
@@ -257,8 +283,7 @@ impl Simulation {
                     let round = |q: Quantum, v: Vec3| Vec3::new(q.round(v.x), q.round(v.y), q.round(v.z));
                     p.force[i] += round(quanta.force, load.f);
                     p.torque[i] += round(quanta.torque, load.ta);
-                    peak[0] = if bound[0] > peak[0] { bound[0] } else { peak[0] };
-                    peak[1] = if bound[1] > peak[1] { bound[1] } else { peak[1] };
+                    *peak = max_peak(*peak, bound);
                     stored.push(MeshHistory {
                         slot: i as u32,
                         mesh: m as u32,
