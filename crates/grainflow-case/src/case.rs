@@ -516,7 +516,7 @@ fn validate<'h>(
                 hi.to_array()
             )));
         }
-        meshes.push(MeshWall { mesh, material });
+        meshes.push(MeshWall::fixed(mesh, material));
         mesh_names.push(name);
     }
 

@@ -143,7 +143,7 @@ pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
         points.push(p.position[c.particle]);
         points.push(match c.other {
             ContactPartner::Particle(j) => p.position[j],
-            ContactPartner::Wall(_) => c.point,
+            ContactPartner::Wall(_) | ContactPartner::Mesh { .. } => c.point,
         });
     }
     let conn: Vec<i64> = (0..points.len() as i64).collect();

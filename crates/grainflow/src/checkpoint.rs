@@ -11,6 +11,7 @@
 //! written from the state and read into it without a second copy of it in memory.
 
 use crate::math::Vec3;
+use crate::mesh::Pose;
 use crate::neighbor::NeighborState;
 use crate::simulation::{Simulation, SimulationConfig};
 use crate::state::Particles;
@@ -21,10 +22,11 @@ use thiserror::Error;
 /// and particle–wall pairs named by particle ids, so that a checkpoint does not depend on the
 /// order the particles are stored in; 4: the last force evaluation's load peaks, from which the
 /// next takes the quanta of its sums, and the count of evaluations with inexact sums, after
-/// the flags; 5: the mesh-wall contacts' histories, at the end). A checkpoint of format 2 or 3
+/// the flags; 5: the mesh-wall contacts' histories, at the end; 6: each mesh wall's motion
+/// state — its anchor and its pose — after them). A checkpoint of format 2 or 3
 /// continues with the quanta of its first evaluation taken afresh: not bit for bit as the run
 /// that wrote it would have gone on.
-pub const FORMAT_VERSION: u32 = 5;
+pub const FORMAT_VERSION: u32 = 6;
 /// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
@@ -273,6 +275,25 @@ struct Payload {
     anchors: Vec<Vec3>,
     /// The mesh-wall contacts: (particle id, mesh), triangle, normal, history.
     mesh_contacts: (Vec<[u32; 2]>, Vec<u32>, Vec<Vec3>, Vec<Vec3>),
+    /// Each mesh's motion: anchor time, anchor pose, pose (None before format 6).
+    mesh_motion: Option<Vec<(f64, Pose, Pose)>>,
+}
+
+/// f64s per mesh of the motion state: τ, then two poses of a quaternion and a translation.
+const MOTION_F64S: usize = 15;
+
+/// A pose from 7 numbers (quaternion x, y, z, w; translation).
+fn pose_of(v: &[f64]) -> Pose {
+    Pose {
+        rotation: glam::DQuat::from_xyzw(v[0], v[1], v[2], v[3]),
+        translation: Vec3::new(v[4], v[5], v[6]),
+    }
+}
+
+/// The 7 numbers of a pose.
+fn pose_numbers(p: &Pose) -> [f64; 7] {
+    let (q, t) = (p.rotation, p.translation);
+    [q.x, q.y, q.z, q.w, t.x, t.y, t.z]
 }
 
 impl Payload {
@@ -334,6 +355,15 @@ impl Payload {
         } else {
             Default::default()
         };
+        let mesh_motion = if version >= 6 {
+            let v = d.f64s("mesh motion")?;
+            if v.len() % MOTION_F64S != 0 {
+                return Err(CheckpointError::Truncated("mesh motion"));
+            }
+            Some(v.chunks_exact(MOTION_F64S).map(|c| (c[0], pose_of(&c[1..8]), pose_of(&c[8..15]))).collect())
+        } else {
+            None
+        };
         let mut neighbors = neighbors;
         if version >= 3 {
             ids_to_slots(&p.id, &mut neighbors)?;
@@ -350,6 +380,7 @@ impl Payload {
             neighbors,
             anchors,
             mesh_contacts,
+            mesh_motion,
         })
     }
 }
@@ -397,6 +428,7 @@ impl Simulation {
             + (8 + 24 * nl.reference().len())
             + (8 + 24 * self.motion_anchors().len())
             + (8 + 8 + 8 + 8 + (8 + 4 + 24 + 24) * self.mesh_histories().len())
+            + (8 + 8 * MOTION_F64S * self.meshes().len())
     }
 
     /// Streams the checkpoint to `w` (no copy of the state in memory: a large state can go
@@ -446,6 +478,14 @@ impl Simulation {
         e.u32s(&mesh.iter().map(|h| h.triangle).collect::<Vec<_>>())?;
         e.vec3s_from(mesh.iter().map(|h| h.normal))?;
         e.vec3s_from(mesh.iter().map(|h| h.h))?;
+        let motion: Vec<f64> = self
+            .mesh_motion_state()
+            .iter()
+            .flat_map(|(tau, anchor, now)| {
+                std::iter::once(*tau).chain(pose_numbers(anchor)).chain(pose_numbers(now))
+            })
+            .collect();
+        e.f64s(&motion)?;
         // The header announced the payload's length before it was written.
         if e.written != payload {
             return Err(io::Error::other(format!(
@@ -546,6 +586,7 @@ impl Simulation {
             run_id,
             sums,
             mesh_contacts,
+            mesh_motion,
             ..
         } = payload;
         let mut sim = Simulation::unbuilt(config, particles)?;
@@ -554,6 +595,9 @@ impl Simulation {
         sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
             .map_err(CheckpointError::Mismatch)?;
         sim.set_mesh_histories(mesh_contacts).map_err(CheckpointError::Mismatch)?;
+        if let Some(motion) = mesh_motion {
+            sim.set_mesh_motion_state(&motion).map_err(CheckpointError::Mismatch)?;
+        }
         Ok(sim)
     }
 }

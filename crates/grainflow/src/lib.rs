@@ -60,7 +60,7 @@ pub use math::Vec3;
 pub use motion::{MotionRule, PrescribedMotion};
 pub use observe::Diagnostics;
 pub use simulation::{
-    ContactInfo, ContactPartner, MemoryUse, ResortRule, Simulation, SimulationConfig, StageTimes,
+    ContactInfo, ContactPartner, MemoryUse, MeshLoad, ResortRule, Simulation, SimulationConfig, StageTimes,
 };
 pub use state::Particles;
 pub use timestep::{TimeStepChoice, TimeStepRule};

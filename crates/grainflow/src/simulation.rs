@@ -23,6 +23,7 @@ use crate::wall::Wall;
 mod meshes;
 mod population;
 
+pub use meshes::MeshLoad;
 pub use population::ResortRule;
 
 /// Standard gravity, m/s² (MFIX's default, along −y).
@@ -126,6 +127,9 @@ pub struct Simulation {
     forces_current: bool,
     /// The caller's name for the run this state belongs to, carried through checkpoints.
     run_id: String,
+    /// Velocity Verlet between its drift and the end of the step: the positions are a step
+    /// ahead of the clock.
+    drifted: bool,
     /// Velocity Verlet within [`advance`](Simulation::advance): the last step's second half
     /// kick (and periodic wrap) is left for the next step's first pass. Never true between
     /// calls of the public methods.
@@ -192,6 +196,9 @@ impl Simulation {
                 m.material,
                 config.wall_materials.len()
             )));
+        }
+        for m in &config.meshes {
+            check_mesh_motion(m)?;
         }
         if config.meshes.len() > u32::MAX as usize {
             return Err(EngineError::BadReference("too many meshes".into()));
@@ -269,7 +276,7 @@ impl Simulation {
             phases: config.phases,
             walls: config.walls,
             meshes: config.meshes,
-            mesh_stage: meshes::MeshStage::default(),
+            mesh_stage: meshes::MeshStage::new(config.t_start),
             law: config.law,
             coeffs,
             integrator: config.integrator,
@@ -288,6 +295,7 @@ impl Simulation {
             history_started: false,
             forces_current: false,
             kick_pending: false,
+            drifted: false,
             run_id: String::new(),
             timing: None,
             pool: None,
@@ -383,6 +391,12 @@ impl Simulation {
     /// Simulated time, s: t_0 + steps·Δt.
     pub fn time(&self) -> f64 {
         self.t_base + (self.step - self.step_base) as f64 * self.time_step.dt
+    }
+
+    /// The time of the particles' positions: [`time`](Self::time), or a step later between
+    /// velocity Verlet's drift and the end of its step (as `time` will then be, to the bit).
+    fn positions_time(&self) -> f64 {
+        self.t_base + (self.step + u64::from(self.drifted) - self.step_base) as f64 * self.time_step.dt
     }
 
     /// Force evaluations so far in which a load grew more than a thousandfold over the largest
@@ -599,6 +613,7 @@ impl Simulation {
                 } else {
                     integrate::verlet_kick_drift(&mut self.particles, &pass);
                 }
+                self.drifted = true;
                 self.compute_forces();
                 if defer {
                     self.kick_pending = true;
@@ -623,10 +638,13 @@ impl Simulation {
             integrate::wrap(&mut self.particles, per, thread_blocks(&self.plan, par, n));
         }
         self.step += 1;
+        self.drifted = false;
         if let (Some((t0, before)), Some(now)) = (start, self.timing.as_mut()) {
             // Whatever the step spent outside the force stages is integration.
-            let forces =
-                (now.neighbor - before.neighbor) + (now.walls - before.walls) + (now.pairs - before.pairs);
+            let forces = (now.neighbor - before.neighbor)
+                + (now.walls - before.walls)
+                + (now.pairs - before.pairs)
+                + (now.meshes - before.meshes);
             now.integrate += (t0.elapsed().as_secs_f64() - forces).max(0.0);
         }
     }
@@ -788,13 +806,17 @@ impl Simulation {
                 forces::ThreadWork { walls, ..Default::default() }
             }
         };
-        self.mesh_loads::<N, T>(quanta, advance_history, &mut peak);
+        let mesh_clock = clock.map(|_| std::time::Instant::now());
+        let t = self.positions_time();
+        self.mesh_loads::<N, T>(quanta, advance_history, &mut peak, t);
         if quanta.exceeded_by(peak) {
             self.inexact_sums += 1;
         }
         self.load_peak = Some(peak);
-        if let (Some(c), Some(t)) = (clock, self.timing.as_mut()) {
-            let total = c.elapsed().as_secs_f64();
+        if let (Some(c), Some(m), Some(t)) = (clock, mesh_clock, self.timing.as_mut()) {
+            let meshes = m.elapsed().as_secs_f64();
+            let total = c.elapsed().as_secs_f64() - meshes;
+            t.meshes += meshes;
             t.walls += work.walls.min(total);
             t.pairs += (total - work.walls).max(0.0);
             t.threads_mean += work.mean;
@@ -854,6 +876,7 @@ impl Simulation {
                 record(i, ContactPartner::Particle(j), g, &c, v_r, h);
             }
         }
+        self.mesh_contact_infos(&mut out);
         out
     }
 
@@ -876,8 +899,9 @@ impl Simulation {
             }
         }
         let key = |c: &ContactInfo| match c.other {
-            ContactPartner::Wall(w) => (c.particle, 0, w),
-            ContactPartner::Particle(j) => (c.particle, 1, j),
+            ContactPartner::Wall(w) => (c.particle, 0, w, 0),
+            ContactPartner::Mesh { mesh, triangle } => (c.particle, 1, mesh, triangle),
+            ContactPartner::Particle(j) => (c.particle, 2, j, 0),
         };
         contacts.sort_unstable_by_key(key);
         (p.gathered(&order), contacts)
@@ -947,6 +971,36 @@ impl Simulation {
     }
 }
 
+/// Refuses a mesh wall's motion with non-finite or meaningless values.
+fn check_mesh_motion(m: &MeshWall) -> Result<(), EngineError> {
+    use crate::mesh::{MeshMotion, SurfaceMotion};
+    let unit = |a: Vec3| a.is_finite() && (a.length() - 1.0).abs() < 1e-12;
+    let ok = match m.motion {
+        MeshMotion::Fixed => true,
+        MeshMotion::Translate { velocity } => velocity.is_finite(),
+        MeshMotion::Rotate { origin, axis, omega, ramp } => {
+            origin.is_finite() && unit(axis) && omega.is_finite() && ramp.is_finite() && ramp >= 0.0
+        }
+        MeshMotion::Oscillate { amplitude, frequency } => {
+            amplitude.is_finite() && frequency.is_finite() && frequency >= 0.0
+        }
+    } && match m.surface {
+        SurfaceMotion::None => true,
+        SurfaceMotion::Translate { velocity } => velocity.is_finite(),
+        SurfaceMotion::Rotate { origin, axis, omega } => {
+            origin.is_finite() && unit(axis) && omega.is_finite()
+        }
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(EngineError::BadReference(format!(
+            "mesh '{}' has a motion with a non-finite value, an axis that is not a unit vector, or a negative ramp or frequency",
+            m.mesh.name()
+        )))
+    }
+}
+
 /// Wall-clock seconds spent in each stage of the step, when timing is on.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimes {
@@ -956,6 +1010,8 @@ pub struct StageTimes {
     pub walls: f64,
     /// Particle–particle contacts.
     pub pairs: f64,
+    /// Particle–mesh-wall contacts.
+    pub meshes: f64,
     /// Integration, prescribed motion, periodic wrapping.
     pub integrate: f64,
     /// On threads: the seconds each thread worked in the force stage (walls and pairs),
@@ -987,6 +1043,8 @@ pub enum ContactPartner {
     Particle(usize),
     /// A wall index.
     Wall(usize),
+    /// A mesh wall's index and the triangle that owns the contact.
+    Mesh { mesh: usize, triangle: usize },
 }
 
 /// One contact of the current state, for output.

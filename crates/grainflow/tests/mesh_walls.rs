@@ -58,7 +58,7 @@ fn bead_setup(
         Integrator::VelocityVerlet,
         dt,
     );
-    cfg.meshes = mesh.into_iter().map(|mesh| MeshWall { mesh, material: 0 }).collect();
+    cfg.meshes = mesh.into_iter().map(|mesh| MeshWall::fixed(mesh, 0)).collect();
     cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
     let mut p = particle(1, 0, 5e-4, 2500.0, Vec3::new(-8e-3, -6e-3, z), v0);
     p.omega = w0;
@@ -199,7 +199,7 @@ fn a_mesh_with_an_unknown_material_is_refused() {
         Integrator::VelocityVerlet,
         1e-6,
     );
-    cfg.meshes = vec![MeshWall { mesh: floor(1), material: 3 }];
+    cfg.meshes = vec![MeshWall::fixed(floor(1), 3)];
     let init = [particle(1, 0, 5e-4, 2500.0, Vec3::new(0.0, 0.0, 1e-3), Vec3::ZERO)];
     let err = Simulation::new(cfg, grainflow::Particles::from_init(&init)).expect_err("an unknown material");
     assert!(err.to_string().contains("mesh 'floor' uses wall material 3"), "{err}");

@@ -24,9 +24,11 @@ pub mod build;
 pub mod contact;
 pub mod grid;
 pub mod load;
+pub mod motion;
 
 pub use contact::{ClosestPoint, MeshContact, Primitive, Region, closest_point_on_triangle, sphere_contacts};
 pub use grid::TriangleGrid;
+pub use motion::{MeshMotion, Pose, SurfaceMotion};
 
 use crate::math::Vec3;
 use std::fmt;
@@ -358,10 +360,25 @@ impl Default for MeshTransform {
     }
 }
 
-/// A triangle-mesh wall of a simulation: its surface and its material (an index into the
-/// simulation's wall materials). Immovable.
+/// A triangle-mesh wall of a simulation: its surface (as loaded, in its reference pose), its
+/// material (an index into the simulation's wall materials), how it moves and how its surface
+/// slides.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshWall {
     pub mesh: Mesh,
     pub material: usize,
+    pub motion: MeshMotion,
+    pub surface: SurfaceMotion,
+}
+
+impl MeshWall {
+    /// An immovable mesh wall of `material`.
+    pub fn fixed(mesh: Mesh, material: usize) -> MeshWall {
+        MeshWall { mesh, material, motion: MeshMotion::Fixed, surface: SurfaceMotion::None }
+    }
+
+    /// True if the contact velocity of its surface may be non-zero.
+    pub fn moves(&self) -> bool {
+        self.motion.moves() || self.surface != SurfaceMotion::None
+    }
 }

@@ -12,6 +12,14 @@
 //!
 //! The loads are rounded to the sums' quanta like every other load (`forces::sum`), so adding
 //! them after the pair stage, on one thread, gives the same sums as adding them anywhere else.
+//!
+//! A moving mesh ([`crate::mesh::motion`]) stays binned in its pose as loaded: a particle's
+//! centre is taken into that pose to find its contacts, and the contacts' normals and points
+//! are turned back. The wall's velocity at the contact point (its motion's v + ω × (x − o),
+//! plus a surface velocity) enters the contact's relative velocity. The candidates are found
+//! again when the neighbour list is rebuilt or a mesh has moved more than half the skin since
+//! they were found (around the list's reference positions, which no particle has left by more
+//! than half the skin): so no contact is missed.
 
 use super::Simulation;
 use crate::contact::LeverArm;
@@ -20,7 +28,8 @@ use crate::contact::pair::{PairInput, wall_law};
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::forces::{Peak, Quanta, Quantum, max_peak};
 use crate::math::Vec3;
-use crate::mesh::{Mesh, MeshContact, MeshWall, TriangleGrid, sphere_contacts};
+use crate::mesh::motion::Anchor;
+use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, TriangleGrid, sphere_contacts};
 
 /// A contact's normal may turn this far (cosine) from one evaluation to the next and still
 /// carry its history to another triangle: 60°.
@@ -48,26 +57,63 @@ pub(crate) struct MeshStage {
     candidates: Vec<(u32, u32)>,
     /// The histories of the last evaluation's contacts, by (slot, mesh, triangle).
     pub history: Vec<MeshHistory>,
+    /// Each mesh's pose when the candidates were found.
+    candidate_poses: Vec<Pose>,
+    /// Where each mesh's motion starts from (none: every one from the run's start).
+    pub anchors: Vec<Anchor>,
+    /// The run's start time, from which the meshes' motions are timed, s.
+    pub t0: f64,
+    /// The last evaluation's loads on the particles from the meshes, for the meshes' loads.
+    loads: Vec<MeshLoadPart>,
+}
+
+/// One mesh contact's load on its particle: the force, and the torque about the centre.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct MeshLoadPart {
+    mesh: u32,
+    centre: Vec3,
+    force: Vec3,
+    torque: Vec3,
+}
+
+/// The load the particles exert on a mesh wall.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MeshLoad {
+    /// Force, N.
+    pub force: Vec3,
+    /// Torque about the point it was asked for, N·m.
+    pub torque: Vec3,
 }
 
 impl MeshStage {
+    /// The stage of a run that starts at `t0`, s.
+    pub(crate) fn new(t0: f64) -> MeshStage {
+        MeshStage { t0, ..Default::default() }
+    }
+
     /// Heap bytes of the stage.
     pub(crate) fn heap_bytes(&self) -> usize {
         self.grids.iter().map(TriangleGrid::heap_bytes).sum::<usize>()
             + self.start.capacity() * 4
             + self.candidates.capacity() * 8
             + self.history.capacity() * std::mem::size_of::<MeshHistory>()
+            + self.loads.capacity() * std::mem::size_of::<MeshLoadPart>()
+    }
+
+    /// The anchor of mesh `m`'s motion.
+    fn anchor(&self, m: usize) -> Anchor {
+        self.anchors.get(m).copied().unwrap_or(Anchor::START)
     }
 
     /// Fills `contacts` with the contacts of slot `i` (centre `centre`, radius `r`) with mesh
-    /// `m` among its candidates, found within `r + reach` (`reach`: a cohesive law's pull-off
-    /// distance, else 0; a contact's overlap with the radius is its `overlap − reach`).
-    /// `triangles` is scratch.
+    /// `m` in pose `pose` among its candidates, found within `r + reach` (`reach`: a cohesive
+    /// law's pull-off distance, else 0; a contact's overlap with the radius is its
+    /// `overlap − reach`); normals and points placed in the pose. `triangles` is scratch.
     #[allow(clippy::too_many_arguments)]
     fn contacts_of(
         &self,
         i: usize,
-        (m, mesh): (usize, &Mesh),
+        (m, mesh, pose): (usize, &Mesh, &Pose),
         centre: Vec3,
         r: f64,
         reach: f64,
@@ -78,8 +124,17 @@ impl MeshStage {
         triangles.clear();
         triangles.extend(cands.iter().filter(|c| c.0 == m as u32).map(|c| c.1));
         contacts.clear();
-        if !triangles.is_empty() {
+        if triangles.is_empty() {
+            return;
+        }
+        if pose.is_identity() {
             sphere_contacts(mesh, triangles, centre, r + reach, contacts);
+        } else {
+            sphere_contacts(mesh, triangles, pose.unapply(centre), r + reach, contacts);
+            for k in contacts.iter_mut() {
+                k.normal = pose.turn(k.normal);
+                k.point = pose.apply(k.point);
+            }
         }
     }
 
@@ -145,6 +200,84 @@ impl Simulation {
         Ok(())
     }
 
+    /// The pose of mesh `m` at time `t`, s.
+    pub(crate) fn mesh_pose_at(&self, m: usize, t: f64) -> Pose {
+        let wall = &self.meshes[m];
+        if !wall.motion.moves() {
+            return Pose::IDENTITY;
+        }
+        self.mesh_stage.anchor(m).pose(&wall.motion, t - self.mesh_stage.t0)
+    }
+
+    /// Where mesh `m` is now (its pose as loaded moved by its motion so far).
+    pub fn mesh_pose(&self, m: usize) -> Pose {
+        self.mesh_pose_at(m, self.time())
+    }
+
+    /// The vertices of mesh `m` where they are now, m (in the order of
+    /// [`Mesh::vertices`]).
+    pub fn mesh_vertices(&self, m: usize) -> Vec<Vec3> {
+        let pose = self.mesh_pose(m);
+        self.meshes[m].mesh.vertices().iter().map(|&y| pose.apply(y)).collect()
+    }
+
+    /// The mesh walls.
+    pub fn meshes(&self) -> &[MeshWall] {
+        &self.meshes
+    }
+
+    /// The load the particles exerted on mesh `m` at the last force evaluation (zero before
+    /// the first): the force, and the torque about `about`. The sums do not depend on the
+    /// particles' order; the force is exactly minus the sum of the particles' loads from it.
+    pub fn mesh_load(&self, m: usize, about: Vec3) -> MeshLoad {
+        use crate::observe::order_free_sum;
+        let parts: Vec<&MeshLoadPart> = self.mesh_stage.loads.iter().filter(|l| l.mesh == m as u32).collect();
+        let sum = |f: &dyn Fn(&MeshLoadPart) -> Vec3| {
+            let c =
+                |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
+            Vec3::new(c(0), c(1), c(2))
+        };
+        MeshLoad {
+            force: -sum(&|l| l.force),
+            torque: -sum(&|l| (l.centre - about).cross(l.force) + l.torque),
+        }
+    }
+
+    /// (anchor time since the start, s; anchor pose; pose now) of every mesh, for checkpoints.
+    pub(crate) fn mesh_motion_state(&self) -> Vec<(f64, Pose, Pose)> {
+        (0..self.meshes.len())
+            .map(|m| {
+                let a = self.mesh_stage.anchor(m);
+                (a.tau, a.pose, self.mesh_pose(m))
+            })
+            .collect()
+    }
+
+    /// Restores what [`mesh_motion_state`](Self::mesh_motion_state) gave. A mesh whose motion
+    /// in this case puts it elsewhere than the checkpoint's pose (the case's motion changed)
+    /// continues from the checkpoint's pose, anchored at its time.
+    pub(crate) fn set_mesh_motion_state(&mut self, state: &[(f64, Pose, Pose)]) -> Result<(), String> {
+        if state.len() != self.meshes.len() {
+            return Err(format!(
+                "the checkpoint has {} mesh walls, the case {}",
+                state.len(),
+                self.meshes.len()
+            ));
+        }
+        let tau = self.time() - self.mesh_stage.t0;
+        self.mesh_stage.anchors = state.iter().map(|&(tau, pose, _)| Anchor { tau, pose }).collect();
+        for (m, &(_, _, was)) in state.iter().enumerate() {
+            if self.mesh_pose(m) != was {
+                self.mesh_stage.anchors[m] = Anchor { tau, pose: was };
+            }
+        }
+        if self.mesh_stage.anchors.iter().all(|a| *a == Anchor::START) {
+            self.mesh_stage.anchors.clear();
+        }
+        self.mesh_stage.built_for = None;
+        Ok(())
+    }
+
     /// Calls `visit(slot, overlap)` for every mesh-wall contact of the current state, with the
     /// candidates of the last evaluation (none before the first), for diagnostics: as the next
     /// evaluation would find them (a cohesive contact formed at the last evaluation holds to
@@ -153,19 +286,29 @@ impl Simulation {
         &self,
         mut visit: impl FnMut(usize, f64, &crate::contact::ContactCoeffs),
     ) {
+        self.each_mesh_contact(|i, _, _, overlap, c| visit(i, overlap, c));
+    }
+
+    /// Calls `visit(slot, mesh, contact, overlap, coefficients)` for every mesh-wall contact
+    /// of the current state, as [`visit_mesh_contacts`](Self::visit_mesh_contacts) finds them.
+    fn each_mesh_contact(
+        &self,
+        mut visit: impl FnMut(usize, usize, &MeshContact, f64, &crate::contact::ContactCoeffs),
+    ) {
         let (st, p) = (&self.mesh_stage, &self.particles);
         if self.meshes.is_empty() || st.start.len() != p.len() + 1 {
             return;
         }
         let reaches = self.law.normal.reaches();
+        let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose(m)).collect();
         let (mut contacts, mut triangles) = (Vec::new(), Vec::new());
         for i in 0..p.len() {
-            for (m, MeshWall { mesh, material }) in self.meshes.iter().enumerate() {
+            for (m, MeshWall { mesh, material, .. }) in self.meshes.iter().enumerate() {
                 let c = self.coeffs.wall(p.phase[i] as usize, *material);
                 let reach = if reaches { c.pull_off } else { 0.0 };
                 st.contacts_of(
                     i,
-                    (m, mesh),
+                    (m, mesh, &poses[m]),
                     p.position[i],
                     p.radius[i],
                     reach,
@@ -182,61 +325,153 @@ impl Simulation {
                             .is_ok()
                     };
                     if overlap >= 0.0 || (reaches && formed()) {
-                        visit(i, overlap, c);
+                        visit(i, m, k, overlap, c);
                     }
                 }
             }
         }
     }
 
-    /// The candidates of every slot, found again if the neighbour list was rebuilt since.
-    fn update_mesh_candidates(&mut self) {
+    /// The mesh-wall contacts of the current state with their forces, for output (see
+    /// [`Simulation::contacts`]): as the next evaluation would see them, springs not advanced.
+    pub(super) fn mesh_contact_infos(&self, out: &mut Vec<super::ContactInfo>) {
+        crate::with_submodels!(self.law, |N, T| self.mesh_contact_infos_for::<N, T>(out))
+    }
+
+    fn mesh_contact_infos_for<N: NormalSubModel, T: TangentialSubModel>(
+        &self,
+        out: &mut Vec<super::ContactInfo>,
+    ) {
+        let (st, law) = (&self.mesh_stage, self.law);
+        let t = self.time();
+        self.each_mesh_contact(|i, m, k, overlap, c| {
+            let h = st
+                .history
+                .binary_search_by_key(&(i as u32, m as u32, k.triangle), |h| (h.slot, h.mesh, h.triangle))
+                .map_or(Vec3::ZERO, |j| st.history[j].h);
+            let input = self.mesh_input(i, m, k, overlap, c, h, t);
+            let (load, _, _) = wall_law::<N, T, { parts::ALL }>(&law, 0.0, &input);
+            let f_n = load.f.dot(k.normal);
+            out.push(super::ContactInfo {
+                particle: i,
+                other: super::ContactPartner::Mesh { mesh: m, triangle: k.triangle as usize },
+                point: k.point,
+                normal: -k.normal,
+                overlap,
+                normal_force: f_n.abs(),
+                tangential_force: (load.f - k.normal * f_n).length(),
+            });
+        });
+    }
+
+    /// The wall law's input for slot `i`'s contact `k` (placed) with mesh `m` at time `t`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn mesh_input(
+        &self,
+        i: usize,
+        m: usize,
+        k: &MeshContact,
+        overlap: f64,
+        c: &crate::contact::ContactCoeffs,
+        h: Vec3,
+        t: f64,
+    ) -> PairInput {
+        let p = &self.particles;
+        let lever = if self.law.lever == LeverArm::RadicalPlane { k.distance } else { p.radius[i] };
+        PairInput {
+            d: -k.normal,
+            ra: overlap,
+            rb: lever,
+            dv: p.velocity[i] - self.mesh_velocity(m, k.point, k.normal, t),
+            wa: p.omega[i],
+            wb: Vec3::ZERO,
+            h,
+            c: *c,
+            m_eff: p.mass[i],
+        }
+    }
+
+    /// The velocity of mesh `m`'s surface at the point `x` (normal `normal`) at time `t`.
+    #[inline]
+    fn mesh_velocity(&self, m: usize, x: Vec3, normal: Vec3, t: f64) -> Vec3 {
+        let wall = &self.meshes[m];
+        if !wall.moves() {
+            return Vec3::ZERO;
+        }
+        let (v, w, o) = wall.motion.rates(t - self.mesh_stage.t0);
+        v + w.cross(x - o) + wall.surface.velocity(x, normal)
+    }
+
+    /// The candidates of every slot, found again if the neighbour list was rebuilt since or a
+    /// mesh (in its poses at time `t`) moved more than half the skin since.
+    fn update_mesh_candidates(&mut self, poses: &[Pose]) {
         let build = self.neighbors.stats().builds;
-        let st = &mut self.mesh_stage;
-        if st.built_for == Some(build) && st.start.len() == self.particles.len() + 1 {
+        let skin = self.neighbors.skin();
+        let st = &self.mesh_stage;
+        let moved = || {
+            st.candidate_poses.len() != poses.len()
+                || self.meshes.iter().zip(poses.iter().zip(&st.candidate_poses)).any(|(w, (now, then))| {
+                    w.motion.moves() && {
+                        let (lo, hi) = w.mesh.bounds();
+                        then.moved_bound(now, 0.5 * (lo + hi), 0.5 * (hi - lo).length()) > 0.5 * skin
+                    }
+                })
+        };
+        if st.built_for == Some(build) && st.start.len() == self.particles.len() + 1 && !moved() {
             return;
         }
-        let skin = self.neighbors.skin();
+        let st = &mut self.mesh_stage;
         if st.grids.len() != self.meshes.len() {
             let cell = 2.0 * self.particles.max_radius() + skin;
             st.grids = self.meshes.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
         }
         let p = &self.particles;
+        // Around the positions the neighbour list was built for: no particle has moved more
+        // than half the skin from them.
+        let reference = self.neighbors.reference();
+        let centres = if reference.len() == p.len() { reference } else { &p.position };
         st.start.clear();
         st.candidates.clear();
         st.start.push(0);
         let mut near = Vec::new();
-        for i in 0..p.len() {
+        for (i, &x) in centres.iter().enumerate() {
             for (m, (wall, grid)) in self.meshes.iter().zip(&st.grids).enumerate() {
-                grid.near(&wall.mesh, p.position[i], p.radius[i] + skin, &mut near);
+                let y = if poses[m].is_identity() { x } else { poses[m].unapply(x) };
+                grid.near(&wall.mesh, y, p.radius[i] + skin, &mut near);
                 st.candidates.extend(near.iter().map(|&t| (m as u32, t)));
             }
             st.start.push(st.candidates.len() as u32);
         }
+        st.candidate_poses = poses.to_vec();
         st.built_for = Some(build);
     }
 
     /// Adds every particle's mesh-contact loads, rounded to `quanta`, to the force and torque
-    /// accumulators, raising `peak`; with `advance`, advances and stores their histories.
+    /// accumulators, raising `peak`; with `advance`, advances and stores their histories. `t`
+    /// is the time of the particles' positions.
     pub(super) fn mesh_loads<N: NormalSubModel, T: TangentialSubModel>(
         &mut self,
         quanta: Quanta,
         advance: bool,
         peak: &mut Peak,
+        t: f64,
     ) {
         if self.meshes.is_empty() {
             return;
         }
-        self.update_mesh_candidates();
+        let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose_at(m, t)).collect();
+        self.update_mesh_candidates(&poses);
         let dt = if advance { self.time_step.dt } else { 0.0 };
         let law = self.law;
-        let (st, p, meshes, coeffs) = (&mut self.mesh_stage, &mut self.particles, &self.meshes, &self.coeffs);
-        let old = std::mem::take(&mut st.history);
+        let old = std::mem::take(&mut self.mesh_stage.history);
+        let mut loads = std::mem::take(&mut self.mesh_stage.loads);
+        loads.clear();
         let mut stored = Vec::with_capacity(old.len());
         let (mut contacts, mut triangles): (Vec<MeshContact>, Vec<u32>) = (Vec::new(), Vec::new());
         let mut claimed: Vec<bool> = Vec::new();
         let mut o = 0;
-        for i in 0..p.len() {
+        for i in 0..self.particles.len() {
             let o0 = o;
             while o < old.len() && old[o].slot as usize <= i {
                 o += 1;
@@ -244,12 +479,13 @@ impl Simulation {
             let mine = &old[o0..o];
             claimed.clear();
             claimed.resize(mine.len(), false);
-            for (m, MeshWall { mesh, material }) in meshes.iter().enumerate() {
-                let c = coeffs.wall(p.phase[i] as usize, *material);
+            for (m, MeshWall { mesh, material, .. }) in self.meshes.iter().enumerate() {
+                let p = &self.particles;
+                let c = self.coeffs.wall(p.phase[i] as usize, *material);
                 let reach = if N::REACHES { c.pull_off } else { 0.0 };
-                st.contacts_of(
+                self.mesh_stage.contacts_of(
                     i,
-                    (m, mesh),
+                    (m, mesh, &poses[m]),
                     p.position[i],
                     p.radius[i],
                     reach,
@@ -267,22 +503,18 @@ impl Simulation {
                         claimed[j] = true;
                         mine[j].h
                     });
-                    let lever = if law.lever == LeverArm::RadicalPlane { k.distance } else { p.radius[i] };
-                    let input = PairInput {
-                        d: -k.normal,
-                        ra: overlap,
-                        rb: lever,
-                        dv: p.velocity[i],
-                        wa: p.omega[i],
-                        wb: Vec3::ZERO,
-                        h,
-                        c: *c,
-                        m_eff: p.mass[i],
-                    };
+                    let input = self.mesh_input(i, m, k, overlap, c, h, t);
                     let (load, h_new, bound) = wall_law::<N, T, { parts::ALL }>(&law, dt, &input);
                     let round = |q: Quantum, v: Vec3| Vec3::new(q.round(v.x), q.round(v.y), q.round(v.z));
-                    p.force[i] += round(quanta.force, load.f);
-                    p.torque[i] += round(quanta.torque, load.ta);
+                    let (f, ta) = (round(quanta.force, load.f), round(quanta.torque, load.ta));
+                    self.particles.force[i] += f;
+                    self.particles.torque[i] += ta;
+                    loads.push(MeshLoadPart {
+                        mesh: m as u32,
+                        centre: self.particles.position[i],
+                        force: f,
+                        torque: ta,
+                    });
                     *peak = max_peak(*peak, bound);
                     stored.push(MeshHistory {
                         slot: i as u32,
@@ -297,6 +529,8 @@ impl Simulation {
         // Two contacts of a particle never share an owner (`sphere_contacts` merges them), so
         // the order is that of (slot, mesh, triangle) once sorted.
         stored.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
+        let st = &mut self.mesh_stage;
+        st.loads = loads;
         st.history = if advance { stored } else { old };
     }
 }

@@ -1,0 +1,294 @@
+//! How a mesh wall moves: its pose as a closed-form function of the time since the run's
+//! start, the velocity of its surface at a point, and a surface velocity of a mesh that does
+//! not itself move (a conveyor belt, a drum's shell turning in place).
+//!
+//! A mesh is stored in its reference pose (as loaded); at time τ its points are at
+//! x = R(τ)·y + t(τ) ([`Pose`]). Contacts are found in the reference pose, with the particle's
+//! centre taken there (y = R⁻¹(x − t)), so a moving mesh's triangle grid never needs binning
+//! again.
+//!
+//! The pose is a closed form of τ (no integration, so no drift): a rotation by θ(τ) about a
+//! fixed axis, a translation v·τ, or an oscillation A·sin(2πfτ). A restart that changed the
+//! motion continues from where the mesh was ([`Anchor`]). Rotations take the platform's `sin`
+//! and `cos` (the same bits on one machine, so restarts are bit-identical).
+
+use crate::math::Vec3;
+use glam::DQuat;
+
+/// Where a mesh is: x = `rotation`·y + `translation` for a point y of the mesh as loaded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    pub rotation: DQuat,
+    pub translation: Vec3,
+}
+
+impl Pose {
+    /// The pose of the mesh as loaded.
+    pub const IDENTITY: Pose = Pose { rotation: DQuat::IDENTITY, translation: Vec3::ZERO };
+
+    /// A point of the mesh as loaded, placed.
+    #[inline]
+    pub fn apply(&self, y: Vec3) -> Vec3 {
+        self.rotation * y + self.translation
+    }
+
+    /// A direction of the mesh as loaded, placed.
+    #[inline]
+    pub fn turn(&self, d: Vec3) -> Vec3 {
+        self.rotation * d
+    }
+
+    /// A point of space taken back to the mesh as loaded: the inverse of [`apply`](Self::apply).
+    #[inline]
+    pub fn unapply(&self, x: Vec3) -> Vec3 {
+        self.rotation.conjugate() * (x - self.translation)
+    }
+
+    /// `self` after `first`: x = self(first(y)).
+    fn after(&self, first: &Pose) -> Pose {
+        Pose {
+            rotation: (self.rotation * first.rotation).normalize(),
+            translation: self.rotation * first.translation + self.translation,
+        }
+    }
+
+    /// The identity, to the bit.
+    pub fn is_identity(&self) -> bool {
+        *self == Pose::IDENTITY
+    }
+
+    /// An upper bound of how far any point within `radius` of `centre` (a point of the mesh
+    /// as loaded) lies in pose `other` from where it lies in `self`, m.
+    pub fn moved_bound(&self, other: &Pose, centre: Vec3, radius: f64) -> f64 {
+        let d = other.rotation * self.rotation.conjugate();
+        // ‖R₂ − R₁‖ = ‖R₂R₁⁻¹ − I‖ = 2 sin(φ/2) = 2·|vector part| of the relative quaternion.
+        let turn = 2.0 * d.xyz().length();
+        (other.apply(centre) - self.apply(centre)).length() + turn * radius * (1.0 + 1e-12)
+    }
+}
+
+/// How a mesh moves, from the run's start time.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum MeshMotion {
+    /// It does not move.
+    #[default]
+    Fixed,
+    /// At a constant velocity, m/s.
+    Translate { velocity: Vec3 },
+    /// About the axis through `origin` along the unit vector `axis` (right-hand rule) at
+    /// `omega` rad/s, reached linearly from rest over `ramp` s (0: from the start).
+    Rotate { origin: Vec3, axis: Vec3, omega: f64, ramp: f64 },
+    /// Sinusoidally: displacement `amplitude`·sin(2π·`frequency`·τ), m and Hz.
+    Oscillate { amplitude: Vec3, frequency: f64 },
+}
+
+impl MeshMotion {
+    /// The pose at τ s after the start, from the pose as loaded.
+    pub fn pose(&self, tau: f64) -> Pose {
+        match *self {
+            MeshMotion::Fixed => Pose::IDENTITY,
+            MeshMotion::Translate { velocity } => {
+                Pose { rotation: DQuat::IDENTITY, translation: velocity * tau }
+            }
+            MeshMotion::Rotate { origin, axis, .. } => {
+                let rotation = DQuat::from_axis_angle(axis, self.angle(tau));
+                Pose { rotation, translation: origin - rotation * origin }
+            }
+            MeshMotion::Oscillate { amplitude, frequency } => Pose {
+                rotation: DQuat::IDENTITY,
+                translation: amplitude * (std::f64::consts::TAU * frequency * tau).sin(),
+            },
+        }
+    }
+
+    /// The angle turned by τ, rad (rotations only; 0 for the others).
+    pub fn angle(&self, tau: f64) -> f64 {
+        match *self {
+            MeshMotion::Rotate { omega, ramp, .. } => {
+                if ramp > 0.0 && tau < ramp {
+                    0.5 * omega * tau * tau / ramp
+                } else {
+                    omega * (tau - 0.5 * ramp)
+                }
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// (linear velocity, angular velocity, a point on the axis) at τ: a point x of the
+    /// surface moves at v + ω × (x − o).
+    pub fn rates(&self, tau: f64) -> (Vec3, Vec3, Vec3) {
+        match *self {
+            MeshMotion::Fixed => (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO),
+            MeshMotion::Translate { velocity } => (velocity, Vec3::ZERO, Vec3::ZERO),
+            MeshMotion::Rotate { origin, axis, omega, ramp } => {
+                let w = if ramp > 0.0 && tau < ramp { omega * (tau / ramp) } else { omega };
+                (Vec3::ZERO, axis * w, origin)
+            }
+            MeshMotion::Oscillate { amplitude, frequency } => {
+                let k = std::f64::consts::TAU * frequency;
+                (amplitude * (k * (k * tau).cos()), Vec3::ZERO, Vec3::ZERO)
+            }
+        }
+    }
+
+    /// True unless fixed.
+    pub fn moves(&self) -> bool {
+        *self != MeshMotion::Fixed
+    }
+}
+
+/// A velocity of a mesh's surface in its own plane while the mesh stays where it is: at a
+/// contact its component along the contact's normal is removed, so the surface slides without
+/// pushing. (A drum's shell turning in place, as MFIX's drum tutorial moves its wall; a belt.)
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum SurfaceMotion {
+    #[default]
+    None,
+    /// Every point at `velocity`, m/s (a conveyor belt).
+    Translate { velocity: Vec3 },
+    /// Turning about the axis through `origin` along the unit vector `axis` at `omega` rad/s.
+    Rotate { origin: Vec3, axis: Vec3, omega: f64 },
+}
+
+impl SurfaceMotion {
+    /// The surface's sliding velocity at the point `x` where the normal is `normal`.
+    #[inline]
+    pub fn velocity(&self, x: Vec3, normal: Vec3) -> Vec3 {
+        let v = match *self {
+            SurfaceMotion::None => return Vec3::ZERO,
+            SurfaceMotion::Translate { velocity } => velocity,
+            SurfaceMotion::Rotate { origin, axis, omega } => (axis * omega).cross(x - origin),
+        };
+        v - normal * v.dot(normal)
+    }
+}
+
+/// The start of a mesh's motion: its pose is that of the motion from τ to `tau`, after
+/// `pose`. A run starts from (0, the pose as loaded), so its poses are the motion's closed
+/// form; a restart whose case changed the motion anchors it at the checkpoint's pose and time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Anchor {
+    pub tau: f64,
+    pub pose: Pose,
+}
+
+impl Anchor {
+    /// The anchor of a run's start.
+    pub const START: Anchor = Anchor { tau: 0.0, pose: Pose::IDENTITY };
+
+    /// The pose of a mesh with `motion` at τ.
+    pub fn pose(&self, motion: &MeshMotion, tau: f64) -> Pose {
+        if *self == Anchor::START {
+            return motion.pose(tau);
+        }
+        let relative = match *motion {
+            MeshMotion::Fixed => Pose::IDENTITY,
+            MeshMotion::Translate { velocity } => {
+                Pose { rotation: DQuat::IDENTITY, translation: velocity * (tau - self.tau) }
+            }
+            MeshMotion::Rotate { origin, axis, .. } => {
+                let turned = motion.angle(tau) - motion.angle(self.tau);
+                let rotation = DQuat::from_axis_angle(axis, turned);
+                Pose { rotation, translation: origin - rotation * origin }
+            }
+            MeshMotion::Oscillate { .. } => Pose {
+                rotation: DQuat::IDENTITY,
+                translation: motion.pose(tau).translation - motion.pose(self.tau).translation,
+            },
+        };
+        relative.after(&self.pose)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quarter turn about z through (1, 0, 0) takes (2, 0, 0) to (1, 1, 0); the pose's
+    /// inverse takes it back (to rounding: 1e-15 of the coordinates).
+    #[test]
+    fn a_rotation_turns_about_its_axis_through_its_origin() {
+        let m = MeshMotion::Rotate {
+            origin: Vec3::X,
+            axis: Vec3::Z,
+            omega: std::f64::consts::FRAC_PI_2,
+            ramp: 0.0,
+        };
+        let p = m.pose(1.0);
+        assert!((p.apply(Vec3::new(2.0, 0.0, 0.0)) - Vec3::new(1.0, 1.0, 0.0)).length() < 1e-15);
+        assert!((p.unapply(Vec3::new(1.0, 1.0, 0.0)) - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-15);
+        // The surface velocity ω × (x − o) at (2, 0, 0): (0, π/2, 0).
+        let (v, w, o) = m.rates(1.0);
+        let at = v + w.cross(Vec3::new(2.0, 0.0, 0.0) - o);
+        assert!((at - Vec3::new(0.0, std::f64::consts::FRAC_PI_2, 0.0)).length() < 1e-15);
+    }
+
+    /// A ramp reaches ω at `ramp` with the angle ½ω·ramp, and the angle's derivative is the
+    /// rate everywhere (central differences, to 1e-9 of ω).
+    #[test]
+    fn a_ramped_rotation_is_continuous_and_its_rate_is_the_angles_derivative() {
+        let m = MeshMotion::Rotate { origin: Vec3::ZERO, axis: Vec3::Y, omega: 6.0, ramp: 0.5 };
+        assert_eq!(m.angle(0.5), 0.5 * 6.0 * 0.5);
+        for tau in [0.1, 0.3, 0.5, 0.7, 2.0] {
+            let h = 1e-6;
+            let rate = (m.angle(tau + h) - m.angle(tau - h)) / (2.0 * h);
+            let w = m.rates(tau).1.y;
+            assert!((rate - w).abs() < 1e-9 * 6.0 + if tau == 0.5 { 6.0 * h / 0.5 } else { 0.0 }, "τ {tau}");
+        }
+    }
+
+    /// An oscillation's velocity is its displacement's derivative (central differences).
+    #[test]
+    fn an_oscillations_velocity_is_its_displacements_derivative() {
+        let m = MeshMotion::Oscillate { amplitude: Vec3::new(0.0, 0.0, 2e-3), frequency: 10.0 };
+        for tau in [0.0, 0.013, 0.05, 0.21] {
+            let h = 1e-7;
+            let d = (m.pose(tau + h).translation - m.pose(tau - h).translation) / (2.0 * h);
+            assert!((d - m.rates(tau).0).length() < 1e-8, "τ {tau}");
+        }
+    }
+
+    /// An anchored motion continues from the anchor's pose: at the anchor's time the pose is
+    /// the anchor's, and from there it turns by the motion's angle since then.
+    #[test]
+    fn an_anchor_continues_from_its_pose() {
+        let m = MeshMotion::Rotate { origin: Vec3::ZERO, axis: Vec3::Z, omega: 1.0, ramp: 0.0 };
+        let start = Pose { rotation: DQuat::from_axis_angle(Vec3::Z, 0.3), translation: Vec3::ZERO };
+        let a = Anchor { tau: 2.0, pose: start };
+        let p = a.pose(&m, 2.0);
+        assert!((p.apply(Vec3::X) - start.apply(Vec3::X)).length() < 1e-15);
+        let later = a.pose(&m, 2.5).apply(Vec3::X);
+        assert!((later - Vec3::new(0.8f64.cos(), 0.8f64.sin(), 0.0)).length() < 1e-15);
+        assert_eq!(Anchor::START.pose(&m, 0.7), m.pose(0.7));
+    }
+
+    /// The displacement bound holds for points of the sphere (sampled) and is tight for a
+    /// pure translation.
+    #[test]
+    fn the_displacement_bound_holds() {
+        let a = MeshMotion::Rotate { origin: Vec3::new(0.1, 0.0, 0.0), axis: Vec3::Y, omega: 2.0, ramp: 0.0 };
+        let (p1, p2) = (a.pose(0.1), a.pose(0.13));
+        let (c, r) = (Vec3::new(0.0, 0.05, 0.02), 0.04);
+        let bound = p1.moved_bound(&p2, c, r);
+        for k in 0..200 {
+            let f = |s: u64| ((k as u64 * 2654435761 + s * 40503) % 1000) as f64 / 500.0 - 1.0;
+            let d = Vec3::new(f(1), f(2), f(3));
+            let y = c + d.normalize_or_zero() * r;
+            assert!((p2.apply(y) - p1.apply(y)).length() <= bound);
+        }
+        let t = MeshMotion::Translate { velocity: Vec3::new(1.0, 2.0, 2.0) };
+        assert!((t.pose(0.0).moved_bound(&t.pose(1.0), c, r) - 3.0).abs() < 1e-12);
+    }
+
+    /// A surface velocity slides in the tangent plane: its normal component is removed.
+    #[test]
+    fn a_surface_velocity_has_no_normal_component() {
+        let s = SurfaceMotion::Translate { velocity: Vec3::new(1.0, 0.0, 1.0) };
+        assert_eq!(s.velocity(Vec3::ZERO, Vec3::Z), Vec3::X);
+        let d = SurfaceMotion::Rotate { origin: Vec3::ZERO, axis: Vec3::Y, omega: 2.0 };
+        // On a drum of radius 0.5 about y, the point (0, 0, −0.5) with the normal +z (inwards)
+        // moves at ω × r = (2ŷ) × (−0.5ẑ) = (−1, 0, 0).
+        assert_eq!(d.velocity(Vec3::new(0.0, 0.0, -0.5), Vec3::Z), Vec3::new(-1.0, 0.0, 0.0));
+    }
+}
