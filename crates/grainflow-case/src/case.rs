@@ -10,7 +10,10 @@ use grainflow::contact::{
     ContactLaw, ContactParams, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel,
     TangentialModel,
 };
-use grainflow::mesh::{Mesh, MeshError, MeshTransform, MeshWall, TriangleGrid, closest_point_on_triangle};
+use grainflow::mesh::{
+    Mesh, MeshError, MeshMotion, MeshTransform, MeshWall, SurfaceMotion, TriangleGrid,
+    closest_point_on_triangle,
+};
 use grainflow::simulation::STANDARD_GRAVITY;
 use grainflow::state::ParticleInit;
 use grainflow::{
@@ -43,6 +46,8 @@ pub struct Case {
     /// `[particles] max_overlap`: the largest overlap allowed during the run, as a fraction of
     /// the smaller radius (the run's health check stops a run that exceeds it).
     pub max_overlap: f64,
+    /// The mesh walls' names, in the order of `config.meshes`.
+    pub mesh_names: Vec<String>,
 }
 
 /// `[output]`, validated.
@@ -516,7 +521,9 @@ fn validate<'h>(
                 hi.to_array()
             )));
         }
-        meshes.push(MeshWall::fixed(mesh, material));
+        let motion = mesh_motion(m.motion.as_ref(), &table)?;
+        let surface = mesh_surface(m.surface.as_ref(), &table)?;
+        meshes.push(MeshWall { mesh, material, motion, surface });
         mesh_names.push(name);
     }
 
@@ -1134,6 +1141,7 @@ fn validate<'h>(
         hash: String::new(),
         warnings,
         max_overlap: run_overlap,
+        mesh_names,
     })
 }
 
@@ -1164,6 +1172,154 @@ impl MeshLoadError {
             MeshLoadError::Mesh(e) => CaseError::Mesh { table: table.into(), source: Box::new(e) },
             MeshLoadError::Case(e) => e,
         }
+    }
+}
+
+/// A unit axis from `[meshes.*] axis`.
+fn axis_of(a: Option<[f64; 3]>, table: &str) -> Result<Vec3, CaseError> {
+    let a = require(a, table, "axis", "the direction of the axis, e.g. [0, 1, 0]")?;
+    let v = vec3(a, table, "axis")?;
+    if v.length() > 0.0 && v.length().is_finite() {
+        Ok(v.normalize())
+    } else {
+        Err(CaseError::invalid(table, "axis", format!("{a:?}"), "must be a non-zero vector"))
+    }
+}
+
+/// The angular velocity, rad/s, from exactly one of `omega` and `rpm`.
+fn omega_of(omega: Option<f64>, rpm: Option<f64>, table: &str) -> Result<f64, CaseError> {
+    let w = match (omega, rpm) {
+        (Some(w), None) => w,
+        (None, Some(n)) => n * std::f64::consts::TAU / 60.0,
+        (Some(_), Some(_)) => {
+            return Err(CaseError::invalid(
+                table,
+                "rpm",
+                "given with omega",
+                "give `omega` (rad/s) or `rpm`, not both",
+            ));
+        }
+        (None, None) => {
+            return Err(CaseError::missing(
+                table,
+                "omega",
+                "the angular velocity: `omega` in rad/s or `rpm`",
+            ));
+        }
+    };
+    if w.is_finite() {
+        Ok(w)
+    } else {
+        Err(CaseError::invalid(
+            table,
+            if omega.is_some() { "omega" } else { "rpm" },
+            w,
+            "must be a finite number",
+        ))
+    }
+}
+
+/// `[meshes.motion]` as the engine's motion; keys another kind uses are refused.
+fn mesh_motion(m: Option<&RawMeshMotion>, table: &str) -> Result<MeshMotion, CaseError> {
+    let Some(m) = m else { return Ok(MeshMotion::Fixed) };
+    let table = format!("{table} [motion]");
+    let kind = require(m.kind.as_deref(), &table, "kind", "\"translate\", \"rotate\" or \"oscillate\"")?;
+    let given = [
+        ("velocity", m.velocity.is_some()),
+        ("axis", m.axis.is_some()),
+        ("origin", m.origin.is_some()),
+        ("omega", m.omega.is_some()),
+        ("rpm", m.rpm.is_some()),
+        ("ramp", m.ramp.is_some()),
+        ("amplitude", m.amplitude.is_some()),
+        ("frequency", m.frequency.is_some()),
+    ];
+    let uses: &[&str] = match kind {
+        "translate" => &["velocity"],
+        "rotate" => &["axis", "origin", "omega", "rpm", "ramp"],
+        "oscillate" => &["amplitude", "frequency"],
+        other => {
+            return Err(CaseError::invalid(
+                &table,
+                "kind",
+                format!("\"{other}\""),
+                "must be one of \"translate\", \"rotate\", \"oscillate\"",
+            ));
+        }
+    };
+    if let Some((key, _)) = given.iter().find(|(k, g)| *g && !uses.contains(k)) {
+        return Err(CaseError::invalid(
+            &table,
+            *key,
+            "given",
+            format!("is not a key of kind \"{kind}\" (its keys: {})", uses.join(", ")),
+        ));
+    }
+    Ok(match kind {
+        "translate" => MeshMotion::Translate {
+            velocity: vec3(
+                require(m.velocity, &table, "velocity", "the velocity, m/s")?,
+                &table,
+                "velocity",
+            )?,
+        },
+        "rotate" => {
+            let ramp = m.ramp.unwrap_or(0.0);
+            if !(ramp.is_finite() && ramp >= 0.0) {
+                return Err(CaseError::invalid(&table, "ramp", ramp, "must be a time >= 0, in s"));
+            }
+            MeshMotion::Rotate {
+                origin: vec3(m.origin.unwrap_or([0.0; 3]), &table, "origin")?,
+                axis: axis_of(m.axis, &table)?,
+                omega: omega_of(m.omega, m.rpm, &table)?,
+                ramp,
+            }
+        }
+        _ => {
+            let frequency = require(m.frequency, &table, "frequency", "the frequency, Hz")?;
+            if !(frequency.is_finite() && frequency > 0.0) {
+                return Err(CaseError::invalid(
+                    &table,
+                    "frequency",
+                    frequency,
+                    "must be a positive frequency, in Hz",
+                ));
+            }
+            MeshMotion::Oscillate {
+                amplitude: vec3(
+                    require(m.amplitude, &table, "amplitude", "the amplitude, m")?,
+                    &table,
+                    "amplitude",
+                )?,
+                frequency,
+            }
+        }
+    })
+}
+
+/// `[meshes.surface]` as the engine's surface motion.
+fn mesh_surface(s: Option<&RawMeshSurface>, table: &str) -> Result<SurfaceMotion, CaseError> {
+    let Some(s) = s else { return Ok(SurfaceMotion::None) };
+    let table = format!("{table} [surface]");
+    let turning = s.axis.is_some() || s.omega.is_some() || s.rpm.is_some() || s.origin.is_some();
+    match (s.velocity, turning) {
+        (Some(v), false) => Ok(SurfaceMotion::Translate { velocity: vec3(v, &table, "velocity")? }),
+        (None, true) => Ok(SurfaceMotion::Rotate {
+            origin: vec3(s.origin.unwrap_or([0.0; 3]), &table, "origin")?,
+            axis: axis_of(s.axis, &table)?,
+            omega: omega_of(s.omega, s.rpm, &table)?,
+        }),
+        (Some(_), true) => Err(CaseError::invalid(
+            &table,
+            "velocity",
+            "given with a turning",
+            "give either `velocity` (a belt) or `axis` with `omega` or `rpm` (a turning surface), not both",
+        )),
+        (None, false) => Err(CaseError::missing(
+            &table,
+            "velocity",
+            "`velocity` (a belt) or `axis` with `omega` or `rpm` (a turning surface)",
+        )),
     }
 }
 

@@ -181,6 +181,68 @@ pub struct RawMesh {
     /// away from the particles). Default false.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub flip_normals: Option<bool>,
+    /// How the mesh moves. Default: it does not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<RawMeshMotion>,
+    /// A velocity of the surface in its own plane, the mesh not moving (a belt, a drum's shell
+    /// turning in place). Default: none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface: Option<RawMeshSurface>,
+}
+
+/// `[meshes.motion]`: how a mesh moves, timed from the run's start time.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawMeshMotion {
+    /// "translate", "rotate" or "oscillate". Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    /// translate: the velocity, m/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<[f64; 3]>,
+    /// rotate: the axis direction (right-hand rule; normalised).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    /// rotate: a point on the axis, m. Default [0, 0, 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin: Option<[f64; 3]>,
+    /// rotate: angular velocity, rad/s (or `rpm`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub omega: Option<f64>,
+    /// rotate: revolutions per minute (or `omega`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rpm: Option<f64>,
+    /// rotate: time over which the angular velocity rises linearly from rest, s. Default 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ramp: Option<f64>,
+    /// oscillate: the displacement's amplitude, m (its direction is the oscillation's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub amplitude: Option<[f64; 3]>,
+    /// oscillate: frequency, Hz.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frequency: Option<f64>,
+}
+
+/// `[meshes.surface]`: a surface velocity, either `velocity` or a turning (`axis`, `origin`,
+/// `omega` or `rpm`).
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawMeshSurface {
+    /// The surface's velocity, m/s (its normal component at a contact is removed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<[f64; 3]>,
+    /// The axis the surface turns about.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    /// A point on that axis, m. Default [0, 0, 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin: Option<[f64; 3]>,
+    /// Angular velocity, rad/s (or `rpm`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub omega: Option<f64>,
+    /// Revolutions per minute (or `omega`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rpm: Option<f64>,
 }
 
 /// `[contact]`

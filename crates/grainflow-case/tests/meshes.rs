@@ -170,3 +170,85 @@ fn elastic_models_need_the_mesh_materials_moduli() {
     std::fs::write(&case, &text).expect("write");
     grainflow_case::load(&case).expect("no walls, no wall moduli needed");
 }
+
+/// `[meshes.motion]` and `[meshes.surface]` become the engine's motions: rpm in rad/s
+/// (60 rpm = 2π rad/s, to rounding), the axis normalised, the origin as given.
+#[test]
+fn motion_and_surface_tables_become_the_engines() {
+    use grainflow::Vec3;
+    use grainflow::mesh::{MeshMotion, SurfaceMotion};
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let case = write_case(
+        dir.path(),
+        "[[meshes]]\nname = \"drum\"\nfile = \"square.obj\"\nscale = 1e-3\n\
+         [meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 2.0, 0.0]\norigin = [0.0, 0.0, 0.01]\nrpm = 60.0\nramp = 0.5\n\
+         [[meshes]]\nname = \"belt\"\nfile = \"square.obj\"\nscale = 1e-3\ntranslate = [0.0, 0.0, -0.05]\n\
+         [meshes.surface]\nvelocity = [0.2, 0.0, 0.0]\n\
+         [[meshes]]\nname = \"shaker\"\nfile = \"square.obj\"\nscale = 1e-3\ntranslate = [0.0, 0.0, -0.08]\n\
+         [meshes.motion]\nkind = \"oscillate\"\namplitude = [0.0, 0.0, 0.002]\nfrequency = 10.0\n",
+    );
+    let c = grainflow_case::load(&case).expect("valid case");
+    let m = &c.config.meshes;
+    match m[0].motion {
+        MeshMotion::Rotate { origin, axis, omega, ramp } => {
+            assert_eq!((origin, axis, ramp), (Vec3::new(0.0, 0.0, 0.01), Vec3::Y, 0.5));
+            assert!((omega - std::f64::consts::TAU).abs() < 1e-15);
+        }
+        other => panic!("not a rotation: {other:?}"),
+    }
+    assert_eq!(m[1].surface, SurfaceMotion::Translate { velocity: Vec3::new(0.2, 0.0, 0.0) });
+    assert_eq!(m[1].motion, MeshMotion::Fixed);
+    assert_eq!(m[2].motion, MeshMotion::Oscillate { amplitude: Vec3::new(0.0, 0.0, 0.002), frequency: 10.0 });
+    assert_eq!(c.mesh_names, ["drum", "belt", "shaker"]);
+}
+
+#[test]
+fn motion_tables_check_their_keys() {
+    let sq = [("square.obj", SQUARE_MM)];
+    let mesh = "[[meshes]]\nname = \"a\"\nfile = \"square.obj\"\nscale = 1e-3\n";
+    let with = |t: &str| format!("{mesh}{t}");
+    refused(&with("[meshes.motion]\nvelocity = [1.0, 0.0, 0.0]\n"), &sq, &["'a' [motion]", "`kind`"]);
+    refused(
+        &with("[meshes.motion]\nkind = \"spin\"\n"),
+        &sq,
+        &["`kind`", "\"translate\", \"rotate\", \"oscillate\""],
+    );
+    refused(
+        &with("[meshes.motion]\nkind = \"translate\"\nvelocity = [1.0, 0.0, 0.0]\nrpm = 3.0\n"),
+        &sq,
+        &["`rpm`", "is not a key of kind \"translate\""],
+    );
+    refused(
+        &with("[meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 0.0]\nrpm = 3.0\n"),
+        &sq,
+        &["`axis`", "non-zero"],
+    );
+    refused(
+        &with("[meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\nrpm = 3.0\nomega = 1.0\n"),
+        &sq,
+        &["not both"],
+    );
+    refused(&with("[meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\n"), &sq, &["`omega`"]);
+    refused(
+        &with("[meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\nomega = 1.0\nramp = -1.0\n"),
+        &sq,
+        &["`ramp`"],
+    );
+    refused(
+        &with("[meshes.motion]\nkind = \"oscillate\"\namplitude = [0.0, 0.0, 1e-3]\nfrequency = 0.0\n"),
+        &sq,
+        &["`frequency`", "positive"],
+    );
+    refused(
+        &with("[meshes.surface]\nvelocity = [1.0, 0.0, 0.0]\nrpm = 2.0\n"),
+        &sq,
+        &["[surface]", "not both"],
+    );
+    refused(&with("[meshes.surface]\n"), &sq, &["[surface]", "`velocity`"]);
+    refused(
+        &with("[meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\nomega = 1.0\nspeed = 2.0\n"),
+        &sq,
+        &["speed"],
+    );
+}
