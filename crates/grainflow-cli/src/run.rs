@@ -348,13 +348,15 @@ pub fn main(args: RunArgs) -> ExitCode {
             let st = s.stages;
             let pct = |t: f64| if s.wall_seconds > 0.0 { 100.0 * t / s.wall_seconds } else { 0.0 };
             println!(
-                "stages: neighbour search {:.3} s ({:.0} %), walls {:.3} s ({:.0} %), pairs {:.3} s ({:.0} %), integration {:.3} s ({:.0} %), output {:.3} s ({:.0} %)",
+                "stages: neighbour search {:.3} s ({:.0} %), walls {:.3} s ({:.0} %), pairs {:.3} s ({:.0} %), mesh walls {:.3} s ({:.0} %), integration {:.3} s ({:.0} %), output {:.3} s ({:.0} %)",
                 st.neighbor,
                 pct(st.neighbor),
                 st.walls,
                 pct(st.walls),
                 st.pairs,
                 pct(st.pairs),
+                st.meshes,
+                pct(st.meshes),
                 st.integrate,
                 pct(st.integrate),
                 s.output_seconds,

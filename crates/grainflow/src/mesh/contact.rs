@@ -145,8 +145,8 @@ pub fn closest_point_on_triangle(p: Vec3, corners: [Vec3; 3]) -> ClosestPoint {
     closest_point_with_normal(p, corners, unit_normal(corners))
 }
 
-/// [`closest_point_on_triangle`] with the triangle's unit normal `n` given.
-fn closest_point_with_normal(p: Vec3, [a, b, c]: [Vec3; 3], n: Vec3) -> ClosestPoint {
+/// [`closest_point_on_triangle`] with the triangle's unit normal `n` given (the mesh's own).
+pub(crate) fn closest_point_with_normal(p: Vec3, [a, b, c]: [Vec3; 3], n: Vec3) -> ClosestPoint {
     let at = |point, region| ClosestPoint { point, region };
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
@@ -197,7 +197,13 @@ pub fn sphere_contacts(
     let start = out.len();
     for &t in candidate_triangles {
         let corners = mesh.corners(t);
-        let region = closest_point_with_normal(centre, corners, mesh.normals[t as usize]).region;
+        let closest = closest_point_with_normal(centre, corners, mesh.normals[t as usize]);
+        // A triangle out of reach takes no part, so that the contacts are a function of the
+        // triangles within reach, whatever other candidates come with them.
+        if (centre - closest.point).length_squared() > radius * radius {
+            continue;
+        }
+        let region = closest.region;
         let primitive = match region {
             Region::Face => Primitive::Face(t),
             Region::Edge(k) => Primitive::Edge(mesh.triangle_edges[t as usize][k as usize]),

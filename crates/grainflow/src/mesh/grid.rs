@@ -2,7 +2,7 @@
 //! that depends on the triangles near it, not on the mesh's size.
 
 use super::Mesh;
-use super::contact::closest_point_on_triangle;
+use super::contact::closest_point_with_normal;
 use crate::math::Vec3;
 
 /// At most this many cells a triangle (on average): coarser cells where the mesh's bounding
@@ -78,6 +78,14 @@ impl TriangleGrid {
     /// Appends to `out`, ascending and each once, the triangles of `mesh` (the mesh this grid
     /// was made of) closer to `centre` than `reach` (m). `out` is cleared first.
     pub fn near(&self, mesh: &Mesh, centre: Vec3, reach: f64, out: &mut Vec<u32>) {
+        let mut with = Vec::new();
+        self.near_with_distances(mesh, centre, reach, &mut with);
+        out.clear();
+        out.extend(with.iter().map(|&(t, _)| t));
+    }
+
+    /// As [`near`](Self::near), each triangle with its distance from `centre`, m.
+    pub fn near_with_distances(&self, mesh: &Mesh, centre: Vec3, reach: f64, out: &mut Vec<(u32, f64)>) {
         out.clear();
         let lo = ((centre - Vec3::splat(reach) - self.lo) / self.cell).to_array();
         let hi = ((centre + Vec3::splat(reach) - self.lo) / self.cell).to_array();
@@ -89,21 +97,28 @@ impl TriangleGrid {
             }
             range[k] = (lo[k].max(0.0) as usize, (hi[k] as usize).min(self.dims[k] - 1));
         }
+        let one_cell = range.iter().all(|r| r.0 == r.1);
         for z in range[2].0..=range[2].1 {
             for y in range[1].0..=range[1].1 {
                 for x in range[0].0..=range[0].1 {
                     let c = (z * self.dims[1] + y) * self.dims[0] + x;
-                    out.extend_from_slice(
-                        &self.triangles[self.start[c] as usize..self.start[c + 1] as usize],
+                    out.extend(
+                        self.triangles[self.start[c] as usize..self.start[c + 1] as usize].iter().map(|&t| (t, 0.0)),
                     );
                 }
             }
         }
-        out.sort_unstable();
-        out.dedup();
-        out.retain(|&t| {
-            let q = closest_point_on_triangle(centre, mesh.corners(t)).point;
-            (centre - q).length_squared() < reach * reach
+        // A cell's triangles are ascending: from one cell they are already in order and once.
+        if !one_cell {
+            out.sort_unstable_by_key(|e| e.0);
+            out.dedup_by_key(|e| e.0);
+        }
+        let normals = mesh.normals();
+        out.retain_mut(|(t, d)| {
+            let q = closest_point_with_normal(centre, mesh.corners(*t), normals[*t as usize]).point;
+            let d2 = (centre - q).length_squared();
+            *d = d2.sqrt();
+            d2 < reach * reach
         });
     }
 
@@ -116,7 +131,7 @@ impl TriangleGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::MeshTransform;
+    use crate::mesh::{MeshTransform, closest_point_on_triangle};
 
     /// A flat n×n grid of squares (two triangles each) on z = 0 over [0, 1]².
     fn floor(n: usize) -> Mesh {

@@ -46,15 +46,32 @@ pub(crate) struct MeshHistory {
     pub h: Vec3,
 }
 
+/// A candidate triangle of a particle: the mesh, the triangle, and its distance from the
+/// particle's centre when the candidates were found (in the mesh's pose as loaded), m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Candidate {
+    mesh: u32,
+    triangle: u32,
+    distance: f64,
+}
+
 /// What the mesh stage keeps between evaluations.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct MeshStage {
     grids: Vec<TriangleGrid>,
     /// The neighbour-list build the candidates were found for.
     built_for: Option<u64>,
-    /// Candidates of slot i: `candidates[start[i]..start[i + 1]]`, (mesh, triangle) ascending.
+    /// The particle count they were found for.
+    built_n: usize,
+    /// The slots with candidates, ascending.
+    active: Vec<u32>,
+    /// Where each active slot's centre was when its candidates were found (the neighbour
+    /// list's reference position), m.
+    centres: Vec<Vec3>,
+    /// Candidates of active slot k: `candidates[start[k]..start[k + 1]]`, by mesh, then by
+    /// distance.
     start: Vec<u32>,
-    candidates: Vec<(u32, u32)>,
+    candidates: Vec<Candidate>,
     /// The histories of the last evaluation's contacts, by (slot, mesh, triangle).
     pub history: Vec<MeshHistory>,
     /// Each mesh's pose when the candidates were found.
@@ -94,8 +111,9 @@ impl MeshStage {
     /// Heap bytes of the stage.
     pub(crate) fn heap_bytes(&self) -> usize {
         self.grids.iter().map(TriangleGrid::heap_bytes).sum::<usize>()
-            + self.start.capacity() * 4
-            + self.candidates.capacity() * 8
+            + (self.start.capacity() + self.active.capacity()) * 4
+            + self.centres.capacity() * 24
+            + self.candidates.capacity() * std::mem::size_of::<Candidate>()
             + self.history.capacity() * std::mem::size_of::<MeshHistory>()
             + self.loads.capacity() * std::mem::size_of::<MeshLoadPart>()
     }
@@ -105,14 +123,22 @@ impl MeshStage {
         self.anchors.get(m).copied().unwrap_or(Anchor::START)
     }
 
-    /// Fills `contacts` with the contacts of slot `i` (centre `centre`, radius `r`) with mesh
-    /// `m` in pose `pose` among its candidates, found within `r + reach` (`reach`: a cohesive
-    /// law's pull-off distance, else 0; a contact's overlap with the radius is its
-    /// `overlap − reach`); normals and points placed in the pose. `triangles` is scratch.
+    /// True if the candidates are those of `n` particles.
+    fn ready(&self, n: usize) -> bool {
+        self.built_for.is_some() && self.built_n == n
+    }
+
+    /// Fills `contacts` with the contacts of active slot `k` (centre `centre`, radius `r`)
+    /// with mesh `m` in pose `pose` among its candidates, found within `r + reach` (`reach`: a
+    /// cohesive law's pull-off distance, else 0; a contact's overlap with the radius is its
+    /// `overlap − reach`); normals and points placed in the pose. Only the candidates that
+    /// may be within reach are tested: a triangle at distance d₀ from where the centre was
+    /// (both in the mesh's pose as loaded) is at least d₀ − |moved| from it now.
+    /// `triangles` is scratch.
     #[allow(clippy::too_many_arguments)]
     fn contacts_of(
         &self,
-        i: usize,
+        k: usize,
         (m, mesh, pose): (usize, &Mesh, &Pose),
         centre: Vec3,
         r: f64,
@@ -120,20 +146,31 @@ impl MeshStage {
         triangles: &mut Vec<u32>,
         contacts: &mut Vec<MeshContact>,
     ) {
-        let cands = &self.candidates[self.start[i] as usize..self.start[i + 1] as usize];
-        triangles.clear();
-        triangles.extend(cands.iter().filter(|c| c.0 == m as u32).map(|c| c.1));
+        let cands = &self.candidates[self.start[k] as usize..self.start[k + 1] as usize];
+        let first = cands.partition_point(|c| c.mesh < m as u32);
+        let mine = &cands[first..];
         contacts.clear();
+        if mine.first().is_none_or(|c| c.mesh != m as u32) {
+            return;
+        }
+        let (y, was) = if pose.is_identity() {
+            (centre, self.centres[k])
+        } else {
+            (pose.unapply(centre), self.candidate_poses[m].unapply(self.centres[k]))
+        };
+        let within = r + reach;
+        // The rounding of the distances and of the move, far below this margin.
+        let limit = within + (y - was).length() + 1e-9 * within;
+        triangles.clear();
+        triangles.extend(mine.iter().take_while(|c| c.mesh == m as u32 && c.distance <= limit).map(|c| c.triangle));
         if triangles.is_empty() {
             return;
         }
-        if pose.is_identity() {
-            sphere_contacts(mesh, triangles, centre, r + reach, contacts);
-        } else {
-            sphere_contacts(mesh, triangles, pose.unapply(centre), r + reach, contacts);
-            for k in contacts.iter_mut() {
-                k.normal = pose.turn(k.normal);
-                k.point = pose.apply(k.point);
+        sphere_contacts(mesh, triangles, y, within, contacts);
+        if !pose.is_identity() {
+            for c in contacts.iter_mut() {
+                c.normal = pose.turn(c.normal);
+                c.point = pose.apply(c.point);
             }
         }
     }
@@ -296,18 +333,19 @@ impl Simulation {
         mut visit: impl FnMut(usize, usize, &MeshContact, f64, &crate::contact::ContactCoeffs),
     ) {
         let (st, p) = (&self.mesh_stage, &self.particles);
-        if self.meshes.is_empty() || st.start.len() != p.len() + 1 {
+        if self.meshes.is_empty() || !st.ready(p.len()) {
             return;
         }
         let reaches = self.law.normal.reaches();
         let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose(m)).collect();
         let (mut contacts, mut triangles) = (Vec::new(), Vec::new());
-        for i in 0..p.len() {
+        for (a, &i) in st.active.iter().enumerate() {
+            let i = i as usize;
             for (m, MeshWall { mesh, material, .. }) in self.meshes.iter().enumerate() {
                 let c = self.coeffs.wall(p.phase[i] as usize, *material);
                 let reach = if reaches { c.pull_off } else { 0.0 };
                 st.contacts_of(
-                    i,
+                    a,
                     (m, mesh, &poses[m]),
                     p.position[i],
                     p.radius[i],
@@ -316,7 +354,7 @@ impl Simulation {
                     &mut contacts,
                 );
                 for k in &contacts {
-                    let overlap = k.overlap - reach;
+                    let overlap = p.radius[i] - k.distance;
                     let formed = || {
                         st.history
                             .binary_search_by_key(&(i as u32, m as u32, k.triangle), |h| {
@@ -404,7 +442,10 @@ impl Simulation {
     }
 
     /// The candidates of every slot, found again if the neighbour list was rebuilt since or a
-    /// mesh (in its poses at time `t`) moved more than half the skin since.
+    /// mesh (in its poses `poses`) moved more than half the skin since. A slot's candidates are
+    /// the triangles within its radius, the skin and the law's pull-off distance of its centre
+    /// (taken at the list's reference position, which no particle leaves by half the skin
+    /// before the next rebuild): so none in reach is missed before they are found again.
     fn update_mesh_candidates(&mut self, poses: &[Pose]) {
         let build = self.neighbors.stats().builds;
         let skin = self.neighbors.skin();
@@ -418,7 +459,7 @@ impl Simulation {
                     }
                 })
         };
-        if st.built_for == Some(build) && st.start.len() == self.particles.len() + 1 && !moved() {
+        if st.built_for == Some(build) && st.ready(self.particles.len()) && !moved() {
             return;
         }
         let st = &mut self.mesh_stage;
@@ -427,24 +468,32 @@ impl Simulation {
             st.grids = self.meshes.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
         }
         let p = &self.particles;
-        // Around the positions the neighbour list was built for: no particle has moved more
-        // than half the skin from them.
         let reference = self.neighbors.reference();
         let centres = if reference.len() == p.len() { reference } else { &p.position };
+        st.active.clear();
+        st.centres.clear();
         st.start.clear();
         st.candidates.clear();
         st.start.push(0);
         let mut near = Vec::new();
         for (i, &x) in centres.iter().enumerate() {
+            let before = st.candidates.len();
             for (m, (wall, grid)) in self.meshes.iter().zip(&st.grids).enumerate() {
                 let y = if poses[m].is_identity() { x } else { poses[m].unapply(x) };
-                grid.near(&wall.mesh, y, p.radius[i] + skin, &mut near);
-                st.candidates.extend(near.iter().map(|&t| (m as u32, t)));
+                let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
+                grid.near_with_distances(&wall.mesh, y, p.radius[i] + skin + reach, &mut near);
+                near.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+                st.candidates.extend(near.iter().map(|&(t, distance)| Candidate { mesh: m as u32, triangle: t, distance }));
             }
-            st.start.push(st.candidates.len() as u32);
+            if st.candidates.len() > before {
+                st.active.push(i as u32);
+                st.centres.push(x);
+                st.start.push(st.candidates.len() as u32);
+            }
         }
         st.candidate_poses = poses.to_vec();
         st.built_for = Some(build);
+        st.built_n = p.len();
     }
 
     /// Adds every particle's mesh-contact loads, rounded to `quanta`, to the force and torque
@@ -471,9 +520,14 @@ impl Simulation {
         let (mut contacts, mut triangles): (Vec<MeshContact>, Vec<u32>) = (Vec::new(), Vec::new());
         let mut claimed: Vec<bool> = Vec::new();
         let mut o = 0;
-        for i in 0..self.particles.len() {
+        for a in 0..self.mesh_stage.active.len() {
+            let i = self.mesh_stage.active[a] as usize;
+            // Histories are kept only for contacts, which only slots with candidates have.
+            while o < old.len() && (old[o].slot as usize) < i {
+                o += 1;
+            }
             let o0 = o;
-            while o < old.len() && old[o].slot as usize <= i {
+            while o < old.len() && old[o].slot as usize == i {
                 o += 1;
             }
             let mine = &old[o0..o];
@@ -483,17 +537,18 @@ impl Simulation {
                 let p = &self.particles;
                 let c = self.coeffs.wall(p.phase[i] as usize, *material);
                 let reach = if N::REACHES { c.pull_off } else { 0.0 };
+                let radius = p.radius[i];
                 self.mesh_stage.contacts_of(
-                    i,
+                    a,
                     (m, mesh, &poses[m]),
                     p.position[i],
-                    p.radius[i],
+                    radius,
                     reach,
                     &mut triangles,
                     &mut contacts,
                 );
                 for k in contacts.iter() {
-                    let overlap = k.overlap - reach;
+                    let overlap = radius - k.distance;
                     let own = mine.iter().position(|h| h.mesh == m as u32 && h.triangle == k.triangle);
                     if !N::wall_touching(overlap, reach, own.is_some()) {
                         continue;
