@@ -495,3 +495,159 @@ fn rolling_and_sliding_across_seams_feels_the_plane() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// 3. A closed box of triangles.
+
+/// The faces of the box [0, L]³ with `m` × `m` squares a face, each split along a random
+/// diagonal, normals inwards: 12·m² triangles. Every coordinate is one of L·(i/m), the same
+/// bits on every face, so the faces weld along the box's edges, and each face lies exactly in
+/// its coordinate plane.
+fn box_mesh(l: f64, m: usize, seed: u64) -> Mesh {
+    let mut rng = Rng::new(seed);
+    // l·(i/m), not l·i/m: the far faces then lie at l exactly, where the plane walls are.
+    let c: Vec<f64> = (0..=m).map(|i| l * (i as f64 / m as f64)).collect();
+    let id = |i: usize, j: usize, k: usize| ((k * (m + 1) + j) * (m + 1) + i) as u32;
+    let vertices: Vec<Vec3> = (0..(m + 1).pow(3))
+        .map(|n| v(c[n % (m + 1)], c[(n / (m + 1)) % (m + 1)], c[n / (m + 1).pow(2)]))
+        .collect();
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        // (b, c) cyclic after the axis: e_b × e_c = e_axis, the inward normal of the face at 0;
+        // the face at L turns round by taking them the other way.
+        let (b, cc) = ((axis + 1) % 3, (axis + 2) % 3);
+        for (side, (u, w)) in [(0, (b, cc)), (m, (cc, b))] {
+            let at = |p: usize, q: usize| {
+                let mut ijk = [0; 3];
+                ijk[axis] = side;
+                ijk[u] = p;
+                ijk[w] = q;
+                id(ijk[0], ijk[1], ijk[2])
+            };
+            for p in 0..m {
+                for q in 0..m {
+                    let (a, b1, c1, d) = (at(p, q), at(p + 1, q), at(p + 1, q + 1), at(p, q + 1));
+                    if rng.uniform() < 0.5 {
+                        triangles.extend([[a, b1, c1], [a, c1, d]]);
+                    } else {
+                        triangles.extend([[a, b1, d], [b1, c1, d]]);
+                    }
+                }
+            }
+        }
+    }
+    let mesh = mesh("box", &vertices, &triangles);
+    let inward = |t: u32| {
+        let centroid = mesh.corners(t).iter().sum::<Vec3>() / 3.0;
+        mesh.normals()[t as usize].dot(Vec3::splat(l / 2.0) - centroid) > 0.0
+    };
+    assert!((0..mesh.triangle_count() as u32).all(inward), "the box's normals must point inwards");
+    mesh
+}
+
+/// Particles in the box [0, L]³: one in each corner and one at the middle of each edge,
+/// touching the walls there (overlap 1e-3 of the radius); four on the floor over the faces'
+/// seams (two over vertices, two over edges of the subdivision); the rest at random, apart;
+/// radii 0.97R to R. All but those in the corners and on the edges with random velocities of
+/// 0.3 m/s and spins.
+fn box_particles(l: f64, m: usize, count: usize, seed: u64) -> Vec<ParticleInit> {
+    let mut rng = Rng::new(seed);
+    let radius = |rng: &mut Rng| R * rng.range(0.97, 1.0);
+    let mut placed: Vec<(Vec3, f64)> = Vec::new();
+    let near = |r: f64| r * (1.0 - 1e-3);
+    let wall_at = |s: usize, r: f64| if s == 0 { near(r) } else { l - near(r) };
+    for corner in 0..8 {
+        let r = radius(&mut rng);
+        placed.push((v(wall_at(corner & 1, r), wall_at((corner >> 1) & 1, r), wall_at(corner >> 2, r)), r));
+    }
+    for axis in 0..3 {
+        for s in 0..4 {
+            let r = radius(&mut rng);
+            let mut x = [l / 2.0; 3];
+            x[(axis + 1) % 3] = wall_at(s & 1, r);
+            x[(axis + 2) % 3] = wall_at(s >> 1, r);
+            placed.push((Vec3::from_array(x), r));
+        }
+    }
+    let h = l / m as f64;
+    for (x, y) in [(h, h), (2.0 * h, 2.0 * h), (1.5 * h, h), (2.0 * h, 0.5 * h)] {
+        let r = radius(&mut rng);
+        placed.push((v(x, y, near(r)), r));
+    }
+    while placed.len() < count {
+        let r = radius(&mut rng);
+        let x = rng.in_box(Vec3::splat(R), Vec3::splat(l - R));
+        if placed.iter().all(|&(y, s)| (x - y).length() > 1.05 * (r + s)) {
+            placed.push((x, r));
+        }
+    }
+    for (k, a) in placed.iter().enumerate() {
+        for b in &placed[..k] {
+            assert!((a.0 - b.0).length() > a.1 + b.1, "particles {a:?} and {b:?} overlap");
+        }
+    }
+    placed
+        .into_iter()
+        .enumerate()
+        .map(|(k, (x, r))| {
+            // Those in the corners and along the edges start at rest (the lower ones stay there,
+            // hit by the others); the rest move.
+            let moving = k >= 20;
+            let u = if moving { 0.3 } else { 0.0 };
+            let mut p = particle(k as u32 + 1, 0, r, DENSITY, x, u * rng.unit());
+            p.omega = (u * 1000.0 * rng.uniform()) * rng.unit();
+            p
+        })
+        .collect()
+}
+
+/// Forty beads bouncing about a closed 6 mm box of 108 triangles (each face 3 × 3 squares), in
+/// its corners, along its edges and over its seams from the start, under gravity tilted into
+/// a corner where they settle, for LSD and Hertz: the total energy (kinetic, potential, elastic) is that of the same box of six
+/// plane walls step for step, and so are the contact count and every particle's state.
+/// Every face lies exactly in its coordinate plane, so every contact is a plane's to the bit
+/// or to one rounding (module doc), and a corner's three contacts are its three planes'. In a
+/// bed of colliding beads a difference of an ulp grows with every collision, so the tolerance,
+/// 1e-12 of the total energy and of the state's scales (L, 0.3 m/s), allows a few ulps grown
+/// over a few collisions, not a mesh contact that differs from its plane's.
+#[test]
+fn a_closed_box_of_triangles_holds_beads_as_six_planes() {
+    let (l, m) = (0.006, 3);
+    let mesh = box_mesh(l, m, 3);
+    assert_eq!(mesh.triangle_count(), 12 * m * m);
+    assert_eq!(mesh.bounds(), (Vec3::ZERO, Vec3::splat(l)));
+    let init = box_particles(l, m, 40, 11);
+    for (what, law, params) in laws().into_iter().take(2) {
+        let planes = Wall::domain_box(Vec3::ZERO, Vec3::splat(l), 0);
+        // Gravity tilted towards the corner at the origin, so that the beads settle into it and
+        // along its three edges, pressed against two or three faces at once.
+        let g = 9.81 * v(-0.35, -0.25, -1.0).normalize();
+        let (mut plane, mut boxed) = pair_of_runs((law, params), planes, vec![mesh.clone()], g, 2e-6, &init);
+        let grid = TriangleGrid::new(&mesh, 2.0 * R);
+        let (mut worst, mut worst_state, mut on_edges, mut in_corners) = (0.0f64, 0.0f64, 0, 0);
+        let e0 = plane.diagnostics().total_energy();
+        for _ in 0..50_000 {
+            plane.step();
+            boxed.step();
+            let (a, b) = (plane.diagnostics(), boxed.diagnostics());
+            assert_eq!(a.contacts, b.contacts, "{what}: contact counts differ at step {}", a.step);
+            worst = worst.max((a.total_energy() - b.total_energy()).abs() / a.total_energy().abs());
+            worst_state = worst_state.max(differ(&plane, &boxed, l, 0.3));
+            // Beads touching two faces (along an edge of the box) and three (in a corner).
+            let q = boxed.particles();
+            for i in 0..q.len() {
+                let faces = touched(&mesh, &grid, q.position[i], q.radius[i]).len();
+                on_edges += (faces >= 2) as usize;
+                in_corners += (faces == 3) as usize;
+            }
+        }
+        let e1 = plane.diagnostics().total_energy();
+        println!(
+            "{what}: energy {e0:e} → {e1:e} J; {on_edges} bead-steps on edges, {in_corners} in corners; \
+             worst energy {worst:e}, state {worst_state:e}"
+        );
+        assert!(e1 < 0.8 * e0, "{what}: the beads did not collide much");
+        assert!(on_edges > 20_000 && in_corners > 5_000, "{what}: too few contacts on edges and corners");
+        assert!(worst < 1e-12 && worst_state < 1e-12, "{what}: {worst:e} {worst_state:e}");
+    }
+}
