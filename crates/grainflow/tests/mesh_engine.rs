@@ -770,3 +770,100 @@ fn a_concave_corner_of_triangles_is_two_or_three_planes() {
     }
     println!("worst relative differences: {}", report.join(", "));
 }
+
+/// A bead at rest on a convex edge feels exactly one contact, with the edge, whatever the
+/// triangles around it: on the outer edge of a step (the top z = 0 and the side x = 0 of the
+/// block [−L, 0] × [0, L] × [−L, 0], 4 × 4 squares a face, so that the edge is four segments),
+/// over the middle of a segment and exactly over a vertex between two, at angles from the top
+/// (0°) to the side (90°); and on the ridge of a roof of 26.6° slopes. The closed form of one
+/// contact with the edge: n = (c − q)/|c − q|, q the closest point of the edge's line, overlap
+/// δ = R − |c − q|, force k_n·δ (LSD) or K_n·δ^1.5 (Hertz) along n, no torque (at rest, no
+/// tangential force). Tolerance: each load component is rounded to the sums' quantum, at most
+/// 2⁻⁴⁰ of the peak bound (1 + μ)|F|, so |F − F_closed| ≤ 2⁻⁴⁰(1 + μ)|F|·√3/2, plus the closed
+/// form's own rounding (δ from c − q, a few ε·R/δ ≤ 1e-14 relative). After one step the
+/// velocity, (F₀ + F₁)·Δt/2m, is along n too: the bead moves along n, keeping q its closest
+/// point, so to the rounding of n (1e-12).
+#[test]
+fn a_bead_on_a_convex_edge_feels_one_contact_along_the_edge_normal() {
+    let l = 0.004;
+    let step = faces(v(-l, 0.0, -l), v(0.0, l, 0.0), 4, 9, &[(2, true, false), (0, true, false)]);
+    // The roof: ridge y from 0 to L at x = 0, z = h; eaves at x = ±2h, z = 0; 4 squares a slope
+    // along y, so the ridge is four segments too.
+    let h = 0.001;
+    let mut roof_v = Vec::new();
+    for j in 0..=4 {
+        let y = l * (j as f64 / 4.0);
+        roof_v.extend([v(-2.0 * h, y, 0.0), v(0.0, y, h), v(2.0 * h, y, 0.0)]);
+    }
+    let mut roof_t = Vec::new();
+    for j in 0..4u32 {
+        let (a, b) = (3 * j, 3 * (j + 1));
+        roof_t.extend([[a, a + 1, b + 1], [a, b + 1, b], [a + 1, a + 2, b + 2], [a + 1, b + 2, b + 1]]);
+    }
+    let roof = mesh("roof", &roof_v, &roof_t);
+    for m in [&step, &roof] {
+        let convex = m.edges().iter().filter(|e| e.kind == grainflow::mesh::EdgeKind::Convex).count();
+        assert_eq!(convex, 4, "{}: the edge must be four convex segments", m.name());
+    }
+    // Each case: the mesh, the ridge point q and the unit directions (on the edge's normal plane)
+    // between which the centre is put: the faces' normals.
+    let slope = v(-1.0, 0.0, 2.0).normalize();
+    let cases = [
+        ("step", &step, v(0.0, 0.0, 0.0), Vec3::Z, Vec3::X),
+        ("roof", &roof, v(0.0, 0.0, h), slope, v(-slope.x, 0.0, slope.z)),
+    ];
+    let mut worst = (0.0f64, 0.0f64);
+    for (what, law, params) in laws().into_iter().take(2) {
+        for &(name, mesh, q0, from, to) in &cases {
+            for y in [0.3 * l, 0.5 * l] {
+                for t in [0.0, 0.1, 0.5, 0.77, 1.0] {
+                    // On the arc from one face's normal to the other's.
+                    let n = (from * (1.0 - t) + to * t).normalize();
+                    let q = q0 + v(0.0, y, 0.0);
+                    for rho in [0.5 * R, 0.95 * R] {
+                        let c = q + rho * n;
+                        let init = [bead(c, Vec3::ZERO, Vec3::ZERO)];
+                        let mut sim = simulation(
+                            setup(law, params, vec![], vec![mesh.clone()], Vec3::ZERO, 1e-6),
+                            &init,
+                        );
+                        sim.compute_forces();
+                        let d = sim.diagnostics();
+                        assert_eq!(d.contacts, 1, "{what} on the {name} at y = {y}, t = {t}, ρ = {rho}");
+                        // The closed form, from the centre as stored.
+                        let c = sim.particles().position[0];
+                        let q = v(q0.x, c.y, q0.z);
+                        let n = (c - q) / (c - q).length();
+                        let delta = R - (c - q).length();
+                        let coeffs = sim.coefficients().wall(0, 0);
+                        let f = if law.normal == NormalModel::Hertz {
+                            coeffs.kn * delta.powf(1.5)
+                        } else {
+                            coeffs.kn * delta
+                        };
+                        let p = sim.particles();
+                        let tol = 2f64.powi(-40) * (1.0 + coeffs.mu) * f + 1e-14 * f;
+                        let err = (p.force[0] - f * n).length();
+                        assert!(err <= tol, "{what} on the {name}: force {} against {}", p.force[0], f * n);
+                        assert!(
+                            p.torque[0].length() <= tol * R,
+                            "{what} on the {name}: torque {}",
+                            p.torque[0]
+                        );
+                        worst.0 = worst.0.max(err / f);
+                        sim.step();
+                        assert_eq!(sim.diagnostics().contacts, 1, "{what} on the {name} after a step");
+                        let u = sim.particles().velocity[0];
+                        let off = u.cross(n).length() / u.length();
+                        assert!(
+                            off <= 1e-12 && u.dot(n) > 0.0,
+                            "{what} on the {name}: velocity {u} against n = {n}"
+                        );
+                        worst.1 = worst.1.max(off);
+                    }
+                }
+            }
+        }
+    }
+    println!("worst: force {:e} of |F|, velocity off the normal {:e}", worst.0, worst.1);
+}
