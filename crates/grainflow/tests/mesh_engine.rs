@@ -342,7 +342,7 @@ fn impact(
 }
 
 /// A bead hitting the random floor — anywhere, exactly on an edge (long slivers among them),
-/// exactly on a vertex (where up to 100 sliver triangles meet) — rebounds as off the plane
+/// exactly on a vertex (the strips' among them, where slivers meet) — rebounds as off the plane
 /// z = 0: the same state all through the impact and the same velocity and spin after it, to
 /// 1e-12 of their scales (see the module doc: the floor is exactly planar, so every contact is
 /// the plane's to one rounding), for every law.
