@@ -10,8 +10,9 @@
 //! really touched:
 //!
 //! 1. Each candidate triangle gives its closest point to the centre and its region
-//!    ([`closest_point_on_triangle`]), i.e. a primitive; one closer than the radius is a
-//!    candidate contact. A primitive reported by several triangles counts once; its geometry
+//!    ([`closest_point_on_triangle`]), i.e. a primitive; one no farther than the radius is a
+//!    candidate contact (a sphere exactly touching, at overlap 0, is in contact, as with a
+//!    plane wall). A primitive reported by several triangles counts once; its geometry
 //!    is computed from the primitive itself, not from the triangle that reported it.
 //! 2. Face contacts are kept. An edge contact is kept only if no triangle on that edge has a
 //!    face contact; a vertex contact only if no triangle around the vertex has a face contact
@@ -92,7 +93,7 @@ pub enum Primitive {
 pub struct MeshContact {
     /// Unit normal from the contact point towards the sphere's centre.
     pub normal: Vec3,
-    /// Overlap δ = R − distance, m (> 0).
+    /// Overlap δ = R − distance, m (≥ 0).
     pub overlap: f64,
     /// The contact point on the mesh, m.
     pub point: Vec3,
@@ -246,7 +247,7 @@ fn accepted(mesh: &Mesh, kept: &[MeshContact], c: &MeshContact) -> bool {
     !kept.iter().any(|k| shadowed(k) || same(k))
 }
 
-/// The contact of the sphere with one primitive, if closer than the radius and (for an edge or
+/// The contact of the sphere with one primitive, if no farther than the radius and (for an edge or
 /// a vertex) in its normal cone.
 fn primitive_contact(mesh: &Mesh, primitive: Primitive, p: Vec3, r: f64) -> Option<MeshContact> {
     // (c − q)·w may exceed 0 by this much times |w| (rule 3).
@@ -304,7 +305,7 @@ fn plane_contact(mesh: &Mesh, t: u32, primitive: Primitive, p: Vec3, r: f64) -> 
     let n = mesh.normals[t as usize];
     let s = (p - mesh.vertices[mesh.triangles[t as usize][0] as usize]).dot(n);
     let distance = s.abs();
-    (distance < r).then(|| MeshContact {
+    (distance <= r).then(|| MeshContact {
         normal: if s >= 0.0 { n } else { -n },
         overlap: r - distance,
         point: p - s * n,
@@ -326,7 +327,7 @@ fn point_contact(
     distance: f64,
     r: f64,
 ) -> Option<MeshContact> {
-    (distance < r).then(|| MeshContact {
+    (distance <= r).then(|| MeshContact {
         // Closer than the coordinates' rounding, the direction of d is noise.
         normal: if distance > ROUNDING * mesh.extent { d / distance } else { mesh.normals[t as usize] },
         overlap: r - distance,
