@@ -83,7 +83,7 @@ fn setup(
         Integrator::VelocityVerlet,
         dt,
     );
-    cfg.meshes = meshes.into_iter().map(|mesh| MeshWall { mesh, material: 0 }).collect();
+    cfg.meshes = meshes.into_iter().map(|mesh| MeshWall::fixed(mesh, 0)).collect();
     cfg.gravity = gravity;
     cfg
 }
@@ -388,12 +388,10 @@ fn a_bead_exactly_touching_the_floor_is_in_contact_as_with_the_plane() {
     }
 }
 
-/// The same for JKR, whose mesh contacts miss the exact touch: the mesh stage finds them out to
-/// the radius plus the pull-off distance and forms the overlap as (R + δ_c − d) − δ_c, which
-/// rounds to a few 1e-20 m either side of the plane's R − d = 0, and a contact not yet formed
-/// is refused at a negative overlap. Harmless but for a bead placed exactly touching.
+/// The same for JKR: the mesh stage finds its contacts out to the radius plus the pull-off
+/// distance, but forms the overlap as R − d, as the plane does (not (R + δ_c − d) − δ_c, which
+/// rounds either side of 0 at the exact touch and would refuse a contact not yet formed).
 #[test]
-#[ignore = "the mesh stage (simulation/meshes.rs) rounds a JKR contact's overlap at the exact touch"]
 fn a_jkr_bead_exactly_touching_the_floor_is_in_contact_as_with_the_plane() {
     let (what, law, params) = laws().pop().unwrap();
     assert_eq!(law.normal, NormalModel::Jkr);

@@ -103,7 +103,9 @@ impl TriangleGrid {
                 for x in range[0].0..=range[0].1 {
                     let c = (z * self.dims[1] + y) * self.dims[0] + x;
                     out.extend(
-                        self.triangles[self.start[c] as usize..self.start[c + 1] as usize].iter().map(|&t| (t, 0.0)),
+                        self.triangles[self.start[c] as usize..self.start[c + 1] as usize]
+                            .iter()
+                            .map(|&t| (t, 0.0)),
                     );
                 }
             }

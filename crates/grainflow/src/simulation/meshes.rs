@@ -162,7 +162,9 @@ impl MeshStage {
         // The rounding of the distances and of the move, far below this margin.
         let limit = within + (y - was).length() + 1e-9 * within;
         triangles.clear();
-        triangles.extend(mine.iter().take_while(|c| c.mesh == m as u32 && c.distance <= limit).map(|c| c.triangle));
+        triangles.extend(
+            mine.iter().take_while(|c| c.mesh == m as u32 && c.distance <= limit).map(|c| c.triangle),
+        );
         if triangles.is_empty() {
             return;
         }
@@ -483,7 +485,11 @@ impl Simulation {
                 let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
                 grid.near_with_distances(&wall.mesh, y, p.radius[i] + skin + reach, &mut near);
                 near.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-                st.candidates.extend(near.iter().map(|&(t, distance)| Candidate { mesh: m as u32, triangle: t, distance }));
+                st.candidates.extend(near.iter().map(|&(t, distance)| Candidate {
+                    mesh: m as u32,
+                    triangle: t,
+                    distance,
+                }));
             }
             if st.candidates.len() > before {
                 st.active.push(i as u32);
