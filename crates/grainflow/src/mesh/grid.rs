@@ -5,10 +5,40 @@ use super::Mesh;
 use super::contact::closest_point_with_normal;
 use crate::math::Vec3;
 
-/// At most this many cells a triangle (on average): coarser cells where the mesh's bounding
-/// box holds few triangles (a large plate of two triangles), so the grid's memory stays
-/// proportional to the mesh.
+/// At most this many cells a triangle (on average), or [`MIN_CELL_BUDGET`] cells: coarser
+/// cells where the mesh's bounding box holds few triangles (a large plate of two triangles),
+/// so the grid's memory stays proportional to the mesh, but never coarser than a small fixed
+/// budget needs (a coarse cell hands every query the triangles of a large region).
 const CELLS_PER_TRIANGLE: usize = 8;
+/// The cells a grid may always have (256 KB of cell starts).
+const MIN_CELL_BUDGET: usize = 1 << 16;
+
+/// Which triangles a query of [`TriangleGrid::near_with_distances`] has met: a mark per
+/// triangle, the query's number, so that a triangle listed in several cells is tested once
+/// without sorting.
+#[derive(Debug, Clone, Default)]
+pub struct NearScratch {
+    seen: Vec<u32>,
+    epoch: u32,
+}
+
+impl NearScratch {
+    /// Heap bytes.
+    pub fn heap_bytes(&self) -> usize {
+        self.seen.capacity() * 4
+    }
+
+    /// The next query's mark, for a mesh of `n` triangles.
+    fn next(&mut self, n: usize) -> u32 {
+        if self.seen.len() != n || self.epoch == u32::MAX {
+            self.seen.clear();
+            self.seen.resize(n, 0);
+            self.epoch = 0;
+        }
+        self.epoch += 1;
+        self.epoch
+    }
+}
 
 /// A mesh's triangles binned in cubic cells: each cell lists the triangles whose bounding
 /// boxes meet it.
@@ -28,7 +58,7 @@ impl TriangleGrid {
     pub fn new(mesh: &Mesh, cell: f64) -> TriangleGrid {
         let (lo, hi) = mesh.bounds();
         let span = (hi - lo).max(Vec3::splat(0.0));
-        let budget = (CELLS_PER_TRIANGLE * mesh.triangle_count()).max(64) as f64;
+        let budget = (CELLS_PER_TRIANGLE * mesh.triangle_count()).max(MIN_CELL_BUDGET) as f64;
         let mut cell = if cell.is_finite() && cell > 0.0 { cell } else { span.max_element().max(1.0) };
         let count = |c: f64| span.to_array().map(|s| (s / c).floor() as usize + 1);
         while count(cell).iter().map(|&n| n as f64).product::<f64>() > budget {
@@ -79,13 +109,22 @@ impl TriangleGrid {
     /// was made of) closer to `centre` than `reach` (m). `out` is cleared first.
     pub fn near(&self, mesh: &Mesh, centre: Vec3, reach: f64, out: &mut Vec<u32>) {
         let mut with = Vec::new();
-        self.near_with_distances(mesh, centre, reach, &mut with);
+        self.near_with_distances(mesh, centre, reach, &mut NearScratch::default(), &mut with);
         out.clear();
         out.extend(with.iter().map(|&(t, _)| t));
+        out.sort_unstable();
     }
 
-    /// As [`near`](Self::near), each triangle with its distance from `centre`, m.
-    pub fn near_with_distances(&self, mesh: &Mesh, centre: Vec3, reach: f64, out: &mut Vec<(u32, f64)>) {
+    /// As [`near`](Self::near), each triangle with its distance from `centre` (m), in no
+    /// particular order; `scratch` marks the triangles already met (kept between calls).
+    pub fn near_with_distances(
+        &self,
+        mesh: &Mesh,
+        centre: Vec3,
+        reach: f64,
+        scratch: &mut NearScratch,
+        out: &mut Vec<(u32, f64)>,
+    ) {
         out.clear();
         let lo = ((centre - Vec3::splat(reach) - self.lo) / self.cell).to_array();
         let hi = ((centre + Vec3::splat(reach) - self.lo) / self.cell).to_array();
@@ -97,31 +136,34 @@ impl TriangleGrid {
             }
             range[k] = (lo[k].max(0.0) as usize, (hi[k] as usize).min(self.dims[k] - 1));
         }
-        let one_cell = range.iter().all(|r| r.0 == r.1);
+        let epoch = scratch.next(mesh.triangle_count());
+        let normals = mesh.normals();
         for z in range[2].0..=range[2].1 {
             for y in range[1].0..=range[1].1 {
                 for x in range[0].0..=range[0].1 {
                     let c = (z * self.dims[1] + y) * self.dims[0] + x;
-                    out.extend(
-                        self.triangles[self.start[c] as usize..self.start[c + 1] as usize]
-                            .iter()
-                            .map(|&t| (t, 0.0)),
-                    );
+                    for &t in &self.triangles[self.start[c] as usize..self.start[c + 1] as usize] {
+                        let seen = &mut scratch.seen[t as usize];
+                        if *seen == epoch {
+                            continue;
+                        }
+                        *seen = epoch;
+                        let corners = mesh.corners(t);
+                        let n = normals[t as usize];
+                        // The distance to the triangle's plane bounds the distance to the
+                        // triangle: most triangles of the cells are out of reach of their plane.
+                        if (centre - corners[0]).dot(n).abs() >= reach {
+                            continue;
+                        }
+                        let q = closest_point_with_normal(centre, corners, n).point;
+                        let d2 = (centre - q).length_squared();
+                        if d2 < reach * reach {
+                            out.push((t, d2.sqrt()));
+                        }
+                    }
                 }
             }
         }
-        // A cell's triangles are ascending: from one cell they are already in order and once.
-        if !one_cell {
-            out.sort_unstable_by_key(|e| e.0);
-            out.dedup_by_key(|e| e.0);
-        }
-        let normals = mesh.normals();
-        out.retain_mut(|(t, d)| {
-            let q = closest_point_with_normal(centre, mesh.corners(*t), normals[*t as usize]).point;
-            let d2 = (centre - q).length_squared();
-            *d = d2.sqrt();
-            d2 < reach * reach
-        });
     }
 
     /// Heap bytes of the grid.
@@ -182,6 +224,6 @@ mod tests {
     fn cells_stay_proportional_to_the_triangles() {
         let mesh = floor(1);
         let grid = TriangleGrid::new(&mesh, 1e-6);
-        assert!(grid.dims.iter().product::<usize>() <= CELLS_PER_TRIANGLE * 2 * 64);
+        assert!(grid.dims.iter().product::<usize>() <= MIN_CELL_BUDGET);
     }
 }

@@ -28,6 +28,7 @@ use crate::contact::pair::{PairInput, wall_law};
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::forces::{Peak, Quanta, Quantum, max_peak};
 use crate::math::Vec3;
+use crate::mesh::grid::NearScratch;
 use crate::mesh::motion::Anchor;
 use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, TriangleGrid, sphere_contacts};
 
@@ -59,15 +60,16 @@ struct Candidate {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct MeshStage {
     grids: Vec<TriangleGrid>,
-    /// The neighbour-list build the candidates were found for.
-    built_for: Option<u64>,
+    /// Whether the candidates are current (false: found afresh at the next evaluation).
+    built: bool,
     /// The particle count they were found for.
     built_n: usize,
     /// The slots with candidates, ascending.
     active: Vec<u32>,
-    /// Where each active slot's centre was when its candidates were found (the neighbour
-    /// list's reference position), m.
+    /// Where each slot's centre was when its candidates were found, m.
     centres: Vec<Vec3>,
+    /// Marks of the triangles met by a query, per mesh.
+    marks: Vec<NearScratch>,
     /// Candidates of active slot k: `candidates[start[k]..start[k + 1]]`, by mesh, then by
     /// distance.
     start: Vec<u32>,
@@ -113,6 +115,7 @@ impl MeshStage {
         self.grids.iter().map(TriangleGrid::heap_bytes).sum::<usize>()
             + (self.start.capacity() + self.active.capacity()) * 4
             + self.centres.capacity() * 24
+            + self.marks.iter().map(|m| m.heap_bytes()).sum::<usize>()
             + self.candidates.capacity() * std::mem::size_of::<Candidate>()
             + self.history.capacity() * std::mem::size_of::<MeshHistory>()
             + self.loads.capacity() * std::mem::size_of::<MeshLoadPart>()
@@ -125,7 +128,7 @@ impl MeshStage {
 
     /// True if the candidates are those of `n` particles.
     fn ready(&self, n: usize) -> bool {
-        self.built_for.is_some() && self.built_n == n
+        self.built && self.built_n == n
     }
 
     /// Fills `contacts` with the contacts of active slot `k` (centre `centre`, radius `r`)
@@ -153,10 +156,11 @@ impl MeshStage {
         if mine.first().is_none_or(|c| c.mesh != m as u32) {
             return;
         }
+        let was = self.centres[self.active[k] as usize];
         let (y, was) = if pose.is_identity() {
-            (centre, self.centres[k])
+            (centre, was)
         } else {
-            (pose.unapply(centre), self.candidate_poses[m].unapply(self.centres[k]))
+            (pose.unapply(centre), self.candidate_poses[m].unapply(was))
         };
         let within = r + reach;
         // The rounding of the distances and of the move, far below this margin.
@@ -186,7 +190,7 @@ impl MeshStage {
             k != u32::MAX
         });
         self.history.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
-        self.built_for = None;
+        self.built = false;
     }
 }
 
@@ -313,7 +317,7 @@ impl Simulation {
         if self.mesh_stage.anchors.iter().all(|a| *a == Anchor::START) {
             self.mesh_stage.anchors.clear();
         }
-        self.mesh_stage.built_for = None;
+        self.mesh_stage.built = false;
         Ok(())
     }
 
@@ -443,63 +447,98 @@ impl Simulation {
         v + w.cross(x - o) + wall.surface.velocity(x, normal)
     }
 
-    /// The candidates of every slot, found again if the neighbour list was rebuilt since or a
-    /// mesh (in its poses `poses`) moved more than half the skin since. A slot's candidates are
-    /// the triangles within its radius, the skin and the law's pull-off distance of its centre
-    /// (taken at the list's reference position, which no particle leaves by half the skin
-    /// before the next rebuild): so none in reach is missed before they are found again.
+    /// Finds the candidates again where they may have become incomplete. A slot's candidates
+    /// are the triangles within its radius, the law's pull-off distance and a margin S (the
+    /// neighbour skin) of its centre c, with each mesh in its pose of the last full search
+    /// (both in the mesh's pose as loaded). They hold every triangle in reach while the centre
+    /// has moved, relative to the mesh, by at most S: while |x − c| plus the mesh's move since
+    /// stays within S. So a slot whose centre moved too far is searched again (at its current
+    /// centre, with the meshes in the same poses), and all are when a mesh has moved S/2
+    /// (`poses`: the meshes now) or the slots changed.
     fn update_mesh_candidates(&mut self, poses: &[Pose]) {
-        let build = self.neighbors.stats().builds;
-        let skin = self.neighbors.skin();
+        let margin = self.neighbors.skin();
+        let n = self.particles.len();
         let st = &self.mesh_stage;
-        let moved = || {
-            st.candidate_poses.len() != poses.len()
-                || self.meshes.iter().zip(poses.iter().zip(&st.candidate_poses)).any(|(w, (now, then))| {
-                    w.motion.moves() && {
-                        let (lo, hi) = w.mesh.bounds();
-                        then.moved_bound(now, 0.5 * (lo + hi), 0.5 * (hi - lo).length()) > 0.5 * skin
-                    }
+        let mesh_moved = if st.candidate_poses.len() == poses.len() {
+            self.meshes
+                .iter()
+                .zip(poses.iter().zip(&st.candidate_poses))
+                .filter(|(w, _)| w.motion.moves())
+                .map(|(w, (now, then))| {
+                    let (lo, hi) = w.mesh.bounds();
+                    then.moved_bound(now, 0.5 * (lo + hi), 0.5 * (hi - lo).length())
                 })
+                .fold(0.0, f64::max)
+        } else {
+            f64::INFINITY
         };
-        if st.built_for == Some(build) && st.ready(self.particles.len()) && !moved() {
+        let full = !st.ready(n) || mesh_moved > 0.5 * margin;
+        let x = &self.particles.position;
+        let limit = (margin - mesh_moved).max(0.0).powi(2);
+        let stale = |i: usize| full || (x[i] - st.centres[i]).length_squared() > limit;
+        if !full && !(0..n).any(stale) {
             return;
         }
-        let st = &mut self.mesh_stage;
+        let stale: Vec<bool> = (0..n).map(stale).collect();
         if st.grids.len() != self.meshes.len() {
-            let cell = 2.0 * self.particles.max_radius() + skin;
-            st.grids = self.meshes.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
+            let cell = 2.0 * self.particles.max_radius() + margin;
+            self.mesh_stage.grids = self.meshes.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
         }
+        let st = &mut self.mesh_stage;
+        if full {
+            st.candidate_poses = poses.to_vec();
+            st.centres.clear();
+            st.centres.resize(n, Vec3::ZERO);
+        }
+        st.marks.resize_with(self.meshes.len(), NearScratch::default);
         let p = &self.particles;
-        let reference = self.neighbors.reference();
-        let centres = if reference.len() == p.len() { reference } else { &p.position };
-        st.active.clear();
-        st.centres.clear();
-        st.start.clear();
-        st.candidates.clear();
-        st.start.push(0);
+        let old_active = std::mem::take(&mut st.active);
+        let old_start = std::mem::take(&mut st.start);
+        let old = std::mem::take(&mut st.candidates);
+        let (mut active, mut start, mut candidates) = (
+            Vec::with_capacity(old_active.len()),
+            Vec::with_capacity(old_start.len()),
+            Vec::with_capacity(old.len()),
+        );
+        start.push(0);
         let mut near = Vec::new();
-        for (i, &x) in centres.iter().enumerate() {
-            let before = st.candidates.len();
-            for (m, (wall, grid)) in self.meshes.iter().zip(&st.grids).enumerate() {
-                let y = if poses[m].is_identity() { x } else { poses[m].unapply(x) };
-                let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
-                grid.near_with_distances(&wall.mesh, y, p.radius[i] + skin + reach, &mut near);
-                near.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-                st.candidates.extend(near.iter().map(|&(t, distance)| Candidate {
-                    mesh: m as u32,
-                    triangle: t,
-                    distance,
-                }));
+        let mut k = 0;
+        for i in 0..n {
+            let had = k < old_active.len() && old_active[k] as usize == i;
+            if !stale[i] {
+                if had {
+                    candidates.extend_from_slice(&old[old_start[k] as usize..old_start[k + 1] as usize]);
+                }
+            } else {
+                st.centres[i] = p.position[i];
+                for (m, (wall, grid)) in self.meshes.iter().zip(&st.grids).enumerate() {
+                    let pose = &st.candidate_poses[m];
+                    let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
+                    let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
+                    grid.near_with_distances(
+                        &wall.mesh,
+                        y,
+                        p.radius[i] + margin + reach,
+                        &mut st.marks[m],
+                        &mut near,
+                    );
+                    near.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+                    candidates.extend(near.iter().map(|&(t, distance)| Candidate {
+                        mesh: m as u32,
+                        triangle: t,
+                        distance,
+                    }));
+                }
             }
-            if st.candidates.len() > before {
-                st.active.push(i as u32);
-                st.centres.push(x);
-                st.start.push(st.candidates.len() as u32);
+            k += had as usize;
+            if candidates.len() > *start.last().unwrap_or(&0) as usize {
+                active.push(i as u32);
+                start.push(candidates.len() as u32);
             }
         }
-        st.candidate_poses = poses.to_vec();
-        st.built_for = Some(build);
-        st.built_n = p.len();
+        (st.active, st.start, st.candidates) = (active, start, candidates);
+        st.built = true;
+        st.built_n = n;
     }
 
     /// Adds every particle's mesh-contact loads, rounded to `quanta`, to the force and torque
