@@ -10,9 +10,9 @@
 # (OMP_NUM_THREADS=1), grainflow on 1 thread (-j 1), median of RUNS rounds in which each code
 # runs once, in turn, with grainflow ÷ LIGGGHTS (also round by round); the hopper's step time at
 # each mesh relative to the 520-triangle mesh, for both codes; where the step goes: grainflow's
-# mesh stage (all of its mesh-wall work: candidates, contacts, forces; from `perf record` of one
-# more run, the share of `Simulation::advance` under `mesh_loads`: `grainflow run` prints the
-# mesh time inside its "pairs" stage), LIGGGHTS's "Other" time (its fixes, mesh walls among
+# mesh stage (all of its mesh-wall work: candidates, contacts, forces; as `grainflow run`
+# prints it if its stages line has it, else from `perf record` of one more run: the share of
+# `Simulation::advance` under `mesh_loads`), LIGGGHTS's "Other" time (its fixes, mesh walls among
 # them); and, from the same state, both codes' translational kinetic energy at the end of the
 # timed window (different trajectories of a chaotic flow: a check of the physics, not a match).
 #
@@ -140,8 +140,12 @@ for c in $CASES; do
   n=$(lig_loop lig.$c.t1 | cut -d' ' -f2)
   ke_l=$(lig_ke lig.$c.t1)
   ke_g=$(awk -F, 'END {print $3}' gf.$c.t1/timeseries.csv)
-  share=-
-  if [ "$PERF" = 1 ]; then
+  # The mesh stage's share of the step: as `grainflow run` prints it, once its stages line has
+  # the meshes (the engine times them; the line printed walls, pairs … without them so far),
+  # else from perf.
+  share=$(awk '/^stages:/ {for(k=1;k<=NF;k++) if($k ~ /^mesh/) {p=$(k+3); gsub(/[(%),]/,"",p); print p}}' gf.$c.t1.log)
+  share=${share:--}
+  if [ "$share" = - ] && [ "$PERF" = 1 ]; then
     perf record -q -F 200 --call-graph dwarf,16384 -o perf.$c.data -- \
       $GF run $c.timed.toml -j 1 -q --restart gf.$c.warm/checkpoint.gfc --accept-changed-case --out gf.$c.perf > /dev/null 2>&1
     share=$(mesh_share perf.$c.data)
@@ -172,8 +176,8 @@ done
   echo
   echo "N: spheres in the timed run (LIGGGHTS's count at its end; grainflow has the same). Step time"
   echo "÷ 520 triangles: the hopper's ms per step over the 520-triangle mesh's, each code its own."
-  echo "grainflow's mesh stage: from one more run under \`perf record\` (dwarf call graphs), the samples"
-  echo "under \`mesh_loads\` ÷ those under \`Simulation::advance\`. LIGGGHTS \"Other\": its timed run's"
+  echo "grainflow's mesh stage: as \`grainflow run\` prints it, or (while its stages line lacks it) from one more"
+  echo "run under \`perf record\` (dwarf call graphs), the samples under \`mesh_loads\` ÷ those under \`Simulation::advance\`. LIGGGHTS \"Other\": its timed run's"
   echo "Other time (fixes: mesh walls, gravity, integration; moving the mesh in the drum) ÷ loop time."
   echo "KE: translational kinetic energy at the window's end, from the same state in both codes."
 } >> "$new"
