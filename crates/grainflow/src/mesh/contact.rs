@@ -196,6 +196,11 @@ pub fn sphere_contacts(
     out: &mut Vec<MeshContact>,
 ) {
     let start = out.len();
+    // Faces first: an edge or vertex of a triangle touched on its face is shadowed (rule 2),
+    // so its contact need not be formed. The others wait here (beyond its size, formed at once).
+    const WAIT: usize = 48;
+    let mut waiting = [Primitive::Face(0); WAIT];
+    let mut n_waiting = 0;
     for &t in candidate_triangles {
         let corners = mesh.corners(t);
         let closest = closest_point_with_normal(centre, corners, mesh.normals[t as usize]);
@@ -204,12 +209,24 @@ pub fn sphere_contacts(
         if (centre - closest.point).length_squared() > radius * radius {
             continue;
         }
-        let region = closest.region;
-        let primitive = match region {
+        let primitive = match closest.region {
             Region::Face => Primitive::Face(t),
             Region::Edge(k) => Primitive::Edge(mesh.triangle_edges[t as usize][k as usize]),
             Region::Vertex(k) => Primitive::Vertex(mesh.triangles[t as usize][k as usize]),
         };
+        if matches!(primitive, Primitive::Face(_)) || n_waiting == WAIT {
+            if let Some(contact) = primitive_contact(mesh, primitive, centre, radius) {
+                out.push(contact);
+            }
+        } else {
+            waiting[n_waiting] = primitive;
+            n_waiting += 1;
+        }
+    }
+    for &primitive in &waiting[..n_waiting] {
+        if out[start..].iter().any(|k| shadows(mesh, k.primitive, primitive)) {
+            continue;
+        }
         if let Some(contact) = primitive_contact(mesh, primitive, centre, radius) {
             out.push(contact);
         }
@@ -232,14 +249,20 @@ pub fn sphere_contacts(
     out.truncate(kept);
 }
 
-/// Whether `c` stands beside the contacts `kept` before it (rules 2 and 4).
-fn accepted(mesh: &Mesh, kept: &[MeshContact], c: &MeshContact) -> bool {
-    let shadowed = |k: &MeshContact| match (c.primitive, k.primitive) {
+/// Whether a contact with `kept` shadows one with `c` (rule 2): a face its edges and
+/// vertices, an edge its vertices.
+fn shadows(mesh: &Mesh, kept: Primitive, c: Primitive) -> bool {
+    match (c, kept) {
         (Primitive::Edge(e), Primitive::Face(t)) => mesh.edges[e as usize].triangles().contains(&t),
         (Primitive::Vertex(v), Primitive::Face(t)) => mesh.triangles[t as usize].contains(&v),
         (Primitive::Vertex(v), Primitive::Edge(e)) => mesh.edges[e as usize].vertices.contains(&v),
         _ => false,
-    };
+    }
+}
+
+/// Whether `c` stands beside the contacts `kept` before it (rules 2 and 4).
+fn accepted(mesh: &Mesh, kept: &[MeshContact], c: &MeshContact) -> bool {
+    let shadowed = |k: &MeshContact| shadows(mesh, k.primitive, c.primitive);
     let same = |k: &MeshContact| {
         let reach = MERGE_TOLERANCE * k.distance.max(c.distance) + 10.0 * ROUNDING * mesh.extent;
         (k.point - c.point).length() <= reach && (k.normal - c.normal).length() <= MERGE_TOLERANCE
