@@ -403,6 +403,18 @@ impl Simulation {
         v + w.cross(x - o) + wall.surface.velocity(x, normal)
     }
 
+    /// Finds the mesh candidates of the current state if they are not current, so that the
+    /// contacts and diagnostics of a state not yet evaluated (a new or a restored simulation)
+    /// include its mesh contacts. The next evaluation finds the same contacts with them as
+    /// with any other complete candidates: the results do not change.
+    pub(crate) fn prepare_mesh_candidates(&mut self) {
+        if self.meshes.is_empty() {
+            return;
+        }
+        let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose(m)).collect();
+        self.update_mesh_candidates(&poses);
+    }
+
     /// The candidates of every slot, found again if the neighbour list was rebuilt since or a
     /// mesh (in its poses at time `t`) moved more than half the skin since.
     fn update_mesh_candidates(&mut self, poses: &[Pose]) {
