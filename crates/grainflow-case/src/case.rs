@@ -48,6 +48,9 @@ pub struct Case {
     pub max_overlap: f64,
     /// The mesh walls' names, in the order of `config.meshes`.
     pub mesh_names: Vec<String>,
+    /// The point each mesh's torque is reported about in the time series (`torque_about`,
+    /// else its rotation axis's origin, else the origin of coordinates), m.
+    pub mesh_torque_about: Vec<Vec3>,
 }
 
 /// `[output]`, validated.
@@ -474,6 +477,7 @@ fn validate<'h>(
     }
     let mut meshes: Vec<MeshWall> = Vec::new();
     let mut mesh_names: Vec<String> = Vec::new();
+    let mut mesh_torque_about: Vec<Vec3> = Vec::new();
     for (k, m) in raw.meshes.iter().enumerate() {
         let table = format!("[[meshes]] #{}", k + 1);
         let name = require(m.name.clone(), &table, "name", "a unique mesh name, for messages")?;
@@ -523,8 +527,14 @@ fn validate<'h>(
         }
         let motion = mesh_motion(m.motion.as_ref(), &table)?;
         let surface = mesh_surface(m.surface.as_ref(), &table)?;
-        meshes.push(MeshWall { mesh, material, motion, surface });
+        let wall = MeshWall { mesh, material, motion, surface };
+        let about = match m.torque_about {
+            Some(p) => vec3(p, &table, "torque_about")?,
+            None => crate::output::rotation_axis(&wall).map_or(Vec3::ZERO, |(origin, _)| origin),
+        };
+        meshes.push(wall);
         mesh_names.push(name);
+        mesh_torque_about.push(about);
     }
 
     // Contact law and tables.
@@ -1142,6 +1152,7 @@ fn validate<'h>(
         warnings,
         max_overlap: run_overlap,
         mesh_names,
+        mesh_torque_about,
     })
 }
 

@@ -188,6 +188,10 @@ pub struct RawMesh {
     /// turning in place). Default: none.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub surface: Option<RawMeshSurface>,
+    /// The point the time series' torque on the mesh is taken about, m. Default: the axis's
+    /// `origin` of a rotating mesh (or turning surface), else [0, 0, 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torque_about: Option<[f64; 3]>,
 }
 
 /// `[meshes.motion]`: how a mesh moves, timed from the run's start time.

@@ -17,8 +17,10 @@
 
 use crate::case::{Case, OutputSettings};
 use crate::outdir::{FolderError, Intent, OutputFolder, RUN_INFO_FILE, TIMESERIES_FILE};
-use crate::output::{TimeSeriesWriter, snapshot_csv, write_atomic, write_atomic_with};
-use crate::vtk::VtkSeries;
+use crate::output::{
+    TimeSeriesWriter, mesh_columns, rotation_axis, snapshot_csv, write_atomic, write_atomic_with,
+};
+use crate::vtk::{FIXED_MESHES_FILE, MeshShape, VtkSeries};
 use grainflow::{Diagnostics, Simulation, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -191,6 +193,7 @@ pub fn run_case(
 ) -> Result<RunSummary, RunError> {
     let (output, domain, hash) = (case.output, case.domain, case.hash.clone());
     let max_overlap = case.max_overlap;
+    let mesh_loads = MeshLoads::new(&case);
     let mut sim = match &options.restart {
         None => Simulation::new(case.config, case.particles)?,
         Some(path) => {
@@ -206,7 +209,7 @@ pub fn run_case(
             sim
         }
     };
-    check_output_volume(&sim, &output)?;
+    check_output_volume(&sim, &output, mesh_loads.columns.len())?;
     let intent = match &options.restart {
         None => Intent::Fresh,
         Some(path) => Intent::Continue { run_id: sim.run_id(), checkpoint: path },
@@ -229,8 +232,9 @@ pub fn run_case(
     // The whole run on the simulation's threads: handing each step over to them on its own
     // costs several microseconds a step.
     let health = Health { domain, max_overlap };
-    let result =
-        sim.on_pool(|sim| run_simulation(sim, output, health, &hash, &mut folder, options, &mut on_progress));
+    let result = sim.on_pool(|sim| {
+        run_simulation(sim, output, health, &mesh_loads, &hash, &mut folder, options, &mut on_progress)
+    });
     let status = match &result {
         Ok(s) if s.interrupted => "interrupted",
         Ok(_) => "completed",
@@ -319,9 +323,14 @@ pub const MAX_OUTPUT_BYTES: f64 = 1e12;
 pub const MAX_OUTPUT_FILES: f64 = 1e6;
 
 /// Refuses a run whose outputs would fill any disk, estimated from the steps left, the
-/// output intervals and the particles (time-series row about 150 bytes, snapshot row about
-/// 160, VTK particle about 150 and contact about 100 bytes at two contacts a particle).
-fn check_output_volume(sim: &Simulation, output: &OutputSettings) -> Result<(), RunError> {
+/// output intervals and the particles (time-series row about 150 bytes and 25 a mesh
+/// column, snapshot row about 160, VTK particle about 150 and contact about 100 bytes at two
+/// contacts a particle, a moving mesh's triangle about 120 bytes a frame and one file).
+fn check_output_volume(
+    sim: &Simulation,
+    output: &OutputSettings,
+    mesh_columns: usize,
+) -> Result<(), RunError> {
     let left = sim.total_steps().saturating_sub(sim.step_index()) as f64;
     let n = sim.particles().len() as f64;
     let rows = left / output_every(output.interval, sim.dt(), sim.total_steps()) as f64 + 1.0;
@@ -329,8 +338,13 @@ fn check_output_volume(sim: &Simulation, output: &OutputSettings) -> Result<(), 
         .vtk_interval
         .map_or(0.0, |iv| left / output_every(Some(iv), sim.dt(), sim.total_steps()) as f64 + 1.0);
     let snapshot_rows = if output.snapshots { rows } else { 0.0 };
-    let bytes = rows * 150.0 + snapshot_rows * n * 160.0 + frames * n * 350.0;
-    let files = snapshot_rows + 2.0 * frames;
+    let moving = sim.meshes().iter().filter(|w| w.motion.moves());
+    let moving_triangles = moving.clone().map(|w| w.mesh.triangle_count() as f64).sum::<f64>();
+    let mesh_files = if moving.count() > 0 { frames } else { 0.0 };
+    let bytes = rows * (150.0 + 25.0 * mesh_columns as f64)
+        + snapshot_rows * n * 160.0
+        + frames * (n * 350.0 + moving_triangles * 120.0);
+    let files = snapshot_rows + 2.0 * frames + mesh_files;
     let gib = bytes / f64::from(1u32 << 30);
     if bytes > MAX_OUTPUT_BYTES || files > MAX_OUTPUT_FILES {
         return Err(RunError::TooMuchOutput(format!(
@@ -530,8 +544,8 @@ fn step_of(name: &str) -> Option<u64> {
     name.rsplit('_').next()?.split('.').next()?.parse().ok()
 }
 
-/// Removes the snapshots and VTK frames after `step` that an earlier attempt of the run being
-/// continued left: the continued run writes its own.
+/// Removes the snapshots and VTK frames (particles, contacts, moving meshes) after `step`
+/// that an earlier attempt of the run being continued left: the continued run writes its own.
 fn drop_later_frames(folder: &OutputFolder, step: u64) -> Result<(), OutputError> {
     for sub in ["snapshots", "vtk"] {
         let dir = folder.dir().join(sub);
@@ -547,10 +561,68 @@ fn drop_later_frames(folder: &OutputFolder, step: u64) -> Result<(), OutputError
     Ok(())
 }
 
+/// The time series' columns of the mesh walls' loads, and how each is measured.
+struct MeshLoads {
+    /// The column names ([`mesh_columns`]).
+    columns: Vec<String>,
+    /// Each mesh's point the torque is taken about, m.
+    about: Vec<Vec3>,
+    /// Each mesh's rotation axis (a point on it, unit direction), if it has one.
+    axes: Vec<Option<(Vec3, Vec3)>>,
+}
+
+impl MeshLoads {
+    fn new(case: &Case) -> MeshLoads {
+        let axes: Vec<_> = case.config.meshes.iter().map(rotation_axis).collect();
+        let rotating: Vec<bool> = axes.iter().map(Option::is_some).collect();
+        MeshLoads {
+            columns: mesh_columns(&case.mesh_names, &rotating),
+            about: case.mesh_torque_about.clone(),
+            axes,
+        }
+    }
+
+    /// The row's values, mesh after mesh: the force the particles exert on it at the last
+    /// force evaluation, its torque about the mesh's point, and for a mesh with an axis that
+    /// torque's component along the axis (about a point of the axis: τ_o = τ_a + (a − o) × F).
+    fn values(&self, sim: &Simulation) -> Vec<f64> {
+        let mut v = Vec::with_capacity(self.columns.len());
+        for (m, (&about, axis)) in self.about.iter().zip(&self.axes).enumerate() {
+            let load = sim.mesh_load(m, about);
+            v.extend(load.force.to_array());
+            v.extend(load.torque.to_array());
+            if let Some((origin, direction)) = axis {
+                v.push(direction.dot(load.torque + (about - *origin).cross(load.force)));
+            }
+        }
+        v
+    }
+}
+
+/// The mesh walls that move (`moving`) or those that do not, where they are now.
+fn mesh_shapes(sim: &Simulation, moving: bool) -> Vec<MeshShape<'_>> {
+    sim.meshes()
+        .iter()
+        .enumerate()
+        .filter(|(_, w)| w.motion.moves() == moving)
+        .map(|(m, w)| {
+            let pose = sim.mesh_pose(m);
+            MeshShape {
+                index: m,
+                vertices: sim.mesh_vertices(m),
+                triangles: w.mesh.triangles(),
+                normals: w.mesh.normals().iter().map(|&n| pose.turn(n)).collect(),
+            }
+        })
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
 fn run_simulation(
     sim: &mut Simulation,
     output: OutputSettings,
     health: Health,
+    mesh_loads: &MeshLoads,
     hash: &str,
     folder: &mut OutputFolder,
     options: &RunOptions,
@@ -566,25 +638,36 @@ fn run_simulation(
     let start_step = sim.step_index();
     let ts_path = out.join(TIMESERIES_FILE);
     folder.record(Path::new(TIMESERIES_FILE))?;
-    let mut ts = if folder.continues() {
+    // The mesh loads are those of the last force evaluation, which a checkpoint does not
+    // hold: a restart of the same case keeps the row its earlier attempt wrote at the
+    // checkpoint's step (written before the checkpoint, from the same state) instead of
+    // writing it again without them.
+    let every = output_every(interval, sim.dt(), sim.total_steps());
+    let keep_row =
+        !options.accept_changed_case && !mesh_loads.columns.is_empty() && start_step.is_multiple_of(every);
+    let (mut ts, row_kept) = if folder.continues() {
         drop_later_frames(folder, start_step)?;
-        TimeSeriesWriter::resume(&ts_path, start_step)
+        TimeSeriesWriter::resume(&ts_path, start_step, &mesh_loads.columns, keep_row)
     } else {
-        TimeSeriesWriter::create(&ts_path)
+        TimeSeriesWriter::create(&ts_path, &mesh_loads.columns).map(|w| (w, false))
     }
     .map_err(io_err(&ts_path))?;
-    let every = output_every(interval, sim.dt(), sim.total_steps());
     let mut files = vec![ts_path.clone()];
     let vtk_dir = out.join("vtk");
     let mut vtk = match vtk_interval {
         Some(iv) => {
-            for f in ["walls.vtp", "particles.pvd", "contacts.pvd"] {
+            let fixed = mesh_shapes(sim, false);
+            let moving = sim.meshes().iter().any(|w| w.motion.moves());
+            let mut files = vec!["walls.vtp", "particles.pvd", "contacts.pvd"];
+            files.extend(fixed.first().map(|_| FIXED_MESHES_FILE));
+            files.extend(moving.then_some("meshes.pvd"));
+            for f in files {
                 folder.record(&Path::new("vtk").join(f))?;
             }
             // A series of another run is not continued (its frames were removed).
             let from = if folder.continues() { start_step } else { 0 };
             Some((
-                VtkSeries::resume(&vtk_dir, sim.walls(), health.domain.0, health.domain.1, from)
+                VtkSeries::resume(&vtk_dir, sim.walls(), health.domain.0, health.domain.1, &fixed, from)
                     .map_err(io_err(&vtk_dir))?,
                 output_every(Some(iv), sim.dt(), sim.total_steps()),
             ))
@@ -596,10 +679,13 @@ fn run_simulation(
     let emit = |sim: &Simulation,
                 ts: &mut TimeSeriesWriter,
                 folder: &mut OutputFolder,
-                files: &mut Vec<PathBuf>|
+                files: &mut Vec<PathBuf>,
+                row: bool|
      -> Result<Diagnostics, RunError> {
         let d = sim.diagnostics();
-        ts.write(&d).map_err(io_err(&ts_path))?;
+        if row {
+            ts.write(&d, &mesh_loads.values(sim)).map_err(io_err(&ts_path))?;
+        }
         if snapshots {
             let name = format!("particles_{:09}.csv", sim.step_index());
             folder.record(&Path::new("snapshots").join(&name))?;
@@ -620,11 +706,19 @@ fn run_simulation(
         if let Some((series, k)) = vtk.as_mut()
             && (force || sim.step_index().is_multiple_of(*k))
         {
-            for kind in ["particles", "contacts"] {
+            let moving = mesh_shapes(sim, true);
+            let kinds = if moving.is_empty() {
+                &["particles", "contacts"][..]
+            } else {
+                &["particles", "contacts", "meshes"]
+            };
+            for kind in kinds {
                 folder.record(&Path::new("vtk").join(format!("{kind}_{:09}.vtp", sim.step_index())))?;
             }
             let (particles, contacts) = sim.in_id_order();
-            series.write(sim.step_index(), sim.time(), &particles, &contacts).map_err(io_err(&vtk_dir))?;
+            series
+                .write(sim.step_index(), sim.time(), &particles, &contacts, &moving)
+                .map_err(io_err(&vtk_dir))?;
         }
         Ok(())
     };
@@ -638,7 +732,7 @@ fn run_simulation(
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
     let (first, mut outputs) = if start_step == 0 || start_step.is_multiple_of(every) {
-        (emit(sim, &mut ts, folder, &mut files)?, 1)
+        (emit(sim, &mut ts, folder, &mut files, !row_kept)?, usize::from(!row_kept))
     } else {
         (sim.diagnostics(), 0)
     };
@@ -678,7 +772,7 @@ fn run_simulation(
         }
         let t_out = Instant::now();
         if output_now {
-            last = emit(sim, &mut ts, folder, &mut files)?;
+            last = emit(sim, &mut ts, folder, &mut files, true)?;
             outputs += 1;
         }
         write_vtk(sim, &mut vtk, folder, end)?;
@@ -692,7 +786,7 @@ fn run_simulation(
         let stop = options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
         if stop && !end && !output_now {
             // The rows of an interrupted run end at the step it stopped at.
-            last = emit(sim, &mut ts, folder, &mut files)?;
+            last = emit(sim, &mut ts, folder, &mut files, true)?;
             outputs += 1;
         }
         if (due || stop) && !end {
@@ -721,6 +815,12 @@ fn run_simulation(
         files.push(vtk_dir.join("particles.pvd"));
         files.push(vtk_dir.join("contacts.pvd"));
         files.push(vtk_dir.join("walls.vtp"));
+        if sim.meshes().iter().any(|w| !w.motion.moves()) {
+            files.push(vtk_dir.join(FIXED_MESHES_FILE));
+        }
+        if sim.meshes().iter().any(|w| w.motion.moves()) {
+            files.push(vtk_dir.join("meshes.pvd"));
+        }
     }
     let steps = sim.step_index() - start_step;
     Ok(RunSummary {

@@ -1,6 +1,7 @@
 //! VTK XML output that ParaView and VTK read natively: particles as points (`.vtp`, with a
 //! vertex cell each), contacts as line cells (force chains), walls as polygons clipped to the
-//! domain box, and a `.pvd` collection per series with the physical time of every frame.
+//! domain box, mesh walls as triangles where they are, and a `.pvd` collection per series with
+//! the physical time of every frame.
 //!
 //! Data arrays use VTK's inline `binary` format: base64 of a UInt64 byte count followed by the
 //! little-endian values. Every file is written atomically.
@@ -136,7 +137,11 @@ pub fn particles_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
 }
 
 /// Contacts as line cells: particle centre to particle centre, or particle centre to the
-/// contact point on a wall. Cell data: `normal_force`, `tangential_force` (N), `overlap` (m).
+/// contact point on a wall or mesh. Cell data: `normal_force`, `tangential_force` (N),
+/// `overlap` (m), `particle` (the id of the particle the line starts at), `partner_kind` (0
+/// another particle, 1 a plane wall, 2 a mesh wall), `partner` (that particle's id, the
+/// wall's index or the mesh's index, 0-based in the case's order) and `triangle` (the mesh
+/// triangle that owns the contact, −1 for the others).
 pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
     let mut points = Vec::with_capacity(2 * contacts.len());
     for c in contacts {
@@ -151,6 +156,18 @@ pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
     let fnorm: Vec<f64> = contacts.iter().map(|c| c.normal_force).collect();
     let ftan: Vec<f64> = contacts.iter().map(|c| c.tangential_force).collect();
     let overlap: Vec<f64> = contacts.iter().map(|c| c.overlap).collect();
+    let particle: Vec<i64> = contacts.iter().map(|c| i64::from(p.id[c.particle])).collect();
+    let (mut kind, mut partner, mut triangle) = (Vec::new(), Vec::new(), Vec::new());
+    for c in contacts {
+        let (k, other, t) = match c.other {
+            ContactPartner::Particle(j) => (0, i64::from(p.id[j]), -1),
+            ContactPartner::Wall(w) => (1, w as i64, -1),
+            ContactPartner::Mesh { mesh, triangle } => (2, mesh as i64, triangle as i64),
+        };
+        kind.push(k);
+        partner.push(other);
+        triangle.push(t);
+    }
     polydata(
         &points,
         "Lines",
@@ -161,6 +178,53 @@ pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
             Array { name: "normal_force", components: 1, values: Values::F64(&fnorm) },
             Array { name: "tangential_force", components: 1, values: Values::F64(&ftan) },
             Array { name: "overlap", components: 1, values: Values::F64(&overlap) },
+            Array { name: "particle", components: 1, values: Values::I64(&particle) },
+            Array { name: "partner_kind", components: 1, values: Values::I32(&kind) },
+            Array { name: "partner", components: 1, values: Values::I64(&partner) },
+            Array { name: "triangle", components: 1, values: Values::I64(&triangle) },
+        ],
+    )
+}
+
+/// A mesh wall where it is, for [`meshes_vtp`].
+#[derive(Debug, Clone)]
+pub struct MeshShape<'a> {
+    /// Its index among the case's meshes (0-based, in the order of the `[[meshes]]` tables).
+    pub index: usize,
+    /// Its vertices where they are, m.
+    pub vertices: Vec<Vec3>,
+    /// Its triangles, as indices into `vertices`.
+    pub triangles: &'a [[u32; 3]],
+    /// Each triangle's unit normal where it is (towards the particles' side).
+    pub normals: Vec<Vec3>,
+}
+
+/// Mesh walls as triangles. Cell data: `mesh` (the mesh's index, 0-based in the case's
+/// order), `triangle` (the triangle's index in its mesh, as contacts name it) and `normal`.
+pub fn meshes_vtp(meshes: &[MeshShape]) -> String {
+    let mut points = Vec::new();
+    let (mut conn, mut index, mut triangle, mut normals) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for m in meshes {
+        let base = points.len() as i64;
+        points.extend_from_slice(&m.vertices);
+        for (t, corners) in m.triangles.iter().enumerate() {
+            conn.extend(corners.iter().map(|&v| base + i64::from(v)));
+            index.push(m.index as i32);
+            triangle.push(t as i32);
+        }
+        normals.extend_from_slice(&m.normals);
+    }
+    let offsets: Vec<i64> = (1..=index.len() as i64).map(|k| 3 * k).collect();
+    polydata(
+        &points,
+        "Polys",
+        &conn,
+        &offsets,
+        &[],
+        &[
+            Array { name: "mesh", components: 1, values: Values::I32(&index) },
+            Array { name: "triangle", components: 1, values: Values::I32(&triangle) },
+            Array { name: "normal", components: 3, values: Values::F64(&flat(&normals)) },
         ],
     )
 }
@@ -288,27 +352,48 @@ pub fn pvd(frames: &[(f64, String)]) -> String {
     s
 }
 
+/// File of the fixed mesh walls, written once.
+pub const FIXED_MESHES_FILE: &str = "meshes_fixed.vtp";
+
 /// Writes a VTK series into a folder: `particles_<step>.vtp`, `contacts_<step>.vtp`, one
 /// `walls.vtp`, and `particles.pvd`, `contacts.pvd` (rewritten after every frame, so a run
-/// stopped early still leaves readable collections).
+/// stopped early still leaves readable collections); with mesh walls, the fixed ones once in
+/// `meshes_fixed.vtp` and the moving ones in `meshes_<step>.vtp` with `meshes.pvd`.
 pub struct VtkSeries {
     dir: PathBuf,
     particles: Vec<(f64, String)>,
     contacts: Vec<(f64, String)>,
+    meshes: Vec<(f64, String)>,
 }
 
 impl VtkSeries {
-    /// Starts a series in `dir` (created if needed) and writes the walls once.
-    pub fn create(dir: &Path, walls: &[Wall], lo: Vec3, hi: Vec3) -> io::Result<Self> {
+    /// Starts a series in `dir` (created if needed) and writes the walls and the `fixed`
+    /// meshes (if any) once.
+    pub fn create(dir: &Path, walls: &[Wall], lo: Vec3, hi: Vec3, fixed: &[MeshShape]) -> io::Result<Self> {
         std::fs::create_dir_all(dir)?;
         write_atomic(&dir.join("walls.vtp"), walls_vtp(walls, lo, hi).as_bytes())?;
-        Ok(VtkSeries { dir: dir.to_path_buf(), particles: Vec::new(), contacts: Vec::new() })
+        if !fixed.is_empty() {
+            write_atomic(&dir.join(FIXED_MESHES_FILE), meshes_vtp(fixed).as_bytes())?;
+        }
+        Ok(VtkSeries {
+            dir: dir.to_path_buf(),
+            particles: Vec::new(),
+            contacts: Vec::new(),
+            meshes: Vec::new(),
+        })
     }
 
     /// Continues a series from an earlier run in `dir`: frames before `step` are kept in the
     /// collections (a restarted run continues where the checkpoint was written).
-    pub fn resume(dir: &Path, walls: &[Wall], lo: Vec3, hi: Vec3, step: u64) -> io::Result<Self> {
-        let mut series = Self::create(dir, walls, lo, hi)?;
+    pub fn resume(
+        dir: &Path,
+        walls: &[Wall],
+        lo: Vec3,
+        hi: Vec3,
+        fixed: &[MeshShape],
+        step: u64,
+    ) -> io::Result<Self> {
+        let mut series = Self::create(dir, walls, lo, hi, fixed)?;
         let keep = |collection: &str| -> Vec<(f64, String)> {
             // Our own file, at most a line per frame; anything else (not a regular file, or
             // larger than any collection of a million frames) is not continued.
@@ -332,17 +417,32 @@ impl VtkSeries {
         };
         series.particles = keep("particles.pvd");
         series.contacts = keep("contacts.pvd");
+        series.meshes = keep("meshes.pvd");
         Ok(series)
     }
 
-    /// Adds one frame.
-    pub fn write(&mut self, step: u64, time: f64, p: &Particles, contacts: &[ContactInfo]) -> io::Result<()> {
+    /// Adds one frame; `moving` are the moving mesh walls where they are now (none: no mesh
+    /// frame).
+    pub fn write(
+        &mut self,
+        step: u64,
+        time: f64,
+        p: &Particles,
+        contacts: &[ContactInfo],
+        moving: &[MeshShape],
+    ) -> io::Result<()> {
         let pf = format!("particles_{step:09}.vtp");
         let cf = format!("contacts_{step:09}.vtp");
         write_atomic(&self.dir.join(&pf), particles_vtp(p, contacts).as_bytes())?;
         write_atomic(&self.dir.join(&cf), contacts_vtp(p, contacts).as_bytes())?;
         self.particles.push((time, pf));
         self.contacts.push((time, cf));
+        if !moving.is_empty() {
+            let mf = format!("meshes_{step:09}.vtp");
+            write_atomic(&self.dir.join(&mf), meshes_vtp(moving).as_bytes())?;
+            self.meshes.push((time, mf));
+            write_atomic(&self.dir.join("meshes.pvd"), pvd(&self.meshes).as_bytes())?;
+        }
         write_atomic(&self.dir.join("particles.pvd"), pvd(&self.particles).as_bytes())?;
         write_atomic(&self.dir.join("contacts.pvd"), pvd(&self.contacts).as_bytes())
     }
@@ -417,14 +517,14 @@ mod tests {
 </Collection>\n</VTKFile>\n";
         std::fs::write(dir.path().join("particles.pvd"), old).unwrap();
         // Restart at step 100: the frame of step 120 is dropped (the run writes it again).
-        let mut series = VtkSeries::resume(dir.path(), &[], lo, hi, 100).unwrap();
+        let mut series = VtkSeries::resume(dir.path(), &[], lo, hi, &[], 100).unwrap();
         let p = Particles::default();
-        series.write(100, 100.0 * 0.01, &p, &[]).unwrap();
+        series.write(100, 100.0 * 0.01, &p, &[], &[]).unwrap();
         let text = std::fs::read_to_string(dir.path().join("particles.pvd")).unwrap();
         assert_eq!(times(&text), ["0", "0.6", "1"]);
         assert!(text.contains("particles_000000060.vtp") && !text.contains("particles_000000120.vtp"));
         // And a second restart reads what this one wrote.
-        let series = VtkSeries::resume(dir.path(), &[], lo, hi, 200).unwrap();
+        let series = VtkSeries::resume(dir.path(), &[], lo, hi, &[], 200).unwrap();
         assert_eq!(series.particles.iter().map(|f| f.0).collect::<Vec<_>>(), [0.0, 0.6, 1.0]);
     }
 }

@@ -598,6 +598,7 @@ impl Simulation {
         if let Some(motion) = mesh_motion {
             sim.set_mesh_motion_state(&motion).map_err(CheckpointError::Mismatch)?;
         }
+        sim.prepare_mesh_candidates();
         Ok(sim)
     }
 }

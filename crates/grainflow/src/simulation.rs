@@ -174,6 +174,7 @@ impl Simulation {
                 x[i].x, x[i].y, x[i].z
             )));
         }
+        sim.prepare_mesh_candidates();
         Ok(sim)
     }
 

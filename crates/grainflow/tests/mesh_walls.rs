@@ -177,12 +177,32 @@ fn a_restart_with_mesh_contacts_is_bit_identical() {
     let bytes = first.checkpoint("case");
     let (cfg, _) = bead_setup(law, Some(floor(10)), 5e-4, v0, Vec3::ZERO, dt);
     let mut rest = Simulation::restore(cfg, &bytes, Some("case")).expect("a restart");
+    // The restored state reports its mesh contact before any evaluation, as the state it was
+    // written from (outputs at the restart step).
+    assert_eq!(first.contacts().len(), 1);
+    assert_eq!(rest.contacts(), first.contacts());
+    assert_eq!(rest.diagnostics().contacts, first.diagnostics().contacts);
     rest.advance(15_000);
     let bits = |s: &Simulation| {
         let p = s.particles();
         [p.position[0], p.velocity[0], p.omega[0]].map(|v| v.to_array().map(f64::to_bits))
     };
     assert_eq!(bits(&whole), bits(&rest));
+}
+
+/// A new simulation reports a particle's mesh contact before its first step (the first
+/// output of a run), as it reports a plane wall's.
+#[test]
+fn a_new_simulation_reports_its_mesh_contacts() {
+    let law = ContactLaw::mfix(NormalModel::Hertz);
+    let on_mesh = bead(law, Some(floor(10)), 4.99e-4, Vec3::ZERO, Vec3::ZERO, 2e-6);
+    let on_plane = bead(law, None, 4.99e-4, Vec3::ZERO, Vec3::ZERO, 2e-6);
+    let (m, p) = (on_mesh.contacts(), on_plane.contacts());
+    assert_eq!((m.len(), p.len()), (1, 1));
+    assert!(matches!(m[0].other, grainflow::ContactPartner::Mesh { mesh: 0, .. }), "{:?}", m[0]);
+    // The same overlap and point: a face contact of a flat mesh is the plane's.
+    assert!((m[0].overlap - p[0].overlap).abs() < 1e-18 && (m[0].point - p[0].point).length() < 1e-15);
+    assert_eq!(on_mesh.diagnostics().contacts, 1);
 }
 
 /// A mesh naming a wall material the case does not define is refused.

@@ -447,6 +447,18 @@ impl Simulation {
         v + w.cross(x - o) + wall.surface.velocity(x, normal)
     }
 
+    /// Finds the mesh candidates of the current state if they are not current, so that the
+    /// contacts and diagnostics of a state not yet evaluated (a new or a restored simulation)
+    /// include its mesh contacts. The next evaluation finds the same contacts with them as
+    /// with any other complete candidates: the results do not change.
+    pub(crate) fn prepare_mesh_candidates(&mut self) {
+        if self.meshes.is_empty() {
+            return;
+        }
+        let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose(m)).collect();
+        self.update_mesh_candidates(&poses);
+    }
+
     /// Finds the candidates again where they may have become incomplete. A slot's candidates
     /// are the triangles within its radius, the law's pull-off distance and a margin S (the
     /// neighbour skin) of its centre c, with each mesh in its pose of the last full search
