@@ -8,6 +8,7 @@ pub mod dem02;
 pub mod dem03;
 pub mod dem04;
 pub mod dem05;
+pub mod drum;
 pub mod error;
 pub mod jkr;
 pub mod kharaz;

@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 /// Options shared by all cases.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SuiteOptions {
-    /// Also run the converged (small time step) variants where a case has them (DEM05).
+    /// Also run the converged (small time step) variants where a case has them (DEM05), and
+    /// the full versions of reduced cases (drum: the Fr sweep).
     pub converged: bool,
     /// Integrator for the converged runs.
     pub integrator: Option<Integrator>,
@@ -104,6 +105,11 @@ pub fn cases() -> Vec<CaseEntry> {
             name: "jkr",
             summary: "JKR cohesion: pull-off force 3πγR* and distance δ_c on the law's curve; a pair approaching, sticking and pulling off against LAMMPS pair granular jkr",
             run: crate::jkr::run_case,
+        },
+        CaseEntry {
+            name: "drum",
+            summary: "rotating drum (quasi-2D, turning mesh walls): dynamic angle of repose in the rolling regime against rotating-drum measurements (Kleinhans et al. 2011) and its rise with Fr (Brucks et al. 2007)",
+            run: crate::drum::run_case,
         },
     ]
 }
