@@ -32,6 +32,24 @@ const EXAMPLES: &[Example] = &[
         ],
     },
     Example {
+        name: "rotating-drum",
+        summary: "1 267 glass beads in a drum (triangle mesh) turning at 10 rpm: the rolling regime, the drive torque in the time series",
+        files: &[
+            ("case.toml", include_str!("../../../examples/rotating-drum/case.toml")),
+            ("drum.obj", include_str!("../../../examples/rotating-drum/drum.obj")),
+            ("particles.csv", include_str!("../../../examples/rotating-drum/particles.csv")),
+        ],
+    },
+    Example {
+        name: "conical-hopper",
+        summary: "3 396 glass beads discharging from a conical hopper (triangle mesh) into a bin",
+        files: &[
+            ("case.toml", include_str!("../../../examples/conical-hopper/case.toml")),
+            ("hopper.obj", include_str!("../../../examples/conical-hopper/hopper.obj")),
+            ("particles.csv", include_str!("../../../examples/conical-hopper/particles.csv")),
+        ],
+    },
+    Example {
         name: "bouncing-ball",
         summary: "one ball dropped on the floor (MFIX DEM02 set-up, e_n = 0.9)",
         files: &[("case.toml", include_str!("../../../examples/bouncing-ball/case.toml"))],
