@@ -143,7 +143,7 @@ for c in $CASES; do
   # The mesh stage's share of the step: as `grainflow run` prints it, once its stages line has
   # the meshes (the engine times them; the line printed walls, pairs … without them so far),
   # else from perf.
-  share=$(awk '/^stages:/ {for(k=1;k<=NF;k++) if($k ~ /^mesh/) {p=$(k+3); gsub(/[(%),]/,"",p); print p}}' gf.$c.t1.log)
+  share=$(awk '/^stages:/ {for(k=1;k<=NF;k++) if($k ~ /^mesh/) {p=$(k+4); gsub(/[(%),]/,"",p); print p}}' gf.$c.t1.log)
   share=${share:--}
   if [ "$share" = - ] && [ "$PERF" = 1 ]; then
     perf record -q -F 200 --call-graph dwarf,16384 -o perf.$c.data -- \

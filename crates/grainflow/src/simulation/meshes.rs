@@ -62,11 +62,14 @@ pub(crate) struct MeshStage {
     grids: Vec<TriangleGrid>,
     /// Whether the candidates are current (false: found afresh at the next evaluation).
     built: bool,
+    /// The neighbour-list build at which fixed meshes' candidates were last checked.
+    checked_build: Option<u64>,
     /// The particle count they were found for.
     built_n: usize,
     /// The slots with candidates, ascending.
     active: Vec<u32>,
-    /// Where each slot's centre was when its candidates were found, m.
+    /// Where each slot's centre was, relative to each mesh (in the mesh's pose as loaded),
+    /// when its candidates were found: slot i, mesh m at `centres[i * meshes + m]`, m.
     centres: Vec<Vec3>,
     /// Marks of the triangles met by a query, per mesh.
     marks: Vec<NearScratch>,
@@ -76,8 +79,6 @@ pub(crate) struct MeshStage {
     candidates: Vec<Candidate>,
     /// The histories of the last evaluation's contacts, by (slot, mesh, triangle).
     pub history: Vec<MeshHistory>,
-    /// Each mesh's pose when the candidates were found.
-    candidate_poses: Vec<Pose>,
     /// Where each mesh's motion starts from (none: every one from the run's start).
     pub anchors: Vec<Anchor>,
     /// The run's start time, from which the meshes' motions are timed, s.
@@ -156,12 +157,9 @@ impl MeshStage {
         if mine.first().is_none_or(|c| c.mesh != m as u32) {
             return;
         }
-        let was = self.centres[self.active[k] as usize];
-        let (y, was) = if pose.is_identity() {
-            (centre, was)
-        } else {
-            (pose.unapply(centre), self.candidate_poses[m].unapply(was))
-        };
+        let meshes = self.centres.len() / self.built_n.max(1);
+        let was = self.centres[self.active[k] as usize * meshes + m];
+        let y = if pose.is_identity() { centre } else { pose.unapply(centre) };
         let within = r + reach;
         // The rounding of the distances and of the move, far below this margin.
         let limit = within + (y - was).length() + 1e-9 * within;
@@ -461,46 +459,59 @@ impl Simulation {
 
     /// Finds the candidates again where they may have become incomplete. A slot's candidates
     /// are the triangles within its radius, the law's pull-off distance and a margin S (the
-    /// neighbour skin) of its centre c, with each mesh in its pose of the last full search
-    /// (both in the mesh's pose as loaded). They hold every triangle in reach while the centre
-    /// has moved, relative to the mesh, by at most S: while |x − c| plus the mesh's move since
-    /// stays within S. So a slot whose centre moved too far is searched again (at its current
-    /// centre, with the meshes in the same poses), and all are when a mesh has moved S/2
-    /// (`poses`: the meshes now) or the slots changed.
+    /// neighbour skin) of where its centre was relative to each mesh (in the mesh's pose as
+    /// loaded, so that the candidates do not depend on the pose). They hold every triangle in
+    /// reach while the centre has moved relative to the mesh by at most S: a slot whose centre
+    /// moved farther relative to a mesh (`poses`: the meshes now) is searched again, and all
+    /// are when the slots changed. A particle turning with a drum keeps its candidates.
     fn update_mesh_candidates(&mut self, poses: &[Pose]) {
         let margin = self.neighbors.skin();
         let n = self.particles.len();
+        let n_meshes = self.meshes.len();
         let st = &self.mesh_stage;
-        let mesh_moved = if st.candidate_poses.len() == poses.len() {
-            self.meshes
-                .iter()
-                .zip(poses.iter().zip(&st.candidate_poses))
-                .filter(|(w, _)| w.motion.moves())
-                .map(|(w, (now, then))| {
-                    let (lo, hi) = w.mesh.bounds();
-                    then.moved_bound(now, 0.5 * (lo + hi), 0.5 * (hi - lo).length())
-                })
-                .fold(0.0, f64::max)
-        } else {
-            f64::INFINITY
-        };
-        let full = !st.ready(n) || mesh_moved > 0.5 * margin;
-        let x = &self.particles.position;
-        let limit = (margin - mesh_moved).max(0.0).powi(2);
-        let stale = |i: usize| full || (x[i] - st.centres[i]).length_squared() > limit;
-        if !full && !(0..n).any(stale) {
-            return;
+        let full = !st.ready(n) || st.centres.len() != n * n_meshes;
+        let mut x: &[Vec3] = &self.particles.position;
+        // Within S, less the rounding of the moves (far below this).
+        let mut limit = (margin * (1.0 - 1e-9)).powi(2);
+        let reference = self.neighbors.reference();
+        if !full && reference.len() == n && self.meshes.iter().all(|w| !w.motion.moves()) {
+            // Fixed meshes: no particle moves half the skin from where the neighbour list was
+            // last built (its reference positions), so a centre within S/2 of those holds until
+            // the next build: the candidates need checking only once a build.
+            let build = self.neighbors.stats().builds;
+            if st.checked_build == Some(build) {
+                return;
+            }
+            self.mesh_stage.checked_build = Some(build);
+            x = reference;
+            limit *= 0.25;
         }
-        let stale: Vec<bool> = (0..n).map(stale).collect();
+        let st = &self.mesh_stage;
+        // The meshes' poses taken back, as matrices (a point x is at R·(x − t) as loaded).
+        let back: Vec<Option<(glam::DMat3, Vec3)>> = poses
+            .iter()
+            .map(|p| {
+                (!p.is_identity()).then(|| (glam::DMat3::from_quat(p.rotation.conjugate()), p.translation))
+            })
+            .collect();
+        let relative = |i: usize, m: usize| match back[m] {
+            None => x[i],
+            Some((r, t)) => r * (x[i] - t),
+        };
+        let stale = |i: usize| {
+            full || (0..n_meshes)
+                .any(|m| (relative(i, m) - st.centres[i * n_meshes + m]).length_squared() > limit)
+        };
+        let Some(first) = (0..n).position(stale) else { return };
+        let stale: Vec<bool> = (0..n).map(|i| i >= first && stale(i)).collect();
         if st.grids.len() != self.meshes.len() {
             let cell = 2.0 * self.particles.max_radius() + margin;
             self.mesh_stage.grids = self.meshes.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
         }
         let st = &mut self.mesh_stage;
         if full {
-            st.candidate_poses = poses.to_vec();
             st.centres.clear();
-            st.centres.resize(n, Vec3::ZERO);
+            st.centres.resize(n * n_meshes, Vec3::ZERO);
         }
         st.marks.resize_with(self.meshes.len(), NearScratch::default);
         let p = &self.particles;
@@ -522,10 +533,10 @@ impl Simulation {
                     candidates.extend_from_slice(&old[old_start[k] as usize..old_start[k + 1] as usize]);
                 }
             } else {
-                st.centres[i] = p.position[i];
                 for (m, (wall, grid)) in self.meshes.iter().zip(&st.grids).enumerate() {
-                    let pose = &st.candidate_poses[m];
+                    let pose = &poses[m];
                     let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
+                    st.centres[i * n_meshes + m] = y;
                     let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
                     grid.near_with_distances(
                         &wall.mesh,
@@ -639,8 +650,11 @@ impl Simulation {
             }
         }
         // Two contacts of a particle never share an owner (`sphere_contacts` merges them), so
-        // the order is that of (slot, mesh, triangle) once sorted.
-        stored.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
+        // the order is that of (slot, mesh, triangle) once sorted; slots and meshes come in
+        // order already.
+        if !stored.is_sorted_by_key(|h| (h.slot, h.mesh, h.triangle)) {
+            stored.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
+        }
         let st = &mut self.mesh_stage;
         st.loads = loads;
         st.history = if advance { stored } else { old };
