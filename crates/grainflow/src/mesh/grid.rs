@@ -109,10 +109,12 @@ impl TriangleGrid {
     /// was made of) closer to `centre` than `reach` (m). `out` is cleared first.
     pub fn near(&self, mesh: &Mesh, centre: Vec3, reach: f64, out: &mut Vec<u32>) {
         let mut with = Vec::new();
-        self.near_with_distances(mesh, centre, reach, &mut NearScratch::default(), &mut with);
+        // A triangle listed in several cells is tested each time: no marks to keep.
+        self.scan(mesh, centre, reach, |_| true, &mut with);
         out.clear();
         out.extend(with.iter().map(|&(t, _)| t));
         out.sort_unstable();
+        out.dedup();
     }
 
     /// As [`near`](Self::near), each triangle with its distance from `centre` (m), in no
@@ -123,6 +125,22 @@ impl TriangleGrid {
         centre: Vec3,
         reach: f64,
         scratch: &mut NearScratch,
+        out: &mut Vec<(u32, f64)>,
+    ) {
+        let epoch = scratch.next(mesh.triangle_count());
+        let seen = &mut scratch.seen;
+        let fresh = |t: u32| std::mem::replace(&mut seen[t as usize], epoch) != epoch;
+        self.scan(mesh, centre, reach, fresh, out);
+    }
+
+    /// Fills `out` with the triangles of the cells within `reach` of `centre` that `fresh`
+    /// lets through and that are closer than `reach`, each with its distance.
+    fn scan(
+        &self,
+        mesh: &Mesh,
+        centre: Vec3,
+        reach: f64,
+        mut fresh: impl FnMut(u32) -> bool,
         out: &mut Vec<(u32, f64)>,
     ) {
         out.clear();
@@ -136,18 +154,15 @@ impl TriangleGrid {
             }
             range[k] = (lo[k].max(0.0) as usize, (hi[k] as usize).min(self.dims[k] - 1));
         }
-        let epoch = scratch.next(mesh.triangle_count());
         let normals = mesh.normals();
         for z in range[2].0..=range[2].1 {
             for y in range[1].0..=range[1].1 {
                 for x in range[0].0..=range[0].1 {
                     let c = (z * self.dims[1] + y) * self.dims[0] + x;
                     for &t in &self.triangles[self.start[c] as usize..self.start[c + 1] as usize] {
-                        let seen = &mut scratch.seen[t as usize];
-                        if *seen == epoch {
+                        if !fresh(t) {
                             continue;
                         }
-                        *seen = epoch;
                         let corners = mesh.corners(t);
                         let n = normals[t as usize];
                         // The distance to the triangle's plane bounds the distance to the

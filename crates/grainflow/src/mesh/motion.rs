@@ -56,15 +56,6 @@ impl Pose {
     pub fn is_identity(&self) -> bool {
         *self == Pose::IDENTITY
     }
-
-    /// An upper bound of how far any point within `radius` of `centre` (a point of the mesh
-    /// as loaded) lies in pose `other` from where it lies in `self`, m.
-    pub fn moved_bound(&self, other: &Pose, centre: Vec3, radius: f64) -> f64 {
-        let d = other.rotation * self.rotation.conjugate();
-        // ‖R₂ − R₁‖ = ‖R₂R₁⁻¹ − I‖ = 2 sin(φ/2) = 2·|vector part| of the relative quaternion.
-        let turn = 2.0 * d.xyz().length();
-        (other.apply(centre) - self.apply(centre)).length() + turn * radius * (1.0 + 1e-12)
-    }
 }
 
 /// How a mesh moves, from the run's start time.
@@ -261,24 +252,6 @@ mod tests {
         let later = a.pose(&m, 2.5).apply(Vec3::X);
         assert!((later - Vec3::new(0.8f64.cos(), 0.8f64.sin(), 0.0)).length() < 1e-15);
         assert_eq!(Anchor::START.pose(&m, 0.7), m.pose(0.7));
-    }
-
-    /// The displacement bound holds for points of the sphere (sampled) and is tight for a
-    /// pure translation.
-    #[test]
-    fn the_displacement_bound_holds() {
-        let a = MeshMotion::Rotate { origin: Vec3::new(0.1, 0.0, 0.0), axis: Vec3::Y, omega: 2.0, ramp: 0.0 };
-        let (p1, p2) = (a.pose(0.1), a.pose(0.13));
-        let (c, r) = (Vec3::new(0.0, 0.05, 0.02), 0.04);
-        let bound = p1.moved_bound(&p2, c, r);
-        for k in 0..200 {
-            let f = |s: u64| ((k as u64 * 2654435761 + s * 40503) % 1000) as f64 / 500.0 - 1.0;
-            let d = Vec3::new(f(1), f(2), f(3));
-            let y = c + d.normalize_or_zero() * r;
-            assert!((p2.apply(y) - p1.apply(y)).length() <= bound);
-        }
-        let t = MeshMotion::Translate { velocity: Vec3::new(1.0, 2.0, 2.0) };
-        assert!((t.pose(0.0).moved_bound(&t.pose(1.0), c, r) - 3.0).abs() < 1e-12);
     }
 
     /// A surface velocity slides in the tangent plane: its normal component is removed.

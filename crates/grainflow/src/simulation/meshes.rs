@@ -87,6 +87,10 @@ pub(crate) struct MeshStage {
     loads: Vec<MeshLoadPart>,
 }
 
+/// A mesh's motion rates at an evaluation: (linear velocity, angular velocity, a point on the
+/// axis), `None` if its surface does not move.
+type Rates = Option<(Vec3, Vec3, Vec3)>;
+
 /// One mesh contact's load on its particle: the force, and the torque about the centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct MeshLoadPart {
@@ -385,13 +389,13 @@ impl Simulation {
         out: &mut Vec<super::ContactInfo>,
     ) {
         let (st, law) = (&self.mesh_stage, self.law);
-        let t = self.time();
+        let rates = self.mesh_rates(self.time());
         self.each_mesh_contact(|i, m, k, overlap, c| {
             let h = st
                 .history
                 .binary_search_by_key(&(i as u32, m as u32, k.triangle), |h| (h.slot, h.mesh, h.triangle))
                 .map_or(Vec3::ZERO, |j| st.history[j].h);
-            let input = self.mesh_input(i, m, k, overlap, c, h, t);
+            let input = self.mesh_input(i, m, k, overlap, c, h, rates[m]);
             let (load, _, _) = wall_law::<N, T, { parts::ALL }>(&law, 0.0, &input);
             let f_n = load.f.dot(k.normal);
             out.push(super::ContactInfo {
@@ -406,7 +410,14 @@ impl Simulation {
         });
     }
 
-    /// The wall law's input for slot `i`'s contact `k` (placed) with mesh `m` at time `t`.
+    /// Each mesh's motion rates (linear velocity, angular velocity, a point on the axis) at
+    /// time `t`, once per evaluation; `None` for a mesh whose surface does not move.
+    fn mesh_rates(&self, t: f64) -> Vec<Rates> {
+        self.meshes.iter().map(|w| w.moves().then(|| w.motion.rates(t - self.mesh_stage.t0))).collect()
+    }
+
+    /// The wall law's input for slot `i`'s contact `k` (placed) with mesh `m`, whose motion
+    /// has `rates`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn mesh_input(
@@ -417,7 +428,7 @@ impl Simulation {
         overlap: f64,
         c: &crate::contact::ContactCoeffs,
         h: Vec3,
-        t: f64,
+        rates: Rates,
     ) -> PairInput {
         let p = &self.particles;
         let lever = if self.law.lever == LeverArm::RadicalPlane { k.distance } else { p.radius[i] };
@@ -425,7 +436,7 @@ impl Simulation {
             d: -k.normal,
             ra: overlap,
             rb: lever,
-            dv: p.velocity[i] - self.mesh_velocity(m, k.point, k.normal, t),
+            dv: p.velocity[i] - self.mesh_velocity(m, rates, k.point, k.normal),
             wa: p.omega[i],
             wb: Vec3::ZERO,
             h,
@@ -434,15 +445,14 @@ impl Simulation {
         }
     }
 
-    /// The velocity of mesh `m`'s surface at the point `x` (normal `normal`) at time `t`.
+    /// The velocity of mesh `m`'s surface (its motion's `rates`) at the point `x` (normal
+    /// `normal`).
     #[inline]
-    fn mesh_velocity(&self, m: usize, x: Vec3, normal: Vec3, t: f64) -> Vec3 {
-        let wall = &self.meshes[m];
-        if !wall.moves() {
-            return Vec3::ZERO;
+    fn mesh_velocity(&self, m: usize, rates: Rates, x: Vec3, normal: Vec3) -> Vec3 {
+        match rates {
+            None => Vec3::ZERO,
+            Some((v, w, o)) => v + w.cross(x - o) + self.meshes[m].surface.velocity(x, normal),
         }
-        let (v, w, o) = wall.motion.rates(t - self.mesh_stage.t0);
-        v + w.cross(x - o) + wall.surface.velocity(x, normal)
     }
 
     /// Finds the mesh candidates of the current state if they are not current, so that the
@@ -580,6 +590,7 @@ impl Simulation {
         let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose_at(m, t)).collect();
         self.update_mesh_candidates(&poses);
         let dt = if advance { self.time_step.dt } else { 0.0 };
+        let rates = self.mesh_rates(t);
         let law = self.law;
         let old = std::mem::take(&mut self.mesh_stage.history);
         let mut loads = std::mem::take(&mut self.mesh_stage.loads);
@@ -626,7 +637,7 @@ impl Simulation {
                         claimed[j] = true;
                         mine[j].h
                     });
-                    let input = self.mesh_input(i, m, k, overlap, c, h, t);
+                    let input = self.mesh_input(i, m, k, overlap, c, h, rates[m]);
                     let (load, h_new, bound) = wall_law::<N, T, { parts::ALL }>(&law, dt, &input);
                     let round = |q: Quantum, v: Vec3| Vec3::new(q.round(v.x), q.round(v.y), q.round(v.z));
                     let (f, ta) = (round(quanta.force, load.f), round(quanta.torque, load.ta));
