@@ -36,6 +36,7 @@ pub mod checkpoint;
 pub mod contact;
 pub mod error;
 pub mod forces;
+pub mod insertion;
 pub mod integrate;
 pub mod material;
 pub mod math;
