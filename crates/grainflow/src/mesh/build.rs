@@ -224,9 +224,11 @@ pub(crate) fn build(
     let lo = vertices.iter().fold(Vec3::INFINITY, |m, &p| m.min(p));
     let hi = vertices.iter().fold(Vec3::NEG_INFINITY, |m, &p| m.max(p));
     let extent = lo.abs().max(hi.abs()).max_element();
+    let corner_table = welded.iter().map(|w| w.map(|v| vertices[v as usize])).collect();
     Ok(Mesh {
         name: name.to_string(),
         vertices,
+        corner_table,
         triangles: welded,
         normals,
         triangle_edges,

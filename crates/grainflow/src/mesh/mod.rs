@@ -82,6 +82,9 @@ pub struct Mesh {
     name: String,
     vertices: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
+    /// Each triangle's corners, beside the indexed form: the contact tests read a triangle
+    /// in one place.
+    corner_table: Vec<[Vec3; 3]>,
     normals: Vec<Vec3>,
     triangle_edges: Vec<[u32; 3]>,
     neighbours: Vec<[u32; 3]>,
@@ -121,7 +124,7 @@ impl Mesh {
 
     /// Triangle `t`'s corners, m.
     pub fn corners(&self, t: u32) -> [Vec3; 3] {
-        self.triangles[t as usize].map(|v| self.vertices[v as usize])
+        self.corner_table[t as usize]
     }
 
     /// Each triangle's unit normal (right-hand winding).

@@ -56,6 +56,21 @@ struct Candidate {
     distance: f64,
 }
 
+/// Where a slot's candidates are in [`MeshStage::candidates`]: `len` of them from `start`, in
+/// room for `cap`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Span {
+    start: u32,
+    len: u32,
+    cap: u32,
+}
+
+impl Span {
+    fn range(self) -> std::ops::Range<usize> {
+        self.start as usize..(self.start + self.len) as usize
+    }
+}
+
 /// What the mesh stage keeps between evaluations.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct MeshStage {
@@ -66,17 +81,18 @@ pub(crate) struct MeshStage {
     checked_build: Option<u64>,
     /// The particle count they were found for.
     built_n: usize,
-    /// The slots with candidates, ascending.
-    active: Vec<u32>,
     /// Where each slot's centre was, relative to each mesh (in the mesh's pose as loaded),
     /// when its candidates were found: slot i, mesh m at `centres[i * meshes + m]`, m.
     centres: Vec<Vec3>,
     /// Marks of the triangles met by a query, per mesh.
     marks: Vec<NearScratch>,
-    /// Candidates of active slot k: `candidates[start[k]..start[k + 1]]`, by mesh, then by
-    /// distance.
-    start: Vec<u32>,
+    /// Slot i's candidates are `candidates[span[i].range()]`, by mesh. A
+    /// slot whose candidates are found again keeps its room if they fit, else takes new room
+    /// at the end (a quarter more than it needs); the room left behind (`garbage`, entries)
+    /// is given back when it is half the list.
+    span: Vec<Span>,
     candidates: Vec<Candidate>,
+    garbage: usize,
     /// The histories of the last evaluation's contacts, by (slot, mesh, triangle).
     pub history: Vec<MeshHistory>,
     /// Where each mesh's motion starts from (none: every one from the run's start).
@@ -118,7 +134,7 @@ impl MeshStage {
     /// Heap bytes of the stage.
     pub(crate) fn heap_bytes(&self) -> usize {
         self.grids.iter().map(TriangleGrid::heap_bytes).sum::<usize>()
-            + (self.start.capacity() + self.active.capacity()) * 4
+            + self.span.capacity() * std::mem::size_of::<Span>()
             + self.centres.capacity() * 24
             + self.marks.iter().map(|m| m.heap_bytes()).sum::<usize>()
             + self.candidates.capacity() * std::mem::size_of::<Candidate>()
@@ -133,10 +149,28 @@ impl MeshStage {
 
     /// True if the candidates are those of `n` particles.
     fn ready(&self, n: usize) -> bool {
-        self.built && self.built_n == n
+        self.built && self.built_n == n && self.span.len() == n
     }
 
-    /// Fills `contacts` with the contacts of active slot `k` (centre `centre`, radius `r`)
+    /// The slots with candidates, ascending.
+    fn active(&self) -> impl Iterator<Item = usize> + '_ {
+        self.span.iter().enumerate().filter(|(_, s)| s.len > 0).map(|(i, _)| i)
+    }
+
+    /// Gives back the room left behind by candidates that moved: the candidates packed in slot
+    /// order.
+    fn compact(&mut self) {
+        let mut packed = Vec::with_capacity(self.candidates.len() - self.garbage);
+        for s in &mut self.span {
+            let r = s.range();
+            *s = Span { start: packed.len() as u32, len: s.len, cap: s.len };
+            packed.extend_from_slice(&self.candidates[r]);
+        }
+        self.candidates = packed;
+        self.garbage = 0;
+    }
+
+    /// Fills `contacts` with the contacts of slot `i` (centre `centre`, radius `r`)
     /// with mesh `m` in pose `pose` among its candidates, found within `r + reach` (`reach`: a
     /// cohesive law's pull-off distance, else 0; a contact's overlap with the radius is its
     /// `overlap − reach`); normals and points placed in the pose. Only the candidates that
@@ -146,7 +180,7 @@ impl MeshStage {
     #[allow(clippy::too_many_arguments)]
     fn contacts_of(
         &self,
-        k: usize,
+        i: usize,
         (m, mesh, pose): (usize, &Mesh, &Pose),
         centre: Vec3,
         r: f64,
@@ -154,7 +188,7 @@ impl MeshStage {
         triangles: &mut Vec<u32>,
         contacts: &mut Vec<MeshContact>,
     ) {
-        let cands = &self.candidates[self.start[k] as usize..self.start[k + 1] as usize];
+        let cands = &self.candidates[self.span[i].range()];
         let first = cands.partition_point(|c| c.mesh < m as u32);
         let mine = &cands[first..];
         contacts.clear();
@@ -162,14 +196,17 @@ impl MeshStage {
             return;
         }
         let meshes = self.centres.len() / self.built_n.max(1);
-        let was = self.centres[self.active[k] as usize * meshes + m];
+        let was = self.centres[i * meshes + m];
         let y = if pose.is_identity() { centre } else { pose.unapply(centre) };
         let within = r + reach;
         // The rounding of the distances and of the move, far below this margin.
         let limit = within + (y - was).length() + 1e-9 * within;
         triangles.clear();
         triangles.extend(
-            mine.iter().take_while(|c| c.mesh == m as u32 && c.distance <= limit).map(|c| c.triangle),
+            mine.iter()
+                .take_while(|c| c.mesh == m as u32)
+                .filter(|c| c.distance <= limit)
+                .map(|c| c.triangle),
         );
         if triangles.is_empty() {
             return;
@@ -347,13 +384,12 @@ impl Simulation {
         let reaches = self.law.normal.reaches();
         let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose(m)).collect();
         let (mut contacts, mut triangles) = (Vec::new(), Vec::new());
-        for (a, &i) in st.active.iter().enumerate() {
-            let i = i as usize;
+        for i in st.active() {
             for (m, MeshWall { mesh, material, .. }) in self.meshes.iter().enumerate() {
                 let c = self.coeffs.wall(p.phase[i] as usize, *material);
                 let reach = if reaches { c.pull_off } else { 0.0 };
                 st.contacts_of(
-                    a,
+                    i,
                     (m, mesh, &poses[m]),
                     p.position[i],
                     p.radius[i],
@@ -512,8 +548,10 @@ impl Simulation {
             full || (0..n_meshes)
                 .any(|m| (relative(i, m) - st.centres[i * n_meshes + m]).length_squared() > limit)
         };
-        let Some(first) = (0..n).position(stale) else { return };
-        let stale: Vec<bool> = (0..n).map(|i| i >= first && stale(i)).collect();
+        let stale: Vec<usize> = (0..n).filter(|&i| stale(i)).collect();
+        if stale.is_empty() {
+            return;
+        }
         if st.grids.len() != self.meshes.len() {
             let cell = 2.0 * self.particles.max_radius() + margin;
             self.mesh_stage.grids = self.meshes.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
@@ -522,54 +560,41 @@ impl Simulation {
         if full {
             st.centres.clear();
             st.centres.resize(n * n_meshes, Vec3::ZERO);
+            st.span.clear();
+            st.span.resize(n, Span::default());
+            st.candidates.clear();
+            st.garbage = 0;
         }
         st.marks.resize_with(self.meshes.len(), NearScratch::default);
         let p = &self.particles;
-        let old_active = std::mem::take(&mut st.active);
-        let old_start = std::mem::take(&mut st.start);
-        let old = std::mem::take(&mut st.candidates);
-        let (mut active, mut start, mut candidates) = (
-            Vec::with_capacity(old_active.len()),
-            Vec::with_capacity(old_start.len()),
-            Vec::with_capacity(old.len()),
-        );
-        start.push(0);
-        let mut near = Vec::new();
-        let mut k = 0;
-        for i in 0..n {
-            let had = k < old_active.len() && old_active[k] as usize == i;
-            if !stale[i] {
-                if had {
-                    candidates.extend_from_slice(&old[old_start[k] as usize..old_start[k + 1] as usize]);
-                }
-            } else {
-                for (m, (wall, grid)) in self.meshes.iter().zip(&st.grids).enumerate() {
-                    let pose = &poses[m];
-                    let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
-                    st.centres[i * n_meshes + m] = y;
-                    let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
-                    grid.near_with_distances(
-                        &wall.mesh,
-                        y,
-                        p.radius[i] + margin + reach,
-                        &mut st.marks[m],
-                        &mut near,
-                    );
-                    near.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-                    candidates.extend(near.iter().map(|&(t, distance)| Candidate {
-                        mesh: m as u32,
-                        triangle: t,
-                        distance,
-                    }));
-                }
+        let (mut near, mut found) = (Vec::new(), Vec::new());
+        for i in stale {
+            found.clear();
+            for (m, (wall, grid)) in self.meshes.iter().zip(&st.grids).enumerate() {
+                let pose = &poses[m];
+                let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
+                st.centres[i * n_meshes + m] = y;
+                let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
+                grid.near_with_distances(&wall.mesh, y, p.radius[i] + margin + reach, &mut st.marks[m], &mut near);
+                found.extend(near.iter().map(|&(t, distance)| Candidate { mesh: m as u32, triangle: t, distance }));
             }
-            k += had as usize;
-            if candidates.len() > *start.last().unwrap_or(&0) as usize {
-                active.push(i as u32);
-                start.push(candidates.len() as u32);
+            let span = &mut st.span[i];
+            let len = found.len() as u32;
+            if len <= span.cap {
+                st.candidates[span.start as usize..][..found.len()].copy_from_slice(&found);
+                span.len = len;
+            } else {
+                st.garbage += span.cap as usize;
+                let cap = if full { len } else { len + len / 4 };
+                *span = Span { start: st.candidates.len() as u32, len, cap };
+                st.candidates.extend_from_slice(&found);
+                let pad = Candidate { mesh: u32::MAX, triangle: u32::MAX, distance: f64::INFINITY };
+                st.candidates.resize(st.candidates.len() + (cap - len) as usize, pad);
             }
         }
-        (st.active, st.start, st.candidates) = (active, start, candidates);
+        if st.garbage > st.candidates.len() / 2 {
+            st.compact();
+        }
         st.built = true;
         st.built_n = n;
     }
@@ -599,8 +624,10 @@ impl Simulation {
         let (mut contacts, mut triangles): (Vec<MeshContact>, Vec<u32>) = (Vec::new(), Vec::new());
         let mut claimed: Vec<bool> = Vec::new();
         let mut o = 0;
-        for a in 0..self.mesh_stage.active.len() {
-            let i = self.mesh_stage.active[a] as usize;
+        for i in 0..self.mesh_stage.span.len() {
+            if self.mesh_stage.span[i].len == 0 {
+                continue;
+            }
             // Histories are kept only for contacts, which only slots with candidates have.
             while o < old.len() && (old[o].slot as usize) < i {
                 o += 1;
@@ -618,7 +645,7 @@ impl Simulation {
                 let reach = if N::REACHES { c.pull_off } else { 0.0 };
                 let radius = p.radius[i];
                 self.mesh_stage.contacts_of(
-                    a,
+                    i,
                     (m, mesh, &poses[m]),
                     p.position[i],
                     radius,
