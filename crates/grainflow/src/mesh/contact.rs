@@ -203,18 +203,29 @@ pub fn sphere_contacts(
     let mut n_waiting = 0;
     for &t in candidate_triangles {
         let corners = mesh.corners(t);
-        let closest = closest_point_with_normal(centre, corners, mesh.normals[t as usize]);
+        let n = mesh.normals[t as usize];
+        // The distance to the triangle's plane bounds the distance to the triangle (the
+        // margin covers the rounding of the two, so no triangle in reach is passed over).
+        let s = (centre - corners[0]).dot(n);
+        if s.abs() > radius * (1.0 + 1e-12) {
+            continue;
+        }
+        let closest = closest_point_with_normal(centre, corners, n);
         // A triangle out of reach takes no part, so that the contacts are a function of the
         // triangles within reach, whatever other candidates come with them.
         if (centre - closest.point).length_squared() > radius * radius {
             continue;
         }
         let primitive = match closest.region {
-            Region::Face => Primitive::Face(t),
+            // The face's contact is its plane's, at the signed distance s.
+            Region::Face => {
+                out.extend(signed_plane_contact(t, n, s, Primitive::Face(t), centre, radius));
+                continue;
+            }
             Region::Edge(k) => Primitive::Edge(mesh.triangle_edges[t as usize][k as usize]),
             Region::Vertex(k) => Primitive::Vertex(mesh.triangles[t as usize][k as usize]),
         };
-        if matches!(primitive, Primitive::Face(_)) || n_waiting == WAIT {
+        if n_waiting == WAIT {
             if let Some(contact) = primitive_contact(mesh, primitive, centre, radius) {
                 out.push(contact);
             }
@@ -326,7 +337,13 @@ fn primitive_contact(mesh: &Mesh, primitive: Primitive, p: Vec3, r: f64) -> Opti
 /// normal side at distance 0).
 fn plane_contact(mesh: &Mesh, t: u32, primitive: Primitive, p: Vec3, r: f64) -> Option<MeshContact> {
     let n = mesh.normals[t as usize];
-    let s = (p - mesh.vertices[mesh.triangles[t as usize][0] as usize]).dot(n);
+    let s = (p - mesh.corners(t)[0]).dot(n);
+    signed_plane_contact(t, n, s, primitive, p, r)
+}
+
+/// [`plane_contact`] with the triangle's normal `n` and the centre's signed distance `s` from
+/// its plane given.
+fn signed_plane_contact(t: u32, n: Vec3, s: f64, primitive: Primitive, p: Vec3, r: f64) -> Option<MeshContact> {
     let distance = s.abs();
     (distance <= r).then(|| MeshContact {
         normal: if s >= 0.0 { n } else { -n },
