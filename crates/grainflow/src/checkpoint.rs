@@ -26,7 +26,7 @@ use thiserror::Error;
 /// state — its anchor and its pose — after them). A checkpoint of format 2 or 3
 /// continues with the quanta of its first evaluation taken afresh: not bit for bit as the run
 /// that wrote it would have gone on.
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 /// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
@@ -277,6 +277,8 @@ struct Payload {
     mesh_contacts: (Vec<[u32; 2]>, Vec<u32>, Vec<Vec3>, Vec<Vec3>),
     /// Each mesh's motion: anchor time, anchor pose, pose (None before format 6).
     mesh_motion: Option<Vec<(f64, Pose, Pose)>>,
+    /// The insertions' and outlets' state (None before format 7).
+    flow: Option<Vec<u64>>,
 }
 
 /// f64s per mesh of the motion state: τ, then two poses of a quaternion and a translation.
@@ -364,6 +366,15 @@ impl Payload {
         } else {
             None
         };
+        let flow = if version >= 7 {
+            let b = d.bytes("insertions and outlets")?;
+            if b.len() % 8 != 0 {
+                return Err(CheckpointError::Truncated("insertions and outlets"));
+            }
+            Some(b.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect())
+        } else {
+            None
+        };
         let mut neighbors = neighbors;
         if version >= 3 {
             ids_to_slots(&p.id, &mut neighbors)?;
@@ -381,6 +392,7 @@ impl Payload {
             anchors,
             mesh_contacts,
             mesh_motion,
+            flow,
         })
     }
 }
@@ -429,6 +441,7 @@ impl Simulation {
             + (8 + 24 * self.motion_anchors().len())
             + (8 + 8 + 8 + 8 + (8 + 4 + 24 + 24) * self.mesh_histories().len())
             + (8 + 8 * MOTION_F64S * self.meshes().len())
+            + (8 + 8 * self.flow_words().len())
     }
 
     /// Streams the checkpoint to `w` (no copy of the state in memory: a large state can go
@@ -486,6 +499,7 @@ impl Simulation {
             })
             .collect();
         e.f64s(&motion)?;
+        e.bytes(&self.flow_words().iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>())?;
         // The header announced the payload's length before it was written.
         if e.written != payload {
             return Err(io::Error::other(format!(
@@ -587,6 +601,7 @@ impl Simulation {
             sums,
             mesh_contacts,
             mesh_motion,
+            flow,
             ..
         } = payload;
         let mut sim = Simulation::unbuilt(config, particles)?;
@@ -597,6 +612,9 @@ impl Simulation {
         sim.set_mesh_histories(mesh_contacts).map_err(CheckpointError::Mismatch)?;
         if let Some(motion) = mesh_motion {
             sim.set_mesh_motion_state(&motion).map_err(CheckpointError::Mismatch)?;
+        }
+        if let Some(flow) = flow {
+            sim.set_flow_words(&flow).map_err(CheckpointError::Mismatch)?;
         }
         sim.prepare_mesh_candidates();
         Ok(sim)

@@ -61,7 +61,8 @@ pub use math::Vec3;
 pub use motion::{MotionRule, PrescribedMotion};
 pub use observe::Diagnostics;
 pub use simulation::{
-    ContactInfo, ContactPartner, MemoryUse, MeshLoad, ResortRule, Simulation, SimulationConfig, StageTimes,
+    ContactInfo, ContactPartner, FlowBooks, MemoryUse, MeshLoad, ResortRule, Simulation, SimulationConfig,
+    StageTimes, Tally,
 };
 pub use state::Particles;
 pub use timestep::{TimeStepChoice, TimeStepRule};

@@ -20,9 +20,11 @@ use crate::state::Particles;
 use crate::timestep::{self, TimeStepChoice, TimeStepRule};
 use crate::wall::Wall;
 
+mod inflow;
 mod meshes;
 mod population;
 
+pub use inflow::{FlowBooks, Tally};
 pub use meshes::MeshLoad;
 pub use population::ResortRule;
 
@@ -90,6 +92,10 @@ pub struct SimulationConfig {
     /// When the particles are re-sorted along a space-filling curve during the run (results
     /// do not depend on it).
     pub resort: ResortRule,
+    /// Particles poured in during the run.
+    pub insertions: Vec<crate::insertion::Insertion>,
+    /// Where particles leave the run (removed and counted).
+    pub outlets: Vec<crate::insertion::Outlet>,
 }
 
 /// A running simulation.
@@ -101,6 +107,8 @@ pub struct Simulation {
     meshes: Vec<MeshWall>,
     /// The mesh walls' candidates and contact histories.
     mesh_stage: meshes::MeshStage,
+    /// Insertions, outlets and their books.
+    flow: inflow::FlowStage,
     law: ContactLaw,
     coeffs: CoeffTable,
     integrator: Integrator,
@@ -174,6 +182,8 @@ impl Simulation {
                 x[i].x, x[i].y, x[i].z
             )));
         }
+        // Batches due at the start are in the initial state.
+        sim.flow_stage(false)?;
         sim.prepare_mesh_candidates();
         Ok(sim)
     }
@@ -231,6 +241,8 @@ impl Simulation {
         if !config.gravity.is_finite() {
             return Err(EngineError::BadReference("gravity must be a finite vector in m/s²".into()));
         }
+        let flow =
+            inflow::FlowStage::new(config.insertions, config.outlets, &particles, config.phases.len())?;
         let coeffs = CoeffTable::build(
             &config.law,
             &config.phases,
@@ -254,7 +266,7 @@ impl Simulation {
                     "the neighbour skin must be a length >= 0, in m",
                 ));
             }
-            None => default_skin(particles.max_radius()),
+            None => default_skin(particles.max_radius().max(flow.max_radius())),
         };
         let skin = skin_reaching(skin, config.skin.is_some(), coeffs.reach())?;
         let mut particles = particles;
@@ -265,7 +277,7 @@ impl Simulation {
         let motion = motion::resolve(&config.motion, &particles)?;
         let free = motion::free_runs(&motion, particles.len());
         let periodic = config.periodic.unwrap_or(Periodic::NONE);
-        periodic.check(particles.max_radius(), skin, &config.walls)?;
+        periodic.check(particles.max_radius().max(flow.max_radius()), skin, &config.walls)?;
         let mut neighbors = NeighborList::with_periodic(skin, periodic);
         let held = motion::held(&motion, particles.len());
         neighbors.exclude_pairs_among(held.clone());
@@ -278,6 +290,7 @@ impl Simulation {
             walls: config.walls,
             meshes: config.meshes,
             mesh_stage: meshes::MeshStage::new(config.t_start),
+            flow,
             law: config.law,
             coeffs,
             integrator: config.integrator,
@@ -571,6 +584,9 @@ impl Simulation {
         if self.particles.len() != self.slot_count {
             // Particles were pushed through `particles_mut`.
             self.adopt_pushed();
+        }
+        if let Err(e) = self.flow_stage(par) {
+            self.flow.error.get_or_insert(e.to_string());
         }
         self.resort_if_due(par);
         let start = self.timing.map(|t| (std::time::Instant::now(), t));

@@ -17,3 +17,113 @@ pub mod region;
 
 /// The random stream of an insertion.
 pub type InsertRng = rand_chacha::ChaCha8Rng;
+
+use crate::math::Vec3;
+use psd::Mixture;
+use region::Region;
+
+/// Particles poured into a region: what, how many, when, how fast.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Insertion {
+    /// The name, for messages and outputs.
+    pub name: String,
+    /// Where the particles are placed (each wholly inside).
+    pub region: Region,
+    /// The phases and sizes they are drawn from.
+    pub mixture: Mixture,
+    /// How much in all; `None`: no limit (a rate insertion goes on to the end of the run).
+    pub amount: Option<Amount>,
+    /// When.
+    pub schedule: Schedule,
+    /// Their velocity when placed, m/s (their spin is zero).
+    pub velocity: Vec3,
+    /// The seed of the insertion's random stream.
+    pub seed: u64,
+}
+
+/// How much an insertion puts in, in all.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Amount {
+    /// A number of particles.
+    Count(u64),
+    /// Particles whose volume is this fraction of the region's volume.
+    VolumeFraction(f64),
+    /// A mass, kg.
+    Mass(f64),
+}
+
+/// When an insertion places its particles.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Schedule {
+    /// All at once, at the first step that starts at or after `at`, s.
+    Once {
+        /// Time, s.
+        at: f64,
+    },
+    /// At a rate, in batches: one at `start` and then every `every` seconds, batch k bringing
+    /// the insertion's total to what the rate gives by `start + (k + 1)·every` (and no more
+    /// than [`Insertion::amount`]).
+    Rate {
+        /// How fast.
+        rate: Rate,
+        /// The first batch's time, s.
+        start: f64,
+        /// Time between batches, s.
+        every: f64,
+    },
+}
+
+/// The rate of a rate insertion.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rate {
+    /// Particles per second.
+    Particles(f64),
+    /// Kilograms per second.
+    Mass(f64),
+}
+
+/// Where particles leave the simulation: they are removed and counted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outlet {
+    /// The name, for messages and outputs.
+    pub name: String,
+    /// Which centres have left.
+    pub shape: OutletShape,
+}
+
+/// Which particles an outlet removes: those whose centre is …
+#[derive(Debug, Clone, PartialEq)]
+pub enum OutletShape {
+    /// … inside the region.
+    Region(Region),
+    /// … beyond the plane through `point`, on the side its `normal` points to.
+    Plane {
+        /// A point of the plane, m.
+        point: Vec3,
+        /// The plane's normal (need not be a unit vector), pointing out of the simulation.
+        normal: Vec3,
+    },
+    /// … outside the box on the axes marked (the domain box, whose non-periodic faces a
+    /// particle leaves through).
+    OutsideBox {
+        /// Lower corner, m.
+        lo: Vec3,
+        /// Upper corner, m.
+        hi: Vec3,
+        /// The axes on which leaving the box counts.
+        axes: [bool; 3],
+    },
+}
+
+impl OutletShape {
+    /// True if a particle centred at `x` has left through the outlet.
+    pub fn has_left(&self, x: Vec3) -> bool {
+        match self {
+            OutletShape::Region(r) => r.contains(x),
+            OutletShape::Plane { point, normal } => (x - *point).dot(*normal) > 0.0,
+            OutletShape::OutsideBox { lo, hi, axes } => {
+                (0..3).any(|k| axes[k] && !(x[k] >= lo[k] && x[k] <= hi[k]))
+            }
+        }
+    }
+}

@@ -343,7 +343,14 @@ fn plane_contact(mesh: &Mesh, t: u32, primitive: Primitive, p: Vec3, r: f64) -> 
 
 /// [`plane_contact`] with the triangle's normal `n` and the centre's signed distance `s` from
 /// its plane given.
-fn signed_plane_contact(t: u32, n: Vec3, s: f64, primitive: Primitive, p: Vec3, r: f64) -> Option<MeshContact> {
+fn signed_plane_contact(
+    t: u32,
+    n: Vec3,
+    s: f64,
+    primitive: Primitive,
+    p: Vec3,
+    r: f64,
+) -> Option<MeshContact> {
     let distance = s.abs();
     (distance <= r).then(|| MeshContact {
         normal: if s >= 0.0 { n } else { -n },

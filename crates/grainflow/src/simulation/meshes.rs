@@ -221,7 +221,8 @@ impl MeshStage {
     }
 
     /// Slots renumbered: slot `k` is now what slot `order[k]` was (`new_of[old]`, `u32::MAX`
-    /// for a removed slot). Histories of removed slots go; candidates are found again.
+    /// for a removed slot). Histories of removed slots go; the others' histories and
+    /// candidates go with their particles.
     pub(crate) fn remap(&mut self, new_of: &[u32]) {
         self.history.retain_mut(|h| {
             let k = new_of[h.slot as usize];
@@ -229,7 +230,43 @@ impl MeshStage {
             k != u32::MAX
         });
         self.history.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
-        self.built = false;
+        if !self.ready(new_of.len()) || !self.centres.len().is_multiple_of(new_of.len().max(1)) {
+            self.built = false;
+            return;
+        }
+        let meshes = self.centres.len() / new_of.len().max(1);
+        let n = new_of.iter().filter(|&&k| k != u32::MAX).count();
+        let mut span = vec![Span::default(); n];
+        let mut centres = vec![Vec3::ZERO; n * meshes];
+        for (old, &k) in new_of.iter().enumerate() {
+            if k == u32::MAX {
+                self.garbage += self.span[old].cap as usize;
+            } else {
+                let k = k as usize;
+                span[k] = self.span[old];
+                centres[k * meshes..(k + 1) * meshes]
+                    .copy_from_slice(&self.centres[old * meshes..(old + 1) * meshes]);
+            }
+        }
+        (self.span, self.centres, self.built_n) = (span, centres, n);
+        if self.garbage > self.candidates.len() / 2 {
+            self.compact();
+        }
+    }
+
+    /// Particles appended to the `n_old` slots, up to `n`: their candidates are found at the next evaluation
+    /// (their centres are nowhere yet, so they are stale), the others' kept.
+    pub(crate) fn appended(&mut self, n_old: usize, n: usize) {
+        if !self.ready(n_old) || n_old == 0 {
+            self.built = false;
+            return;
+        }
+        let meshes = self.centres.len() / self.built_n;
+        self.span.resize(n, Span::default());
+        self.centres.resize(n * meshes, Vec3::INFINITY);
+        self.built_n = n;
+        // Fixed meshes are checked once a neighbour-list build: check at the next evaluation.
+        self.checked_build = None;
     }
 }
 
@@ -553,7 +590,7 @@ impl Simulation {
             return;
         }
         if st.grids.len() != self.meshes.len() {
-            let cell = 2.0 * self.particles.max_radius() + margin;
+            let cell = 2.0 * self.particles.max_radius().max(self.flow.max_radius()) + margin;
             self.mesh_stage.grids = self.meshes.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
         }
         let st = &mut self.mesh_stage;
@@ -575,8 +612,18 @@ impl Simulation {
                 let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
                 st.centres[i * n_meshes + m] = y;
                 let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
-                grid.near_with_distances(&wall.mesh, y, p.radius[i] + margin + reach, &mut st.marks[m], &mut near);
-                found.extend(near.iter().map(|&(t, distance)| Candidate { mesh: m as u32, triangle: t, distance }));
+                grid.near_with_distances(
+                    &wall.mesh,
+                    y,
+                    p.radius[i] + margin + reach,
+                    &mut st.marks[m],
+                    &mut near,
+                );
+                found.extend(near.iter().map(|&(t, distance)| Candidate {
+                    mesh: m as u32,
+                    triangle: t,
+                    distance,
+                }));
             }
             let span = &mut st.span[i];
             let len = found.len() as u32;

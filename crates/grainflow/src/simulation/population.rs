@@ -162,7 +162,9 @@ impl Simulation {
             added.accel_prev = vec![Vec3::splat(f64::NAN); added.len()];
             added.alpha_prev = vec![Vec3::splat(f64::NAN); added.len()];
         }
+        let n_old = self.particles.len();
         self.particles.append(&added);
+        self.mesh_stage.appended(n_old, self.particles.len());
         // The forces held are those of the particles before: evaluated again before they act.
         self.forces_current = false;
         self.derive_slot_facts();

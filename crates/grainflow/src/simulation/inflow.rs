@@ -1,0 +1,583 @@
+//! Particles that come in and go out during a run: the insertions' batches
+//! ([`crate::insertion`]), the outlets, and the books of both.
+//!
+//! Between steps, at the start of a step:
+//! 1. **Outlets** remove the particles whose centres have left through them (and, with
+//!    [`OutletShape::OutsideBox`], those outside the domain box) every [`DRAIN_EVERY`] steps:
+//!    removing rearranges the slots (`Simulation::rearrange`), so it is done in batches, and
+//!    a particle that has left goes on for at most that many steps more (falling freely
+//!    below an orifice, or outside the box, where nothing meets it).
+//! 2. **Insertions** whose batch is due draw their particles (phase and diameter from the
+//!    mixture), place them ([`crate::insertion::place::place`]) clear of everything present,
+//!    and append them with new ids (counting on from the largest id there has been).
+//!
+//! Every insertion draws from its own stream, seeded by the case; its position in the stream
+//! is in the checkpoint, so a restart draws and places what the uninterrupted run would
+//! have. Nothing depends on the thread count.
+//!
+//! **The books.** Masses are counted in integers of a quantum fixed at set-up (2⁻⁶⁰ of the
+//! largest particle mass the run can have, rounded to a power of two): each particle's mass
+//! is rounded to a whole number of quanta once, so that initial + inserted = present +
+//! removed holds exactly, in any order, for counts and masses.
+
+use super::Simulation;
+use crate::error::EngineError;
+use crate::insertion::place::{Obstacles, place};
+use crate::insertion::{Amount, InsertRng, Insertion, Outlet, OutletShape, Rate, Schedule};
+use crate::math::Vec3;
+use crate::state::ParticleInit;
+use rand::SeedableRng;
+
+/// Particles and their mass, counted exactly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Tally {
+    /// How many.
+    pub count: u64,
+    /// Their mass in quanta of the run's books ([`FlowBooks::quantum`]).
+    pub units: i128,
+}
+
+impl Tally {
+    fn add(&mut self, units: i128) {
+        self.count += 1;
+        self.units += units;
+    }
+}
+
+/// The mass books of a run: what was there at the start, came in, went out and is there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlowBooks {
+    /// The mass of one unit of [`Tally::units`], kg (a power of two).
+    pub quantum: f64,
+    /// The particles at the start of the run.
+    pub initial: Tally,
+    /// Inserted since, by each insertion.
+    pub inserted: Vec<Tally>,
+    /// Removed since, by each outlet.
+    pub removed: Vec<Tally>,
+    /// There now.
+    pub present: Tally,
+    /// Particles each insertion drew but could not place (no room left in its region).
+    pub missed: Vec<u64>,
+}
+
+impl FlowBooks {
+    /// A tally's mass, kg.
+    pub fn mass(&self, t: Tally) -> f64 {
+        t.units as f64 * self.quantum
+    }
+
+    /// All insertions' tallies together.
+    pub fn inserted_total(&self) -> Tally {
+        sum(&self.inserted)
+    }
+
+    /// All outlets' tallies together.
+    pub fn removed_total(&self) -> Tally {
+        sum(&self.removed)
+    }
+
+    /// True if initial + inserted = present + removed, in counts and in mass units.
+    pub fn close(&self) -> bool {
+        let (i, r) = (self.inserted_total(), self.removed_total());
+        self.initial.count + i.count == self.present.count + r.count
+            && self.initial.units + i.units == self.present.units + r.units
+    }
+}
+
+fn sum(t: &[Tally]) -> Tally {
+    t.iter().fold(Tally::default(), |a, b| Tally { count: a.count + b.count, units: a.units + b.units })
+}
+
+/// The number of particles a batch of `ins` draws, about (from the mixture's mean volume and
+/// mass), for the set-up's check.
+fn batch_estimate(ins: &Insertion, volume: f64) -> f64 {
+    let (v, m) = (ins.mixture.mean_volume(), ins.mixture.mean_mass());
+    let of = |t: Target| match t {
+        Target::Count(n) => n as f64,
+        Target::Volume(x) => x / v,
+        Target::Mass(x) => x / m,
+    };
+    let whole = ins.amount.map(|a| of(total_target(a, volume)));
+    let batch = match ins.schedule {
+        Schedule::Once { .. } => whole.unwrap_or(0.0),
+        Schedule::Rate { rate, every, .. } => match rate {
+            Rate::Particles(r) => r * every,
+            Rate::Mass(r) => r * every / m,
+        },
+    };
+    whole.map_or(batch, |w| batch.min(w))
+}
+
+/// An insertion's progress.
+#[derive(Debug, Clone)]
+struct Feed {
+    rng: InsertRng,
+    /// Batches done.
+    batches: u64,
+    /// What has been drawn so far (placed or not): count, volume (m³), mass (kg).
+    drawn: (u64, f64, f64),
+    placed: Tally,
+    missed: u64,
+}
+
+/// What the flow stage keeps.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct FlowStage {
+    insertions: Vec<Insertion>,
+    outlets: Vec<Outlet>,
+    feeds: Vec<Feed>,
+    removed: Vec<Tally>,
+    /// The next inserted particle's id.
+    next_id: u64,
+    /// log₂ of the books' quantum.
+    quantum_exp: i32,
+    initial: Tally,
+    /// The first thing that went wrong in the stage (the run should stop on it).
+    pub error: Option<String>,
+}
+
+/// The books' quantum for particles up to `largest_mass`: a power of two 2⁻⁶⁰ of it or less.
+fn quantum_exponent(largest_mass: f64) -> i32 {
+    if largest_mass.is_finite() && largest_mass > 0.0 { largest_mass.log2().ceil() as i32 - 60 } else { -60 }
+}
+
+impl FlowStage {
+    /// The stage for `insertions` and `outlets`, with the particles `p` present at the start.
+    pub(crate) fn new(
+        insertions: Vec<Insertion>,
+        outlets: Vec<Outlet>,
+        p: &crate::state::Particles,
+        n_phases: usize,
+    ) -> Result<FlowStage, EngineError> {
+        for ins in &insertions {
+            check_insertion(ins, n_phases)?;
+        }
+        for o in &outlets {
+            if let OutletShape::Region(r) = &o.shape {
+                r.check().map_err(|e| EngineError::BadReference(format!("outlet '{}': {e}", o.name)))?;
+            }
+            if let OutletShape::Plane { point, normal } = &o.shape
+                && !(point.is_finite() && normal.is_finite() && normal.length_squared() > 0.0)
+            {
+                return Err(EngineError::BadReference(format!(
+                    "outlet '{}': the plane needs a finite point and a non-zero normal",
+                    o.name
+                )));
+            }
+        }
+        let largest = insertions
+            .iter()
+            .flat_map(|i| i.mixture.parts.iter())
+            .map(|part| part.density * std::f64::consts::FRAC_PI_6 * part.sizes.max_diameter().powi(3))
+            .chain(p.mass.iter().copied())
+            .fold(0.0, f64::max);
+        let quantum_exp = quantum_exponent(largest);
+        let feeds = insertions
+            .iter()
+            .map(|i| Feed {
+                rng: InsertRng::seed_from_u64(i.seed),
+                batches: 0,
+                drawn: (0, 0.0, 0.0),
+                placed: Tally::default(),
+                missed: 0,
+            })
+            .collect();
+        let mut stage = FlowStage {
+            removed: vec![Tally::default(); outlets.len()],
+            insertions,
+            outlets,
+            feeds,
+            next_id: p.id.iter().map(|&i| i as u64 + 1).max().unwrap_or(1),
+            quantum_exp,
+            initial: Tally::default(),
+            error: None,
+        };
+        stage.initial = stage.tally(p.mass.iter().copied());
+        Ok(stage)
+    }
+
+    /// True if the stage has nothing to do.
+    pub(crate) fn is_empty(&self) -> bool {
+        self.insertions.is_empty() && self.outlets.is_empty()
+    }
+
+    /// The largest radius an insertion can bring, m (0 if none).
+    pub(crate) fn max_radius(&self) -> f64 {
+        self.insertions.iter().map(|i| 0.5 * i.mixture.max_diameter()).fold(0.0, f64::max)
+    }
+
+    fn units(&self, mass: f64) -> i128 {
+        (mass * 2f64.powi(-self.quantum_exp)).round() as i128
+    }
+
+    fn tally(&self, masses: impl Iterator<Item = f64>) -> Tally {
+        let mut t = Tally::default();
+        for m in masses {
+            t.add(self.units(m));
+        }
+        t
+    }
+
+    /// The flow state as words, for checkpoints.
+    pub(crate) fn words(&self) -> Vec<u64> {
+        let mut w = vec![self.feeds.len() as u64, self.removed.len() as u64, self.next_id];
+        w.push(self.quantum_exp as i64 as u64);
+        let tally = |w: &mut Vec<u64>, t: Tally| {
+            w.push(t.count);
+            w.push(t.units as u128 as u64);
+            w.push((t.units as u128 >> 64) as u64);
+        };
+        tally(&mut w, self.initial);
+        for f in &self.feeds {
+            let pos = f.rng.get_word_pos();
+            w.extend([pos as u64, (pos >> 64) as u64, f.batches, f.drawn.0, f.drawn.1.to_bits()]);
+            w.push(f.drawn.2.to_bits());
+            tally(&mut w, f.placed);
+            w.push(f.missed);
+        }
+        for &t in &self.removed {
+            tally(&mut w, t);
+        }
+        w
+    }
+
+    /// Restores the flow state of [`words`](Self::words).
+    pub(crate) fn set_words(&mut self, w: &[u64]) -> Result<(), String> {
+        let (f, o) = (self.feeds.len(), self.removed.len());
+        if w.len() < 7 || w[0] != f as u64 || w[1] != o as u64 {
+            return Err(format!(
+                "the checkpoint has {} insertions and {} outlets, the case {f} and {o}",
+                w.first().unwrap_or(&0),
+                w.get(1).unwrap_or(&0)
+            ));
+        }
+        if w.len() != 7 + 10 * f + 3 * o {
+            return Err("the checkpoint's insertion state has the wrong length".into());
+        }
+        let tally = |c: &[u64]| Tally { count: c[0], units: (c[1] as u128 | (c[2] as u128) << 64) as i128 };
+        self.next_id = w[2];
+        self.quantum_exp = w[3] as i64 as i32;
+        self.initial = tally(&w[4..7]);
+        for (k, feed) in self.feeds.iter_mut().enumerate() {
+            let c = &w[7 + 10 * k..7 + 10 * (k + 1)];
+            feed.rng.set_word_pos(c[0] as u128 | (c[1] as u128) << 64);
+            feed.batches = c[2];
+            feed.drawn = (c[3], f64::from_bits(c[4]), f64::from_bits(c[5]));
+            feed.placed = tally(&c[6..9]);
+            feed.missed = c[9];
+        }
+        for (k, t) in self.removed.iter_mut().enumerate() {
+            *t = tally(&w[7 + 10 * f + 3 * k..]);
+        }
+        Ok(())
+    }
+}
+
+/// The engine's checks of an insertion (the case layer names the keys).
+fn check_insertion(ins: &Insertion, n_phases: usize) -> Result<(), EngineError> {
+    let bad = |what: String| EngineError::BadReference(format!("insertion '{}': {what}", ins.name));
+    if let Some(part) = ins.mixture.parts.iter().find(|p| p.phase as usize >= n_phases) {
+        return Err(bad(format!("phase index {} but only {n_phases} phases are defined", part.phase)));
+    }
+    ins.region.check().map_err(|e| bad(e.to_string()))?;
+    ins.mixture.check().map_err(|e| bad(e.to_string()))?;
+    if !ins.velocity.is_finite() {
+        return Err(bad("the velocity must be finite".into()));
+    }
+    match ins.amount {
+        Some(Amount::Count(_)) | None => {}
+        Some(Amount::VolumeFraction(f)) if f > 0.0 && f < 1.0 => {}
+        Some(Amount::Mass(m)) if m > 0.0 && m.is_finite() => {}
+        Some(a) => {
+            return Err(bad(format!("{a:?} is not an amount: a fraction in (0, 1) or a positive mass")));
+        }
+    }
+    match ins.schedule {
+        Schedule::Once { at } if at.is_finite() => {
+            if ins.amount.is_none() {
+                return Err(bad("an insertion all at once needs an amount".into()));
+            }
+        }
+        Schedule::Rate { rate, start, every } if start.is_finite() && every.is_finite() && every > 0.0 => {
+            let r = match rate {
+                Rate::Particles(r) | Rate::Mass(r) => r,
+            };
+            if !(r.is_finite() && r > 0.0) {
+                return Err(bad(format!("the rate must be positive, not {r}")));
+            }
+        }
+        s => return Err(bad(format!("{s:?} is not a schedule: finite times and a positive interval"))),
+    }
+    let batch = batch_estimate(ins, ins.region.volume());
+    if batch.is_nan() || batch > MAX_BATCH as f64 / 2.0 {
+        return Err(bad(format!(
+            "a batch would hold about {batch:.3e} particles, more than the {:.0e} one batch may hold; lower the amount or the rate, or insert more often",
+            MAX_BATCH as f64 / 2.0
+        )));
+    }
+    Ok(())
+}
+
+impl Simulation {
+    /// The mass books: initial, inserted, removed and present particles, each counted and
+    /// weighed exactly (see the [module doc](self)).
+    pub fn flow_books(&self) -> FlowBooks {
+        let st = &self.flow;
+        FlowBooks {
+            quantum: 2f64.powi(st.quantum_exp),
+            initial: st.initial,
+            inserted: st.feeds.iter().map(|f| f.placed).collect(),
+            removed: st.removed.clone(),
+            present: st.tally(self.particles.mass.iter().copied()),
+            missed: st.feeds.iter().map(|f| f.missed).collect(),
+        }
+    }
+
+    /// The insertions of the run.
+    pub fn insertions(&self) -> &[Insertion] {
+        &self.flow.insertions
+    }
+
+    /// The outlets of the run.
+    pub fn outlets(&self) -> &[Outlet] {
+        &self.flow.outlets
+    }
+
+    /// What went wrong in an insertion or an outlet, if anything did: the run should stop
+    /// (the steps go on without the failed batch).
+    pub fn flow_error(&self) -> Option<&str> {
+        self.flow.error.as_deref()
+    }
+
+    pub(crate) fn flow_words(&self) -> Vec<u64> {
+        self.flow.words()
+    }
+
+    pub(crate) fn set_flow_words(&mut self, w: &[u64]) -> Result<(), String> {
+        self.flow.set_words(w)
+    }
+
+    /// The flow stage at the start of a step (see the [module doc](self)); with `par` on the
+    /// thread pool.
+    pub(super) fn flow_stage(&mut self, par: bool) -> Result<(), EngineError> {
+        if self.flow.is_empty() {
+            return Ok(());
+        }
+        let t = self.time();
+        let tolerance = 1e-6 * self.time_step.dt;
+        let due: Vec<usize> =
+            (0..self.flow.insertions.len()).filter(|&k| self.batch_due(k, t + tolerance)).collect();
+        let drain = !self.flow.outlets.is_empty() && self.step.is_multiple_of(DRAIN_EVERY) && self.any_left();
+        if due.is_empty() && !drain {
+            return Ok(());
+        }
+        if self.kick_pending {
+            self.finish_kick(par);
+        }
+        if drain {
+            self.drain()?;
+        }
+        for k in due {
+            while self.batch_due(k, t + tolerance) {
+                self.insert_batch(k)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// True if insertion `k` has a batch due at time `t` and something left to insert.
+    fn batch_due(&self, k: usize, t: f64) -> bool {
+        let (ins, feed) = (&self.flow.insertions[k], &self.flow.feeds[k]);
+        if amount_reached(ins.amount, feed.drawn, ins.region.volume()) {
+            return false;
+        }
+        match ins.schedule {
+            Schedule::Once { at } => feed.batches == 0 && at <= t,
+            Schedule::Rate { start, every, .. } => start + feed.batches as f64 * every <= t,
+        }
+    }
+
+    /// True if a particle has left through an outlet.
+    fn any_left(&self) -> bool {
+        let outlets = &self.flow.outlets;
+        self.particles.position.iter().any(|&x| outlets.iter().any(|o| o.shape.has_left(x)))
+    }
+
+    /// Removes the particles that have left through an outlet (the first outlet that has them
+    /// counts them).
+    fn drain(&mut self) -> Result<(), EngineError> {
+        let p = &self.particles;
+        let mut gone: Vec<(usize, usize)> = Vec::new();
+        for i in 0..p.len() {
+            if let Some(o) = self.flow.outlets.iter().position(|o| o.shape.has_left(p.position[i])) {
+                gone.push((i, o));
+            }
+        }
+        if gone.is_empty() {
+            return Ok(());
+        }
+        for &(i, o) in &gone {
+            let u = self.flow.units(self.particles.mass[i]);
+            self.flow.removed[o].add(u);
+        }
+        let mut leaving = vec![false; p.len()];
+        for &(i, _) in &gone {
+            leaving[i] = true;
+        }
+        self.remove_where(|_, i| leaving[i])?;
+        Ok(())
+    }
+
+    /// Draws, places and inserts the next batch of insertion `k`.
+    fn insert_batch(&mut self, k: usize) -> Result<(), EngineError> {
+        let ins = self.flow.insertions[k].clone();
+        let volume = ins.region.volume();
+        let target = batch_target(&ins, self.flow.feeds[k].batches, volume);
+        // Draw until the batch's target is reached.
+        let feed = &mut self.flow.feeds[k];
+        let mut drawn: Vec<(u32, f64, f64)> = Vec::new();
+        let rho = |phase: u32| ins.mixture.parts.iter().find(|p| p.phase == phase).map_or(0.0, |p| p.density);
+        // (The set-up's check keeps batches far below `MAX_BATCH`: the cap only bounds memory.)
+        while !target.reached(feed.drawn) && !amount_reached(ins.amount, feed.drawn, volume) {
+            if drawn.len() >= MAX_BATCH {
+                break;
+            }
+            let (phase, d) = ins.mixture.sample(&mut feed.rng);
+            let v = std::f64::consts::FRAC_PI_6 * d * d * d;
+            let density = rho(phase);
+            feed.drawn.0 += 1;
+            feed.drawn.1 += v;
+            feed.drawn.2 += density * v;
+            drawn.push((phase, d, density));
+        }
+        feed.batches += 1;
+        if drawn.is_empty() {
+            return Ok(());
+        }
+        let diameters: Vec<f64> = drawn.iter().map(|d| d.1).collect();
+        let triangles = self.mesh_triangles_near(&ins.region, ins.mixture.max_diameter());
+        let periodic = self.periodic.any().then_some(self.periodic);
+        let p = &self.particles;
+        let radii = &p.radius;
+        let obstacles =
+            Obstacles { positions: &p.position, radii, walls: &self.walls, triangles: &triangles, periodic };
+        let centres = place(&ins.region, &diameters, &obstacles, &mut self.flow.feeds[k].rng);
+        let mut new = Vec::with_capacity(centres.len());
+        for (&(phase, d, density), c) in drawn.iter().zip(centres) {
+            let Some(position) = c else {
+                self.flow.feeds[k].missed += 1;
+                continue;
+            };
+            let id = u32::try_from(self.flow.next_id).map_err(|_| {
+                EngineError::BadReference(format!(
+                    "insertion '{}': particle ids beyond {}",
+                    ins.name,
+                    u32::MAX
+                ))
+            })?;
+            self.flow.next_id += 1;
+            new.push(ParticleInit {
+                id,
+                phase,
+                radius: 0.5 * d,
+                density,
+                position,
+                velocity: ins.velocity,
+                omega: Vec3::ZERO,
+            });
+        }
+        if new.is_empty() {
+            return Ok(());
+        }
+        let first = self.particles.len();
+        self.insert(&new)?;
+        let units: Vec<i128> = self.particles.mass[first..].iter().map(|&m| self.flow.units(m)).collect();
+        for u in units {
+            self.flow.feeds[k].placed.add(u);
+        }
+        Ok(())
+    }
+
+    /// The mesh walls' triangles, where they are now, whose bounding boxes come within
+    /// `margin` of `region`'s.
+    fn mesh_triangles_near(&self, region: &crate::insertion::region::Region, margin: f64) -> Vec<[Vec3; 3]> {
+        let (lo, hi) = region.bounds();
+        let (lo, hi) = (lo - Vec3::splat(margin), hi + Vec3::splat(margin));
+        let mut out = Vec::new();
+        for m in 0..self.meshes.len() {
+            let v = self.mesh_vertices(m);
+            for t in self.meshes[m].mesh.triangles() {
+                let c = t.map(|k| v[k as usize]);
+                let (a, b) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+                if a.cmple(hi).all() && b.cmpge(lo).all() {
+                    out.push(c);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Outlets remove the particles that have left through them every this many steps (each
+/// removal moves the particles to new slots, which costs about a neighbour-list build).
+pub const DRAIN_EVERY: u64 = 10;
+
+/// The most particles one batch may draw (a guard against an amount or rate that would take
+/// gigabytes: 10⁷ particles are about 2 GB of state).
+const MAX_BATCH: usize = 10_000_000;
+
+/// What a batch draws up to: the insertion's total so far must reach the count, volume or mass.
+#[derive(Debug, Clone, Copy)]
+enum Target {
+    Count(u64),
+    Volume(f64),
+    Mass(f64),
+}
+
+impl Target {
+    fn reached(self, (n, v, m): (u64, f64, f64)) -> bool {
+        match self {
+            Target::Count(c) => n >= c,
+            Target::Volume(x) => v >= x,
+            Target::Mass(x) => m >= x,
+        }
+    }
+}
+
+/// True if the insertion has drawn its whole amount.
+fn amount_reached(amount: Option<Amount>, drawn: (u64, f64, f64), volume: f64) -> bool {
+    amount.is_some_and(|a| total_target(a, volume).reached(drawn))
+}
+
+fn total_target(a: Amount, volume: f64) -> Target {
+    match a {
+        Amount::Count(n) => Target::Count(n),
+        Amount::VolumeFraction(f) => Target::Volume(f * volume),
+        Amount::Mass(m) => Target::Mass(m),
+    }
+}
+
+/// Batch `k`'s target: the amount for an insertion all at once; for a rate, what the rate
+/// gives by the end of the batch's interval, capped by the amount. A rate in particles and
+/// an amount in mass or volume (or the other way round) each stop the batch.
+fn batch_target(ins: &Insertion, k: u64, volume: f64) -> Target {
+    let whole = ins.amount.map(|a| total_target(a, volume));
+    match ins.schedule {
+        Schedule::Once { .. } => whole.unwrap_or(Target::Count(0)),
+        Schedule::Rate { rate, every, .. } => {
+            let by = (k + 1) as f64 * every;
+            let rate_target = match rate {
+                Rate::Particles(r) => Target::Count((r * by).round() as u64),
+                Rate::Mass(r) => Target::Mass(r * by),
+            };
+            match (whole, rate_target) {
+                (Some(Target::Count(a)), Target::Count(b)) => Target::Count(a.min(b)),
+                (Some(Target::Mass(a)), Target::Mass(b)) => Target::Mass(a.min(b)),
+                // Different kinds: the rate's target; the whole amount stops the drawing too
+                // (`amount_reached`).
+                (_, t) => t,
+            }
+        }
+    }
+}
