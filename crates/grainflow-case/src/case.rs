@@ -221,7 +221,7 @@ fn require<T>(v: Option<T>, table: &str, key: &str, hint: &str) -> Result<T, Cas
     v.ok_or_else(|| CaseError::missing(table, key, hint))
 }
 
-fn check(r: Range, table: &str, key: &str, v: f64) -> Result<f64, CaseError> {
+pub(crate) fn check(r: Range, table: &str, key: &str, v: f64) -> Result<f64, CaseError> {
     if r.contains(v) { Ok(v) } else { Err(CaseError::invalid(table, key, v, r.valid)) }
 }
 
@@ -239,7 +239,7 @@ fn choose<T: Copy>(
     })
 }
 
-fn vec3(a: [f64; 3], table: &str, key: &str) -> Result<Vec3, CaseError> {
+pub(crate) fn vec3(a: [f64; 3], table: &str, key: &str) -> Result<Vec3, CaseError> {
     let v = Vec3::from_array(a);
     if v.is_finite() {
         Ok(v)
@@ -843,9 +843,22 @@ fn validate<'h>(
         .transpose()?;
     let output = OutputSettings { interval, snapshots: raw.output.snapshots.unwrap_or(true), vtk_interval };
 
-    // Particles.
-    let praw =
-        require(raw.particles, "top level", "[particles]", "a particle file and/or [[particles.list]]")?;
+    // Insertions and outlets.
+    let mesh_set = crate::flow::Meshes { walls: &meshes, names: &mesh_names };
+    let insertions = crate::flow::insertions(&raw.insertions, &phases, &mesh_set, t_start)?;
+    let outlets = crate::flow::outlets(&raw.outlets, &mesh_set, domain.leaving.as_deref(), (min, max), axes)?;
+
+    // Particles (none needed when an insertion brings them).
+    let praw = match raw.particles {
+        Some(p) => p,
+        None if !insertions.is_empty() => RawParticles::default(),
+        None => require(
+            None,
+            "top level",
+            "[particles]",
+            "a particle file and/or [[particles.list]] (or [[insertions]])",
+        )?,
+    };
     let mut init: Vec<ParticleInit> = Vec::new();
     if let Some(file) = &praw.file {
         let lower = file.to_ascii_lowercase();
@@ -935,8 +948,12 @@ fn validate<'h>(
             omega: vec3(p.angular_velocity.unwrap_or([0.0; 3]), &table, "angular_velocity")?,
         });
     }
-    if init.is_empty() {
-        return Err(CaseError::missing("[particles]", "file or list", "at least one particle"));
+    if init.is_empty() && insertions.is_empty() {
+        return Err(CaseError::missing(
+            "[particles]",
+            "file or list",
+            "at least one particle (or [[insertions]])",
+        ));
     }
     match praw.order.as_deref() {
         None | Some("input") => {}
@@ -1141,6 +1158,8 @@ fn validate<'h>(
         motion,
         periodic,
         resort,
+        insertions,
+        outlets,
     };
     Ok(Case {
         title: raw.title,

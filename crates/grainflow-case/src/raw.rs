@@ -49,6 +49,12 @@ pub struct RawCase {
     /// Prescribed particle motion.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub motion: Vec<RawMotion>,
+    /// Particles poured in during the run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub insertions: Vec<RawInsertion>,
+    /// Where particles leave the run.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outlets: Vec<RawOutlet>,
 }
 
 /// `[domain]`
@@ -71,6 +77,10 @@ pub struct RawDomain {
     /// Material of the six box walls. Default: the first wall material.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub wall_material: Option<String>,
+    /// A particle leaving the box through a face that is not periodic: "stop" the run
+    /// (default) or "remove" it (counted as the outlet "domain").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub leaving: Option<String>,
 }
 
 /// `[domain] walls`: all faces, none, or the named ones.
@@ -403,7 +413,7 @@ pub struct RawOutput {
 }
 
 /// `[particles]`
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawParticles {
     /// A particle file, relative to the case file's folder.
@@ -502,4 +512,143 @@ pub enum IdSelection {
     One(u32),
     /// `[first, last]`, inclusive.
     Range([u32; 2]),
+}
+
+/// `[[insertions]]`: particles poured into a region, all at once (`at`) or at a rate
+/// (`rate` or `mass_rate`, in batches every `every` seconds from `start`).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawInsertion {
+    /// Name for messages and outputs. Required, unique among the insertions.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Where the particles are placed. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<RawRegion>,
+    /// How many particles in all (or `volume_fraction` or `mass`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub count: Option<u64>,
+    /// The particles' volume in all, as a fraction of the region's volume.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub volume_fraction: Option<f64>,
+    /// The particles' mass in all, kg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    /// All at once at this time, s. Default: the start time (when there is no rate).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at: Option<f64>,
+    /// Particles per second.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rate: Option<f64>,
+    /// Kilograms per second.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mass_rate: Option<f64>,
+    /// A rate's first batch, s. Default: the start time.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start: Option<f64>,
+    /// Time between a rate's batches, s. Default 0.01.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub every: Option<f64>,
+    /// The particles' velocity when placed, m/s. Default [0, 0, 0].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<[f64; 3]>,
+    /// Seed of the insertion's random stream. Default: its position among the insertions.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// How the phases' `fraction`s are meant: "number" (default) or "mass".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fractions_by: Option<String>,
+    /// The phases poured, with their size distributions. At least one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub phases: Vec<RawInsertPhase>,
+}
+
+/// `[[insertions.phases]]`: one phase of an insertion and its size distribution.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawInsertPhase {
+    /// The phase's name. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub phase: Option<String>,
+    /// Its share of the insertion (by `fractions_by`). Default 1 when it is the only phase.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fraction: Option<f64>,
+    /// "constant" (default), "uniform", "normal", "lognormal" or "table".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub distribution: Option<String>,
+    /// constant: the diameter, m. Default: the phase's diameter.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub diameter: Option<f64>,
+    /// normal, lognormal: the mean diameter, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mean: Option<f64>,
+    /// normal, lognormal: the standard deviation of the diameter, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
+    /// uniform, normal, lognormal: the smallest diameter, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_diameter: Option<f64>,
+    /// uniform, normal, lognormal: the largest diameter, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_diameter: Option<f64>,
+    /// table: the diameters, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub diameters: Option<Vec<f64>>,
+    /// table: each diameter's share (by `weights_by`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub weights: Option<Vec<f64>>,
+    /// table: "number" (default) or "mass".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub weights_by: Option<String>,
+}
+
+/// `[insertions.region]`, `[outlets.region]`: a box, a cylinder, or the inside of a closed
+/// mesh.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawRegion {
+    /// "box", "cylinder" or "mesh". Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    /// box: the lower corner, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min: Option<[f64; 3]>,
+    /// box: the upper corner, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max: Option<[f64; 3]>,
+    /// cylinder: the centre of one end, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base: Option<[f64; 3]>,
+    /// cylinder: the direction from `base` to the other end.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    /// cylinder: the distance between its ends, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub length: Option<f64>,
+    /// cylinder: its radius, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// mesh: the name of a closed `[[meshes]]` entry whose inside is the region.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<String>,
+}
+
+/// `[[outlets]]`: particles whose centres enter the region, or cross the plane, are removed
+/// and counted.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawOutlet {
+    /// Name for messages and outputs. Required, unique among the outlets.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The region (or `point` and `normal`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<RawRegion>,
+    /// A point of the plane, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point: Option<[f64; 3]>,
+    /// The plane's normal, pointing out of the simulation: centres beyond the plane on this
+    /// side are removed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[f64; 3]>,
 }

@@ -231,7 +231,9 @@ pub fn run_case(
     info.write(out, &sim, "running", None)?;
     // The whole run on the simulation's threads: handing each step over to them on its own
     // costs several microseconds a step.
-    let health = Health { domain, max_overlap };
+    let leaving_removed =
+        sim.outlets().iter().any(|o| matches!(o.shape, grainflow::insertion::OutletShape::OutsideBox { .. }));
+    let health = Health { domain, max_overlap, leaving_removed };
     let result = sim.on_pool(|sim| {
         run_simulation(sim, output, health, &mesh_loads, &hash, &mut folder, options, &mut on_progress)
     });
@@ -489,8 +491,11 @@ impl Drop for LastGood<'_> {
 /// What the run-time health check holds a state to.
 #[derive(Debug, Clone, Copy)]
 pub struct Health {
-    /// The domain box (lower, upper corner), m: no particle may leave it.
+    /// The domain box (lower, upper corner), m: no particle may leave it, unless
+    /// `leaving_removed` (`[domain] leaving = "remove"`: the outlet "domain" removes them).
     pub domain: (Vec3, Vec3),
+    /// Particles leaving the box are removed, not a problem.
+    pub leaving_removed: bool,
     /// The largest overlap, as a fraction of the smaller radius (`[particles] max_overlap`).
     pub max_overlap: f64,
 }
@@ -500,6 +505,9 @@ pub struct Health {
 pub fn health_problem(sim: &Simulation, health: Health) -> Option<String> {
     let p = sim.particles();
     let step = sim.step_index();
+    if let Some(e) = sim.flow_error() {
+        return Some(format!("step {step}: {e}"));
+    }
     // In id order: the problem named is the same however the particles are stored.
     for i in p.id_order() {
         let (x, v, w) = (p.position[i], p.velocity[i], p.omega[i]);
@@ -510,7 +518,7 @@ pub fn health_problem(sim: &Simulation, health: Health) -> Option<String> {
             ));
         }
         let (lo, hi) = health.domain;
-        if x.cmplt(lo).any() || x.cmpgt(hi).any() {
+        if !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any()) {
             return Some(format!(
                 "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.",
                 p.id[i],
@@ -569,16 +577,34 @@ struct MeshLoads {
     about: Vec<Vec3>,
     /// Each mesh's rotation axis (a point on it, unit direction), if it has one.
     axes: Vec<Option<(Vec3, Vec3)>>,
+    /// With insertions or outlets: the inserted and removed tallies at the last row (the
+    /// flow columns count what came and went since).
+    flow: Option<std::sync::Mutex<(grainflow::Tally, grainflow::Tally)>>,
 }
+
+/// The time series' columns of the insertions and outlets: what came in and went out since
+/// the row before (count and mass, kg), and the particles' mass now, kg.
+pub const FLOW_COLUMNS: [&str; 5] = ["inserted", "inserted_mass", "removed", "removed_mass", "mass"];
 
 impl MeshLoads {
     fn new(case: &Case) -> MeshLoads {
         let axes: Vec<_> = case.config.meshes.iter().map(rotation_axis).collect();
         let rotating: Vec<bool> = axes.iter().map(Option::is_some).collect();
-        MeshLoads {
-            columns: mesh_columns(&case.mesh_names, &rotating),
-            about: case.mesh_torque_about.clone(),
-            axes,
+        let mut columns = mesh_columns(&case.mesh_names, &rotating);
+        let flow = !(case.config.insertions.is_empty() && case.config.outlets.is_empty());
+        if flow {
+            columns.extend(FLOW_COLUMNS.iter().map(|c| c.to_string()));
+        }
+        MeshLoads { columns, about: case.mesh_torque_about.clone(), axes, flow: flow.then(Default::default) }
+    }
+
+    /// The flow columns count from the books of `sim` (a restarted run's), or from nothing
+    /// (a fresh run, whose first row counts the insertions made at its start).
+    fn start_flow(&self, sim: &Simulation, fresh: bool) {
+        if let Some(last) = &self.flow {
+            let b = sim.flow_books();
+            let now = if fresh { Default::default() } else { (b.inserted_total(), b.removed_total()) };
+            *last.lock().unwrap_or_else(|e| e.into_inner()) = now;
         }
     }
 
@@ -594,6 +620,18 @@ impl MeshLoads {
             if let Some((origin, direction)) = axis {
                 v.push(direction.dot(load.torque + (about - *origin).cross(load.force)));
             }
+        }
+        if let Some(last) = &self.flow {
+            let b = sim.flow_books();
+            let (i, r) = (b.inserted_total(), b.removed_total());
+            let (i0, r0) = std::mem::replace(&mut *last.lock().unwrap_or_else(|e| e.into_inner()), (i, r));
+            let q = b.quantum;
+            let since = |a: grainflow::Tally, b: grainflow::Tally| {
+                [(a.count - b.count) as f64, (a.units - b.units) as f64 * q]
+            };
+            v.extend(since(i, i0));
+            v.extend(since(r, r0));
+            v.push(b.mass(b.present));
         }
         v
     }
@@ -645,6 +683,7 @@ fn run_simulation(
     let every = output_every(interval, sim.dt(), sim.total_steps());
     let keep_row =
         !options.accept_changed_case && !mesh_loads.columns.is_empty() && start_step.is_multiple_of(every);
+    mesh_loads.start_flow(sim, options.restart.is_none());
     let (mut ts, row_kept) = if folder.continues() {
         drop_later_frames(folder, start_step)?;
         TimeSeriesWriter::resume(&ts_path, start_step, &mesh_loads.columns, keep_row)

@@ -48,6 +48,9 @@ fn every_case_file_key_is_documented_and_every_documented_key_exists() {
         "list",
         "motion",
         "params",
+        "insertions",
+        "outlets",
+        "region",
     ];
     let undocumented: Vec<_> =
         code.iter().filter(|k| !doc.contains(*k) && !tables.contains(&k.as_str())).collect();

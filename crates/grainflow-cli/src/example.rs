@@ -50,6 +50,11 @@ const EXAMPLES: &[Example] = &[
         ],
     },
     Example {
+        name: "pour-bed",
+        summary: "a bed of glass beads (1.6–2.4 mm) and steel shot poured into a box by an insertion: no particle file",
+        files: &[("case.toml", include_str!("../../../examples/pour-bed/case.toml"))],
+    },
+    Example {
         name: "bouncing-ball",
         summary: "one ball dropped on the floor (MFIX DEM02 set-up, e_n = 0.9)",
         files: &[("case.toml", include_str!("../../../examples/bouncing-ball/case.toml"))],

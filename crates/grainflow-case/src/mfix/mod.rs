@@ -398,6 +398,7 @@ impl Translator<'_> {
                 walls: WallSelection::All(true),
                 periodic: None,
                 wall_material: None,
+                leaving: None,
             }),
             physics: RawPhysics { gravity: Some(gravity) },
             phases: phases
@@ -419,6 +420,8 @@ impl Translator<'_> {
             output,
             particles: Some(particles),
             motion,
+            insertions: Vec::new(),
+            outlets: Vec::new(),
         };
         Ok((raw, extra_source))
     }

@@ -72,6 +72,8 @@ pub fn config(
         motion: Vec::new(),
         periodic: None,
         resort: grainflow::ResortRule::Never,
+        insertions: Vec::new(),
+        outlets: Vec::new(),
     }
 }
 

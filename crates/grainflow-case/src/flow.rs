@@ -1,0 +1,443 @@
+//! `[[insertions]]`, `[[outlets]]` and `[domain] leaving` → the engine's insertions and
+//! outlets, with messages naming table, key and value.
+
+use crate::case::{check, vec3};
+use crate::error::CaseError;
+use crate::raw::{RawInsertPhase, RawInsertion, RawOutlet, RawRegion};
+use grainflow::contact::limits;
+use grainflow::insertion::psd::{Basis, Mixture, MixturePart, SizeDistribution};
+use grainflow::insertion::region::Region;
+use grainflow::insertion::{Amount, Insertion, Outlet, OutletShape, Rate, Schedule};
+use grainflow::mesh::MeshWall;
+use grainflow::{Phase, Vec3};
+
+/// Default time between a rate insertion's batches, s.
+pub const DEFAULT_EVERY: f64 = 0.01;
+
+/// The meshes of the case, by name, for mesh regions.
+pub(crate) struct Meshes<'a> {
+    pub walls: &'a [MeshWall],
+    pub names: &'a [String],
+}
+
+fn positive(table: &str, key: &str, v: f64) -> Result<f64, CaseError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(CaseError::invalid(table, key, v, "must be a positive number"))
+    }
+}
+
+fn finite(table: &str, key: &str, v: f64) -> Result<f64, CaseError> {
+    if v.is_finite() { Ok(v) } else { Err(CaseError::invalid(table, key, v, "must be a finite number")) }
+}
+
+/// A region table.
+pub(crate) fn region(r: &RawRegion, table: &str, meshes: &Meshes) -> Result<Region, CaseError> {
+    let kind = r
+        .kind
+        .as_deref()
+        .ok_or_else(|| CaseError::missing(table, "kind", "\"box\", \"cylinder\" or \"mesh\""))?;
+    let given = |k: &str| match k {
+        "min" => r.min.is_some(),
+        "max" => r.max.is_some(),
+        "base" => r.base.is_some(),
+        "axis" => r.axis.is_some(),
+        "length" => r.length.is_some(),
+        "radius" => r.radius.is_some(),
+        "mesh" => r.mesh.is_some(),
+        _ => false,
+    };
+    let own: &[&str] = match kind {
+        "box" => &["min", "max"],
+        "cylinder" => &["base", "axis", "length", "radius"],
+        "mesh" => &["mesh"],
+        other => {
+            return Err(CaseError::invalid(
+                table,
+                "kind",
+                format!("\"{other}\""),
+                "must be \"box\", \"cylinder\" or \"mesh\"",
+            ));
+        }
+    };
+    if let Some(k) = ["min", "max", "base", "axis", "length", "radius", "mesh"]
+        .iter()
+        .find(|k| given(k) && !own.contains(k))
+    {
+        return Err(CaseError::invalid(
+            table,
+            *k,
+            "given",
+            format!("not a key of kind = \"{kind}\" (its keys: {})", own.join(", ")),
+        ));
+    }
+    let need = |k: &str| CaseError::missing(table, k, format!("required by kind = \"{kind}\""));
+    let region = match kind {
+        "box" => {
+            let lo = vec3(r.min.ok_or_else(|| need("min"))?, table, "min")?;
+            let hi = vec3(r.max.ok_or_else(|| need("max"))?, table, "max")?;
+            if !hi.cmpgt(lo).all() {
+                return Err(CaseError::invalid(
+                    table,
+                    "max",
+                    format!("{:?}", hi.to_array()),
+                    format!("every component must exceed min = {:?}", lo.to_array()),
+                ));
+            }
+            Region::Box { lo, hi }
+        }
+        "cylinder" => {
+            let base = vec3(r.base.ok_or_else(|| need("base"))?, table, "base")?;
+            let axis = vec3(r.axis.ok_or_else(|| need("axis"))?, table, "axis")?;
+            if axis.length_squared() == 0.0 {
+                return Err(CaseError::invalid(table, "axis", "[0, 0, 0]", "must not be zero"));
+            }
+            let length = positive(table, "length", r.length.ok_or_else(|| need("length"))?)?;
+            let radius = positive(table, "radius", r.radius.ok_or_else(|| need("radius"))?)?;
+            Region::cylinder(base, axis, length, radius)
+        }
+        _ => {
+            let name = r.mesh.as_deref().ok_or_else(|| need("mesh"))?;
+            let Some(k) = meshes.names.iter().position(|n| n == name) else {
+                let names: Vec<String> = meshes.names.iter().map(|n| format!("\"{n}\"")).collect();
+                return Err(CaseError::invalid(
+                    table,
+                    "mesh",
+                    format!("\"{name}\""),
+                    if names.is_empty() {
+                        "the case has no [[meshes]]".to_string()
+                    } else {
+                        format!("not a mesh; the meshes are {}", names.join(", "))
+                    },
+                ));
+            };
+            Region::mesh(&meshes.walls[k].mesh)
+        }
+    };
+    region.check().map_err(|e| CaseError::Geometry(format!("{table}: {e}")))?;
+    Ok(region)
+}
+
+/// One phase's size distribution.
+fn sizes(p: &RawInsertPhase, table: &str, phase: &Phase) -> Result<SizeDistribution, CaseError> {
+    let kind = p.distribution.as_deref().unwrap_or("constant");
+    let keys: [(&str, bool); 8] = [
+        ("diameter", p.diameter.is_some()),
+        ("mean", p.mean.is_some()),
+        ("sigma", p.sigma.is_some()),
+        ("min_diameter", p.min_diameter.is_some()),
+        ("max_diameter", p.max_diameter.is_some()),
+        ("diameters", p.diameters.is_some()),
+        ("weights", p.weights.is_some()),
+        ("weights_by", p.weights_by.is_some()),
+    ];
+    let own: &[&str] = match kind {
+        "constant" => &["diameter"],
+        "uniform" => &["min_diameter", "max_diameter"],
+        "normal" | "lognormal" => &["mean", "sigma", "min_diameter", "max_diameter"],
+        "table" => &["diameters", "weights", "weights_by"],
+        other => {
+            return Err(CaseError::invalid(
+                table,
+                "distribution",
+                format!("\"{other}\""),
+                "must be \"constant\", \"uniform\", \"normal\", \"lognormal\" or \"table\"",
+            ));
+        }
+    };
+    if let Some((k, _)) = keys.iter().find(|(k, given)| *given && !own.contains(k)) {
+        return Err(CaseError::invalid(
+            table,
+            *k,
+            "given",
+            format!("not a key of distribution = \"{kind}\" (its keys: {})", own.join(", ")),
+        ));
+    }
+    let need = |k: &str| CaseError::missing(table, k, format!("required by distribution = \"{kind}\", m"));
+    let d = |k: &str, v: Option<f64>| -> Result<f64, CaseError> {
+        check(limits::DIAMETER, table, k, v.ok_or_else(|| need(k))?)
+    };
+    let s = match kind {
+        "constant" => SizeDistribution::Constant {
+            diameter: check(limits::DIAMETER, table, "diameter", p.diameter.unwrap_or(phase.diameter))?,
+        },
+        "uniform" => SizeDistribution::Uniform {
+            min: d("min_diameter", p.min_diameter)?,
+            max: d("max_diameter", p.max_diameter)?,
+        },
+        "normal" | "lognormal" => {
+            let (mean, min, max) =
+                (d("mean", p.mean)?, d("min_diameter", p.min_diameter)?, d("max_diameter", p.max_diameter)?);
+            let sigma = positive(table, "sigma", p.sigma.ok_or_else(|| need("sigma"))?)?;
+            if kind == "normal" {
+                SizeDistribution::Normal { mean, sigma, min, max }
+            } else {
+                SizeDistribution::LogNormal { mean, sigma, min, max }
+            }
+        }
+        _ => {
+            let diameters = p.diameters.clone().ok_or_else(|| need("diameters"))?;
+            for &x in &diameters {
+                check(limits::DIAMETER, table, "diameters", x)?;
+            }
+            let fractions = p
+                .weights
+                .clone()
+                .ok_or_else(|| CaseError::missing(table, "weights", "one share per diameter"))?;
+            let basis = basis(p.weights_by.as_deref(), table, "weights_by")?;
+            SizeDistribution::Table { diameters, fractions, basis }
+        }
+    };
+    s.check().map_err(|e| CaseError::invalid(table, "distribution", format!("\"{kind}\""), e.to_string()))?;
+    Ok(s)
+}
+
+fn basis(v: Option<&str>, table: &str, key: &str) -> Result<Basis, CaseError> {
+    match v {
+        None | Some("number") => Ok(Basis::Number),
+        Some("mass") => Ok(Basis::Mass),
+        Some(other) => {
+            Err(CaseError::invalid(table, key, format!("\"{other}\""), "must be \"number\" or \"mass\""))
+        }
+    }
+}
+
+/// The `[[insertions]]` tables.
+pub(crate) fn insertions(
+    raw: &[RawInsertion],
+    phases: &[Phase],
+    meshes: &Meshes,
+    t_start: f64,
+) -> Result<Vec<Insertion>, CaseError> {
+    let mut out: Vec<Insertion> = Vec::with_capacity(raw.len());
+    for (k, ins) in raw.iter().enumerate() {
+        let table = format!("[[insertions]] #{}", k + 1);
+        let name = ins
+            .name
+            .clone()
+            .ok_or_else(|| CaseError::missing(&table, "name", "a name for messages and outputs"))?;
+        if out.iter().any(|i| i.name == name) {
+            return Err(CaseError::invalid(
+                &table,
+                "name",
+                format!("\"{name}\""),
+                "is used by an earlier insertion",
+            ));
+        }
+        let table = format!("[[insertions]] '{name}'");
+        let region_table = format!("{table} region");
+        let region = region(
+            ins.region
+                .as_ref()
+                .ok_or_else(|| CaseError::missing(&table, "region", "a [insertions.region] table"))?,
+            &region_table,
+            meshes,
+        )?;
+        let amounts = [
+            ins.count.map(Amount::Count),
+            ins.volume_fraction.map(Amount::VolumeFraction),
+            ins.mass.map(Amount::Mass),
+        ];
+        if amounts.iter().flatten().count() > 1 {
+            return Err(CaseError::invalid(
+                &table,
+                "count",
+                "with volume_fraction or mass",
+                "give one of count, volume_fraction and mass",
+            ));
+        }
+        let amount = amounts.into_iter().flatten().next();
+        match amount {
+            Some(Amount::VolumeFraction(f)) if !(f > 0.0 && f < 1.0) => {
+                return Err(CaseError::invalid(&table, "volume_fraction", f, "must be a fraction in (0, 1)"));
+            }
+            Some(Amount::Mass(m)) => {
+                positive(&table, "mass", m)?;
+            }
+            _ => {}
+        }
+        let rate = match (ins.rate, ins.mass_rate) {
+            (Some(_), Some(_)) => {
+                return Err(CaseError::invalid(
+                    &table,
+                    "rate",
+                    "with mass_rate",
+                    "give one of rate and mass_rate",
+                ));
+            }
+            (Some(r), None) => Some(Rate::Particles(positive(&table, "rate", r)?)),
+            (None, Some(r)) => Some(Rate::Mass(positive(&table, "mass_rate", r)?)),
+            (None, None) => None,
+        };
+        let schedule = match rate {
+            Some(rate) => {
+                if ins.at.is_some() {
+                    return Err(CaseError::invalid(
+                        &table,
+                        "at",
+                        "with a rate",
+                        "`at` is for an insertion all at once; a rate starts at `start`",
+                    ));
+                }
+                let start = finite(&table, "start", ins.start.unwrap_or(t_start))?;
+                let every = positive(&table, "every", ins.every.unwrap_or(DEFAULT_EVERY))?;
+                Schedule::Rate { rate, start, every }
+            }
+            None => {
+                for (key, given) in [("start", ins.start.is_some()), ("every", ins.every.is_some())] {
+                    if given {
+                        return Err(CaseError::invalid(
+                            &table,
+                            key,
+                            "without a rate",
+                            "is for a rate insertion (`rate` or `mass_rate`)",
+                        ));
+                    }
+                }
+                if amount.is_none() {
+                    return Err(CaseError::missing(
+                        &table,
+                        "count",
+                        "how much to insert: count, volume_fraction or mass (or a rate)",
+                    ));
+                }
+                Schedule::Once { at: finite(&table, "at", ins.at.unwrap_or(t_start))? }
+            }
+        };
+        if ins.phases.is_empty() {
+            return Err(CaseError::missing(
+                &table,
+                "[[insertions.phases]]",
+                "at least one phase (phase = \"name\") and its sizes",
+            ));
+        }
+        let by = basis(ins.fractions_by.as_deref(), &table, "fractions_by")?;
+        let mut parts = Vec::with_capacity(ins.phases.len());
+        for (j, p) in ins.phases.iter().enumerate() {
+            let ptable = format!("{table} phases #{}", j + 1);
+            let phase_name =
+                p.phase.as_deref().ok_or_else(|| CaseError::missing(&ptable, "phase", "a phase name"))?;
+            let index = phases.iter().position(|ph| ph.name == phase_name).ok_or_else(|| {
+                let names: Vec<String> = phases.iter().map(|p| format!("\"{}\"", p.name)).collect();
+                CaseError::invalid(
+                    &ptable,
+                    "phase",
+                    format!("\"{phase_name}\""),
+                    format!("not a phase; the phases are {}", names.join(", ")),
+                )
+            })?;
+            let fraction = match (p.fraction, ins.phases.len()) {
+                (Some(f), _) if f.is_finite() && (0.0..=1.0).contains(&f) => f,
+                (Some(f), _) => {
+                    return Err(CaseError::invalid(&ptable, "fraction", f, "must be a fraction in [0, 1]"));
+                }
+                (None, 1) => 1.0,
+                (None, _) => {
+                    return Err(CaseError::missing(
+                        &ptable,
+                        "fraction",
+                        "its share of the insertion, with several phases",
+                    ));
+                }
+            };
+            let phase = &phases[index];
+            parts.push(MixturePart {
+                phase: index as u32,
+                density: phase.density,
+                fraction,
+                sizes: sizes(p, &ptable, phase)?,
+            });
+        }
+        let mixture = Mixture { parts, basis: by };
+        mixture.check().map_err(|e| CaseError::invalid(&table, "phases", "the fractions", e.to_string()))?;
+        let velocity = vec3(ins.velocity.unwrap_or([0.0; 3]), &table, "velocity")?;
+        out.push(Insertion {
+            name,
+            region,
+            mixture,
+            amount,
+            schedule,
+            velocity,
+            seed: ins.seed.unwrap_or(k as u64 + 1),
+        });
+    }
+    Ok(out)
+}
+
+/// The `[[outlets]]` tables, and the domain's faces as the outlet "domain" if particles
+/// leaving it are removed.
+pub(crate) fn outlets(
+    raw: &[RawOutlet],
+    meshes: &Meshes,
+    leaving: Option<&str>,
+    domain: (Vec3, Vec3),
+    periodic: [bool; 3],
+) -> Result<Vec<Outlet>, CaseError> {
+    let mut out: Vec<Outlet> = Vec::with_capacity(raw.len() + 1);
+    for (k, o) in raw.iter().enumerate() {
+        let table = format!("[[outlets]] #{}", k + 1);
+        let name = o
+            .name
+            .clone()
+            .ok_or_else(|| CaseError::missing(&table, "name", "a name for messages and outputs"))?;
+        if name == "domain" || out.iter().any(|i| i.name == name) {
+            return Err(CaseError::invalid(
+                &table,
+                "name",
+                format!("\"{name}\""),
+                "is used by an earlier outlet (\"domain\" is [domain] leaving's)",
+            ));
+        }
+        let table = format!("[[outlets]] '{name}'");
+        let shape = match (&o.region, o.point, o.normal) {
+            (Some(r), None, None) => OutletShape::Region(region(r, &format!("{table} region"), meshes)?),
+            (None, Some(p), Some(n)) => {
+                let normal = vec3(n, &table, "normal")?;
+                if normal.length_squared() == 0.0 {
+                    return Err(CaseError::invalid(&table, "normal", "[0, 0, 0]", "must not be zero"));
+                }
+                OutletShape::Plane { point: vec3(p, &table, "point")?, normal }
+            }
+            (None, _, _) if o.point.is_some() || o.normal.is_some() => {
+                return Err(CaseError::missing(
+                    &table,
+                    if o.point.is_some() { "normal" } else { "point" },
+                    "a plane needs a point and a normal",
+                ));
+            }
+            (None, _, _) => {
+                return Err(CaseError::missing(
+                    &table,
+                    "region",
+                    "a [outlets.region] table, or a plane's point and normal",
+                ));
+            }
+            (Some(_), _, _) => {
+                return Err(CaseError::invalid(
+                    &table,
+                    "point",
+                    "with a region",
+                    "give a region or a plane (point and normal), not both",
+                ));
+            }
+        };
+        out.push(Outlet { name, shape });
+    }
+    match leaving {
+        None | Some("stop") => {}
+        Some("remove") => out.push(Outlet {
+            name: "domain".into(),
+            shape: OutletShape::OutsideBox { lo: domain.0, hi: domain.1, axes: periodic.map(|p| !p) },
+        }),
+        Some(other) => {
+            return Err(CaseError::invalid(
+                "[domain]",
+                "leaving",
+                format!("\"{other}\""),
+                "must be \"stop\" or \"remove\"",
+            ));
+        }
+    }
+    Ok(out)
+}
