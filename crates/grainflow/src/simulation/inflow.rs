@@ -431,9 +431,17 @@ impl Simulation {
 
     /// Draws, places and inserts the next batch of insertion `k`.
     fn insert_batch(&mut self, k: usize) -> Result<(), EngineError> {
-        let ins = self.flow.insertions[k].clone();
+        // Lent out rather than cloned: a mesh region holds every triangle of its mesh.
+        let insertions = std::mem::take(&mut self.flow.insertions);
+        let result = self.insert_batch_of(k, &insertions[k]);
+        self.flow.insertions = insertions;
+        result
+    }
+
+    /// [`insert_batch`](Self::insert_batch) with insertion `k`, `ins`, lent out.
+    fn insert_batch_of(&mut self, k: usize, ins: &Insertion) -> Result<(), EngineError> {
         let volume = ins.region.volume();
-        let target = batch_target(&ins, self.flow.feeds[k].batches, volume);
+        let target = batch_target(ins, self.flow.feeds[k].batches, volume);
         // Draw until the batch's target is reached.
         let feed = &mut self.flow.feeds[k];
         let mut drawn: Vec<(u32, f64, f64)> = Vec::new();
