@@ -321,7 +321,7 @@ fn check_insertion(ins: &Insertion, n_phases: usize) -> Result<(), EngineError> 
 
 impl Simulation {
     /// The mass books: initial, inserted, removed and present particles, each counted and
-    /// weighed exactly (see the [module doc](self)).
+    /// weighed exactly (see [`FlowBooks`]).
     pub fn flow_books(&self) -> FlowBooks {
         let st = &self.flow;
         FlowBooks {
