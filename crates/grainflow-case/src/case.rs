@@ -7,7 +7,7 @@ use crate::raw::*;
 use grainflow::contact::coefficients::{MAX_PHASES, MAX_WALL_MATERIALS};
 use grainflow::contact::limits::{self, Range};
 use grainflow::contact::{
-    ContactLaw, ContactParams, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel,
+    ContactLaw, ContactParams, ContactSizes, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel,
     TangentialModel,
 };
 use grainflow::mesh::{
@@ -595,7 +595,14 @@ fn validate<'h>(
         CoulombCap::Mfix,
         &[("mfix", CoulombCap::Mfix), ("lammps", CoulombCap::Lammps)],
     )?;
-    let law = ContactLaw { normal, tangential, history, lever, damping, clip_attraction, coulomb };
+    let sizes = choose(
+        "[contact]",
+        "sizes",
+        contact.sizes.as_deref(),
+        ContactSizes::Own,
+        &[("own", ContactSizes::Own), ("phase", ContactSizes::Phase)],
+    )?;
+    let law = ContactLaw { normal, tangential, history, lever, damping, clip_attraction, coulomb, sizes };
     if normal == NormalModel::Jkr {
         // The damping JKR takes (LAMMPS's examples pair `jkr` with `damping tsuji`), and no
         // clipping, which would remove its adhesion.
@@ -753,7 +760,12 @@ fn validate<'h>(
             format!("must be a finite time in s after t_start = {t_start}"),
         ));
     }
-    let time_step = match (time.dt, time.dtsolid_factor) {
+    // The Hertz default is taken again from the smallest particles once they are known.
+    let hertz_default = time.dt.is_none()
+        && time.dtsolid_factor.is_none()
+        && normal.elastic()
+        && grainflow::timestep::hertz_default_dt(&phases).is_some();
+    let mut time_step = match (time.dt, time.dtsolid_factor) {
         (Some(_), Some(_)) => {
             return Err(CaseError::invalid(
                 "[time]",
@@ -1129,11 +1141,21 @@ fn validate<'h>(
         per.check(particles.max_radius(), skin, &walls)?;
     }
     let force_dt = time.force_dt.unwrap_or(false);
+    // Contacts of their own sizes: the time step from the smallest particles (as the engine
+    // takes it).
+    // Each particle's own size is checked before the smallest one sets a step.
+    grainflow::simulation::check_particles(&particles, phases.len())?;
+    let sizes = grainflow::simulation::RunSizes::of(&phases, &particles, &insertions);
+    let step_phases =
+        if law.sizes == ContactSizes::Own && sizes.vary { sizes.smallest } else { phases.clone() };
+    if let Some(dt) = grainflow::timestep::hertz_default_dt(&step_phases).filter(|_| hertz_default) {
+        time_step = TimeStepRule::Fixed(dt);
+    }
     check_stability(
         time_step,
         t_stop - t_start,
         &law,
-        &phases,
+        &step_phases,
         &wall_materials,
         &pair_params,
         &wall_params,

@@ -293,6 +293,11 @@ pub struct RawContact {
     /// the cone) or "lammps" (spring plus dashpot scaled to the limit). Default "mfix".
     #[serde(skip_serializing_if = "Option::is_none")]
     pub coulomb: Option<String>,
+    /// Whose radii and masses a contact's stiffness and damping take: "own" (each contact's
+    /// particles', as LAMMPS; the time step from the smallest particle) or "phase" (the phases'
+    /// reference diameters and densities, as MFIX). Default "own"; MFIX decks use "phase".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sizes: Option<String>,
     /// Defaults for every phase pair.
     #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
     pub particle: RawContactParams,

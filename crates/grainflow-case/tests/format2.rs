@@ -12,7 +12,13 @@ fn a_format_2_checkpoint_continues_as_the_uninterrupted_run() {
     let dir = tempfile::tempdir().expect("temp dir");
     let (full, resumed) = (dir.path().join("full"), dir.path().join("resumed"));
     run_case(case(), &full, &RunOptions::default(), |_| {}).expect("uninterrupted run");
-    let restart = RunOptions { restart: Some(fixture.join("checkpoint-v2.gfc")), ..RunOptions::default() };
+    // The case gained `sizes = "phase"` after the checkpoint was written: the default of that
+    // build, so the same run, but another case file to the checkpoint's hash.
+    let restart = RunOptions {
+        restart: Some(fixture.join("checkpoint-v2.gfc")),
+        accept_changed_case: true,
+        ..RunOptions::default()
+    };
     let summary = run_case(case(), &resumed, &restart, |_| {}).expect("the format 2 checkpoint restarts");
     assert_eq!(summary.start_step, 6000);
     assert_eq!(summary.run_id.len(), 16, "a format 2 checkpoint has no run id: the restart draws one");

@@ -3,10 +3,13 @@
 use crate::boundary::Periodic;
 use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
 use crate::contact::law::{contact_force_dyn, normal_spring_energy};
-use crate::contact::pair::{pair_geometry_in_contact, pair_mass, scaled_damping, wall_geometry_in_contact};
+use crate::contact::pair::{
+    contact_coeffs, contact_reach, pair_geometry_in_contact, pair_mass, scaled_damping,
+    wall_geometry_in_contact,
+};
 use crate::contact::submodel::formed;
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
-use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, ContactParams};
+use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, ContactParams, ContactSizes};
 use crate::error::EngineError;
 use crate::forces::{self, ForcePlan};
 use crate::integrate::{self, Integrator};
@@ -34,6 +37,53 @@ pub const STANDARD_GRAVITY: f64 = 9.80665;
 /// The neighbour skin used when none is given: 20 % of the largest radius, m.
 pub fn default_skin(max_radius: f64) -> f64 {
     0.2 * max_radius
+}
+
+/// The sizes a run's particles take, per phase, from its particles and insertions: what
+/// [`ContactSizes::Own`](crate::contact::ContactSizes::Own) needs to know at set-up.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSizes {
+    /// The phases with the smallest diameter any of their particles has or can be inserted
+    /// with (the phase's own where it has none): what the time step is taken from.
+    pub smallest: Vec<Phase>,
+    /// Some particle has, or can be inserted with, another diameter or density than its
+    /// phase's reference: contacts' coefficients then differ from their phases'.
+    pub vary: bool,
+}
+
+impl RunSizes {
+    /// The sizes of `particles` and of those `insertions` bring, for `phases`.
+    pub fn of(
+        phases: &[Phase],
+        particles: &Particles,
+        insertions: &[crate::insertion::Insertion],
+    ) -> RunSizes {
+        // A particle made from its phase's diameter and density by another formula may differ
+        // in the last bits; 1e-12 is far below any size a distribution would draw.
+        let differs = |a: f64, b: f64| (a - b).abs() > 1e-12 * b.abs();
+        let mut smallest: Vec<f64> = vec![f64::INFINITY; phases.len()];
+        let mut vary = false;
+        for i in 0..particles.len() {
+            let k = particles.phase[i] as usize;
+            let Some(ph) = phases.get(k) else { continue };
+            let r = particles.radius[i];
+            smallest[k] = smallest[k].min(2.0 * r);
+            vary |= differs(r, ph.radius()) || differs(particles.mass[i], ph.mass());
+        }
+        for part in insertions.iter().flat_map(|ins| &ins.mixture.parts) {
+            let k = part.phase as usize;
+            let Some(ph) = phases.get(k) else { continue };
+            let (lo, hi) = (part.sizes.min_diameter(), part.sizes.max_diameter());
+            smallest[k] = smallest[k].min(lo);
+            vary |= differs(lo, ph.diameter) || differs(hi, ph.diameter) || differs(part.density, ph.density);
+        }
+        let smallest = phases
+            .iter()
+            .zip(smallest)
+            .map(|(ph, d)| Phase { diameter: if d.is_finite() { d } else { ph.diameter }, ..ph.clone() })
+            .collect();
+        RunSizes { smallest, vary }
+    }
 }
 
 /// The skin for a law whose formed contacts hold to a pull-off distance `reach` (0 for the
@@ -241,22 +291,43 @@ impl Simulation {
         if !config.gravity.is_finite() {
             return Err(EngineError::BadReference("gravity must be a finite vector in m/s²".into()));
         }
+        let sizes = RunSizes::of(&config.phases, &particles, &config.insertions);
         let flow =
             inflow::FlowStage::new(config.insertions, config.outlets, &particles, config.phases.len())?;
-        let coeffs = CoeffTable::build(
-            &config.law,
-            &config.phases,
-            &config.wall_materials,
-            &config.pair_params,
-            &config.wall_params,
-        )?;
-        let time_step = timestep::choose(
-            config.time_step,
-            &config.law,
-            &config.phases,
-            &coeffs,
-            config.t_stop - config.t_start,
-        )?;
+        let table = |phases: &[Phase]| {
+            CoeffTable::build(
+                &config.law,
+                phases,
+                &config.wall_materials,
+                &config.pair_params,
+                &config.wall_params,
+            )
+        };
+        let reference = table(&config.phases)?;
+        // Contacts' own sizes where they differ from the phases' (where they do not, the
+        // phases' coefficients are the contacts' own, and cost nothing per contact).
+        let own = config.law.sizes == ContactSizes::Own && sizes.vary;
+        let time_step = if own {
+            timestep::choose(
+                config.time_step,
+                &config.law,
+                &sizes.smallest,
+                &table(&sizes.smallest)?,
+                config.t_stop - config.t_start,
+            )?
+        } else {
+            timestep::choose(
+                config.time_step,
+                &config.law,
+                &config.phases,
+                &reference,
+                config.t_stop - config.t_start,
+            )?
+        };
+        let r_max = particles.max_radius().max(flow.max_radius());
+        let peak_floor = sum_floor(&config.law, &config.phases, &reference);
+        let coeffs =
+            if own { reference.per_unit_size(&config.law, &config.phases, r_max) } else { reference };
         let skin = match config.skin {
             Some(s) if s.is_finite() && s >= 0.0 => s,
             Some(s) => {
@@ -282,7 +353,6 @@ impl Simulation {
         let held = motion::held(&motion, particles.len());
         neighbors.exclude_pairs_among(held.clone());
         let held = if held.iter().any(|&h| h) { held } else { Vec::new() };
-        let peak_floor = sum_floor(&config.law, &config.phases, &coeffs);
         let n_particles = particles.len();
         let mut sim = Simulation {
             particles,
@@ -865,7 +935,7 @@ impl Simulation {
         let nl = &self.neighbors;
         for (&[i, w], &h) in nl.wall_pairs().iter().zip(nl.wall_history()) {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
-            let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+            let c = &self.wall_coeffs(i, wall.material);
             let (x, r) = (p.position[i], p.radius[i]);
             if let Some(g) =
                 wall_geometry_in_contact(self.law.normal, x, r, wall, lever, c.pull_off, formed(h))
@@ -883,7 +953,7 @@ impl Simulation {
             } else {
                 (j as usize, i as usize, -h)
             };
-            let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+            let c = &self.pair_coeffs(i, j);
             let (x, r) = (&p.position, &p.radius);
             if let Some(g) =
                 pair_geometry_in_contact(self.law.normal, x, r, i, j, lever, &per, c.pull_off, formed(h))
@@ -924,6 +994,24 @@ impl Simulation {
         (p.gathered(&order), contacts)
     }
 
+    /// The coefficients of the contact of slots `i` and `j`: their phases', formed for the
+    /// pair's own R* and effective mass where the table is per unit size (the pull-off
+    /// distance too).
+    fn pair_coeffs(&self, i: usize, j: usize) -> ContactCoeffs {
+        let p = &self.particles;
+        let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+        if !self.coeffs.sized() {
+            return *c;
+        }
+        let (ra, rb) = (p.radius[i], p.radius[j]);
+        let r_star = ra * rb / (ra + rb);
+        let mut sized =
+            contact_coeffs(&self.coeffs, &self.law, c, r_star, pair_mass(&p.mass, &self.held, i, j));
+        sized.pull_off =
+            crate::with_normal_submodel!(self.law.normal, |N| contact_reach::<N>(&self.coeffs, c, r_star));
+        sized
+    }
+
     /// Energies, contacts and overlaps of the current state.
     ///
     /// The sums do not depend on the order the particles are stored in
@@ -948,7 +1036,7 @@ impl Simulation {
         let nl = &self.neighbors;
         for (&[i, w], &h) in nl.wall_pairs().iter().zip(nl.wall_history()) {
             let (i, wall) = (i as usize, &self.walls[w as usize]);
-            let c = self.coeffs.wall(p.phase[i] as usize, wall.material);
+            let c = &self.wall_coeffs(i, wall.material);
             let (x, r) = (p.position[i], p.radius[i]);
             let g = if reaches {
                 wall_geometry_in_contact(normal, x, r, wall, lever, c.pull_off, formed(h))
@@ -961,7 +1049,7 @@ impl Simulation {
         }
         for ([i, j], h) in nl.pairs().zip(nl.pair_histories()) {
             let (i, j) = (i as usize, j as usize);
-            let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
+            let c = &self.pair_coeffs(i, j);
             let g = if reaches {
                 let (x, r, per) = (&p.position, &p.radius, &self.periodic);
                 pair_geometry_in_contact(normal, x, r, i, j, lever, per, c.pull_off, formed(h))
@@ -1108,7 +1196,10 @@ fn sum_floor(law: &ContactLaw, phases: &[Phase], coeffs: &CoeffTable) -> forces:
     forces::peak_floor(kn * r.powf(power), r)
 }
 
-fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
+/// Whether particle arrays may start a run with `n_phases` phases: arrays of one length, ids
+/// used once, known phases, positive finite radii, masses and moments of inertia, finite
+/// positions and velocities. [`Simulation::new`] checks it first.
+pub fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
     let n = p.len();
     let lens = [
         p.phase.len(),

@@ -1030,6 +1030,7 @@ impl Translator<'_> {
             damping: None,
             clip_attraction: None,
             coulomb: None,
+            sizes: Some("phase".into()),
             particle,
             wall,
             pairs: pair_tables,

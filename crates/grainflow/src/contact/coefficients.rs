@@ -3,7 +3,7 @@
 use super::ContactLaw;
 #[cfg(test)]
 use super::NormalModel;
-use super::submodel::{ElasticPair, NormalSubModel};
+use super::submodel::{ElasticPair, NormalSubModel, per_unit_size};
 use crate::error::EngineError;
 use crate::material::{Phase, WallMaterial};
 
@@ -84,7 +84,8 @@ pub struct ContactCoeffs {
     pub mu_roll: f64,
     /// Effective mass used for the damping, kg.
     pub m_eff: f64,
-    /// R* of the phases' radii, m (JKR; 0 otherwise).
+    /// R*, m: of the phases' radii (JKR; 0 otherwise), or of the contact's own
+    /// ([`sized`](super::submodel::sized)).
     pub r_star: f64,
     /// Surface energy γ, J/m² (JKR; 0 otherwise).
     pub surface_energy: f64,
@@ -120,6 +121,11 @@ pub struct CoeffTable {
     uniform_pair: Option<ContactCoeffs>,
     /// Some pair or wall contact has rolling friction (μ_r ≠ 0).
     rolling: bool,
+    /// The coefficients are per unit size ([`CoeffTable::per_unit_size`]): each contact's are
+    /// [`sized`](super::submodel::sized) by its own R* and m_eff.
+    sized: bool,
+    /// The largest pull-off distance a contact can have, m.
+    reach: f64,
 }
 
 /// Index of phase pair (m, l), m ≤ l, in MFIX's upper-triangle order 1-1, 1-2, …, 1-M, 2-2, …
@@ -239,9 +245,55 @@ impl CoeffTable {
                 walls[m * nw + w] = usable(&what, derive(law, &what, p, phases[m].mass(), elastic)?)?;
             }
         }
+        Ok(CoeffTable::of(n, nw, pairs, walls, false, |c| c.pull_off))
+    }
+
+    fn of(
+        n_phases: usize,
+        n_wall_materials: usize,
+        pairs: Vec<ContactCoeffs>,
+        walls: Vec<ContactCoeffs>,
+        sized: bool,
+        reach: impl Fn(&ContactCoeffs) -> f64,
+    ) -> CoeffTable {
         let uniform_pair = pairs.first().filter(|c0| pairs.iter().all(|c| c == *c0)).copied();
         let rolling = pairs.iter().chain(&walls).any(|c| c.mu_roll != 0.0);
-        Ok(CoeffTable { n_phases: n, n_wall_materials: nw, pairs, walls, uniform_pair, rolling })
+        let reach = pairs.iter().chain(&walls).map(reach).fold(0.0, f64::max);
+        CoeffTable { n_phases, n_wall_materials, pairs, walls, uniform_pair, rolling, sized, reach }
+    }
+
+    /// The table per unit size, for [`ContactSizes::Own`](super::ContactSizes::Own): this
+    /// table's coefficients (derived at the `phases`' reference diameters and masses) divided
+    /// by their [`size_scales`](super::submodel::NormalSubModel::size_scales) there, so that
+    /// [`sized`](super::submodel::sized) gives each contact its own. `r_max` is the largest
+    /// particle radius of the run, which bounds the pull-off distance ([`reach`](Self::reach)).
+    pub fn per_unit_size(&self, law: &ContactLaw, phases: &[Phase], r_max: f64) -> CoeffTable {
+        crate::with_normal_submodel!(law.normal, |N| self.per_unit_size_for::<N>(law, phases, r_max))
+    }
+
+    fn per_unit_size_for<N: NormalSubModel>(
+        &self,
+        law: &ContactLaw,
+        phases: &[Phase],
+        r_max: f64,
+    ) -> CoeffTable {
+        let (n, nw) = (self.n_phases, self.n_wall_materials);
+        let unit = |c: &ContactCoeffs, r_ref: f64| per_unit_size::<N>(c, law.damping, r_ref, c.m_eff);
+        let mut pairs = self.pairs.clone();
+        for m in 0..n {
+            for l in 0..n {
+                let (ra, rb) = (phases[m].radius(), phases[l].radius());
+                pairs[m * n + l] = unit(&self.pairs[m * n + l], ra * rb / (ra + rb));
+            }
+        }
+        let mut walls = self.walls.clone();
+        for m in 0..n {
+            for w in 0..nw {
+                walls[m * nw + w] = unit(&self.walls[m * nw + w], phases[m].radius());
+            }
+        }
+        // A wall contact's R* is the particle's radius, above any pair's.
+        CoeffTable::of(n, nw, pairs, walls, true, |c| c.pull_off * N::pull_off_scale(r_max))
     }
 
     /// Coefficients of the phase pair (a, b).
@@ -275,10 +327,17 @@ impl CoeffTable {
         self.pairs.iter().chain(&self.walls)
     }
 
-    /// The largest pull-off distance of any contact type, m (0 unless the normal model holds
+    /// The largest pull-off distance of any contact, m (0 unless the normal model holds
     /// formed contacts beyond the touch): the neighbour skin must exceed it.
     pub fn reach(&self) -> f64 {
-        self.pairs.iter().chain(&self.walls).map(|c| c.pull_off).fold(0.0, f64::max)
+        self.reach
+    }
+
+    /// True if the coefficients are per unit size and each contact's are formed from its own
+    /// R* and m_eff ([`per_unit_size`](Self::per_unit_size)).
+    #[inline(always)]
+    pub fn sized(&self) -> bool {
+        self.sized
     }
 
     /// Number of phases.
@@ -325,6 +384,80 @@ mod tests {
 
     fn phase(name: String, diameter: f64, density: f64) -> Phase {
         Phase { name, diameter, density, youngs_modulus: None, poisson_ratio: None }
+    }
+
+    /// Coefficients per unit size, formed for another pair of sizes, are those derived for
+    /// phases of those sizes directly: the scalings of each normal model (K ∝ √R*, η ∝
+    /// √(K·m_eff), JKR's δ_c ∝ R*^⅓) are those of its formulas. Both are the same formulas
+    /// evaluated in another order: equal to a few roundings (1e-14).
+    #[test]
+    fn coefficients_per_unit_size_formed_for_a_size_are_those_derived_at_it() {
+        use crate::contact::submodel::{self, NormalSubModel};
+        use crate::contact::{NormalDamping as D, NormalModel as M};
+        let elastic = |name: &str, d: f64, rho: f64| Phase {
+            name: name.into(),
+            diameter: d,
+            density: rho,
+            youngs_modulus: Some(7e7),
+            poisson_ratio: Some(0.3),
+        };
+        let wall =
+            [WallMaterial { name: "steel".into(), youngs_modulus: Some(2e8), poisson_ratio: Some(0.25) }];
+        let p = ContactParams {
+            kn: Some(2e3),
+            en: 0.7,
+            et: Some(0.8),
+            mu: 0.4,
+            gamma_n: Some(500.0),
+            surface_energy: Some(0.05),
+            etat_fac: 0.5,
+            ..Default::default()
+        };
+        let rel = |a: f64, b: f64| if a == b { 0.0 } else { (a - b).abs() / b.abs() };
+        let cases = [
+            (M::LinearSpringDashpot, D::Mfix),
+            (M::LinearSpringDashpot, D::ExactRestitution),
+            (M::LinearSpringDashpot, D::MassVelocity),
+            (M::Hertz, D::Mfix),
+            (M::Hertz, D::Tsuji),
+            (M::Hertz, D::MassVelocity),
+            (M::Jkr, D::Tsuji),
+        ];
+        for (normal, damping) in cases {
+            let law = ContactLaw { damping, ..ContactLaw::mfix(normal) };
+            let reference = [elastic("a", 0.002, 2500.0), elastic("b", 0.003, 7800.0)];
+            let other = [elastic("a", 0.0013, 2500.0), elastic("b", 0.0047, 7800.0)];
+            let build =
+                |phases: &[Phase]| CoeffTable::build(&law, phases, &wall, &[p; 3], &[p; 2]).expect("table");
+            let unit = build(&reference).per_unit_size(&law, &reference, 0.01);
+            let direct = build(&other);
+            assert!(unit.sized() && !direct.sized());
+            let (ra, rb) = (other[0].radius(), other[1].radius());
+            let (ma, mb) = (other[0].mass(), other[1].mass());
+            // A pair of the two phases and phase b at the wall.
+            for (u, d, r_star, m_eff) in [
+                (unit.pair(0, 1), direct.pair(0, 1), ra * rb / (ra + rb), ma * mb / (ma + mb)),
+                (unit.wall(1, 0), direct.wall(1, 0), rb, mb),
+            ] {
+                let (s, pull_off) = crate::with_normal_submodel!(normal, |N| (
+                    submodel::sized::<N>(u, damping, r_star, m_eff),
+                    u.pull_off * <N as NormalSubModel>::pull_off_scale(r_star)
+                ));
+                let what = format!("{normal:?} {damping:?}");
+                for (name, a, b) in [
+                    ("kn", s.kn, d.kn),
+                    ("kt", s.kt, d.kt),
+                    ("eta_n", s.eta_n, d.eta_n),
+                    ("eta_t", s.eta_t, d.eta_t),
+                    ("pull_off", pull_off, d.pull_off),
+                ] {
+                    assert!(rel(a, b) < 1e-14, "{what} {name}: {a:e} formed, {b:e} derived");
+                }
+                if normal == M::Jkr {
+                    assert!(rel(s.r_star, d.r_star) < 1e-15, "{what} R*");
+                }
+            }
+        }
     }
 
     #[test]

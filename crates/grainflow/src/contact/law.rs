@@ -66,13 +66,19 @@ pub mod parts {
     pub const TSUJI: u8 = 16;
     /// Lever arms to the radical plane ([`LeverArm::RadicalPlane`]).
     pub const RADICAL: u8 = 32;
-    /// Every part: the law for any settings.
+    /// Each contact's coefficients formed from its own size: the coefficients are per unit
+    /// size ([`CoeffTable::sized`](crate::contact::CoeffTable::sized)). A property of the
+    /// table, not of the law's settings, so not in [`ALL`].
+    pub const SIZED: u8 = 64;
+    /// Every part the law's settings can pick: the law for any settings.
     pub const ALL: u8 = ROTATE | MFIX_CAP | LAMMPS_CAP | ROLLING | TSUJI | RADICAL;
 
-    /// The parts `law` needs; `rolling` if some contact has rolling friction.
-    pub fn needed(law: &ContactLaw, rolling: bool) -> u8 {
+    /// The parts `law` needs; `rolling` if some contact has rolling friction, `sized` if the
+    /// coefficients are per unit size.
+    pub fn needed(law: &ContactLaw, rolling: bool, sized: bool) -> u8 {
         let bit = |on: bool, b: u8| if on { b } else { 0 };
-        bit(law.history == HistoryFrame::Rotate, ROTATE)
+        bit(sized, SIZED)
+            | bit(law.history == HistoryFrame::Rotate, ROTATE)
             | bit(law.coulomb == CoulombCap::Mfix, MFIX_CAP)
             | bit(law.coulomb == CoulombCap::Lammps, LAMMPS_CAP)
             | bit(rolling, ROLLING)

@@ -144,6 +144,24 @@ pub struct ContactLaw {
     pub clip_attraction: bool,
     /// Coulomb cap of the tangential force.
     pub coulomb: CoulombCap,
+    /// Whose radii and masses a contact's stiffness and damping take.
+    pub sizes: ContactSizes,
+}
+
+/// Whose radii and masses set a contact's coefficients (Hertz's R*, the damping's effective
+/// mass, JKR's R* and pull-off distance), for beds whose particles differ from their phase's
+/// reference diameter or density.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ContactSizes {
+    /// Each contact's own: R* = R_iR_j/(R_i + R_j) (R_i at a wall) and m_eff = m_im_j/(m_i + m_j)
+    /// (m_i at a wall) of the two particles in contact, as LAMMPS and LIGGGHTS do; the time step
+    /// from the smallest particle. The default of native cases.
+    #[default]
+    Own,
+    /// The phases' reference diameters and densities, as MFIX does (`des_etan`, `kn_des` per
+    /// phase pair): every contact of a phase pair has the same coefficients, whatever the sizes
+    /// of its particles. The form of MFIX decks.
+    Phase,
 }
 
 impl ContactLaw {
@@ -157,6 +175,7 @@ impl ContactLaw {
             damping: NormalDamping::Mfix,
             clip_attraction: false,
             coulomb: CoulombCap::Mfix,
+            sizes: ContactSizes::Phase,
         }
     }
 

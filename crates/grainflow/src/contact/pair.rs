@@ -13,8 +13,8 @@ use crate::contact::geometry::{
     relative_velocity_of_centres, wall_contact,
 };
 use crate::contact::law::{ContactForce, contact_force_for, parts, rolling_torque};
-use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
-use crate::contact::{ContactCoeffs, ContactLaw, LeverArm, NormalDamping, NormalModel};
+use crate::contact::submodel::{NormalSubModel, TangentialSubModel, sized};
+use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping, NormalModel};
 use crate::math::Vec3;
 use crate::wall::Wall;
 
@@ -80,6 +80,15 @@ pub(crate) fn pair_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8
     g.lever_i = if radical { g.lever_i } else { p.ra };
     g.lever_j = if radical { g.lever_j } else { p.rb };
     let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, p.wb);
+    // Coefficients per unit size formed for the pair's own R* and mass (not formed otherwise).
+    let sized_input;
+    let p = if PARTS & parts::SIZED != 0 {
+        let r_star = p.ra * p.rb / (p.ra + p.rb);
+        sized_input = PairInput { c: sized::<N>(&p.c, law.damping, r_star, p.m_eff), ..*p };
+        &sized_input
+    } else {
+        p
+    };
     let (f, h) = law_force::<N, T, PARTS>(law, dt, p, &g, v_r);
     let levers =
         [torque_lever(law.lever, g.lever_i, g.overlap), torque_lever(law.lever, g.lever_j, g.overlap)];
@@ -129,7 +138,9 @@ fn law_force<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8>(
 /// The load of a particle touching a wall (its force in `f`, its torque in `ta`) and the
 /// advanced history, from a [`PairInput`] that holds the wall geometry: the normal in `d`, the
 /// overlap in `ra`, the lever arm in `rb`, the particle's velocity and spin in `dv`, `wa`, its
-/// mass in `m_eff`. Branch-free.
+/// mass in `m_eff`, and the coefficients of this contact (formed for its size by
+/// [`contact_coeffs`] where the table is per unit size: [`parts::SIZED`] is for pairs).
+/// Branch-free.
 #[inline(always)]
 pub(crate) fn wall_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8>(
     law: &ContactLaw,
@@ -143,6 +154,30 @@ pub(crate) fn wall_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8
     let torque = f.torque(g.lever_i, g.normal) + rolling::<PARTS>(p.c.mu_roll, f.rolling_load, p.wa);
     let bound = [f.bound, torque_bound::<PARTS>(&f, p.c.mu_roll, [g.lever_i, 0.0])];
     (PairLoad { f: f.total(), ta: torque, tb: Vec3::ZERO }, h, bound)
+}
+
+/// The coefficients of a contact of effective radius `r_star` (R_iR_j/(R_i + R_j), or R_i at
+/// a wall) and mass `m_eff` from the table's `c` for its phases: formed for them
+/// ([`sized`]) where the table is per unit size, else `c`.
+#[inline]
+pub(crate) fn contact_coeffs(
+    table: &CoeffTable,
+    law: &ContactLaw,
+    c: &ContactCoeffs,
+    r_star: f64,
+    m_eff: f64,
+) -> ContactCoeffs {
+    if !table.sized() {
+        return *c;
+    }
+    crate::with_normal_submodel!(law.normal, |N| sized::<N>(c, law.damping, r_star, m_eff))
+}
+
+/// The pull-off distance of a contact of effective radius `r_star` from the table's `c`, as
+/// [`contact_coeffs`].
+#[inline(always)]
+pub(crate) fn contact_reach<N: NormalSubModel>(table: &CoeffTable, c: &ContactCoeffs, r_star: f64) -> f64 {
+    if table.sized() { c.pull_off * N::pull_off_scale(r_star) } else { c.pull_off }
 }
 
 /// `h` if `keep`, else zero: a history kept or cleared by a bit mask (a select here compiles

@@ -82,6 +82,63 @@ impl ElasticPair {
     }
 }
 
+/// The factors a contact's coefficients take from its own size ([`NormalSubModel::size_scales`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SizeScales {
+    /// Of the normal and tangential stiffness.
+    pub stiffness: f64,
+    /// Of the normal and tangential damping.
+    pub damping: f64,
+}
+
+/// √m_eff where the damping rule forms η from √(K·m_eff) at set-up (MFIX's and the exact
+/// restitution rules), else 1: `MassVelocity` and `Tsuji` take the contact's mass already.
+#[inline(always)]
+fn set_up_mass_scale(damping: NormalDamping, m_eff: f64) -> f64 {
+    if matches!(damping, NormalDamping::Mfix | NormalDamping::ExactRestitution) { m_eff.sqrt() } else { 1.0 }
+}
+
+/// The coefficients per unit size (R* = 1 m, m_eff = 1 kg) of `c`, derived at the reference
+/// effective radius `r_ref` and mass `m_ref`: [`sized`] of them at (`r_ref`, `m_ref`) gives
+/// `c` back to rounding.
+pub fn per_unit_size<N: NormalSubModel>(
+    c: &ContactCoeffs,
+    damping: NormalDamping,
+    r_ref: f64,
+    m_ref: f64,
+) -> ContactCoeffs {
+    let s = N::size_scales(damping, r_ref, m_ref);
+    ContactCoeffs {
+        kn: c.kn / s.stiffness,
+        kt: c.kt / s.stiffness,
+        eta_n: c.eta_n / s.damping,
+        eta_t: c.eta_t / s.damping,
+        pull_off: c.pull_off / N::pull_off_scale(r_ref),
+        ..*c
+    }
+}
+
+/// The coefficients of one contact of effective radius `r_star` and mass `m_eff` from the
+/// coefficients per unit size `c` ([`per_unit_size`]): its stiffness, damping and R* (the
+/// pull-off distance is the contact test's: [`NormalSubModel::pull_off_scale`]). Branch-free.
+#[inline(always)]
+pub fn sized<N: NormalSubModel>(
+    c: &ContactCoeffs,
+    damping: NormalDamping,
+    r_star: f64,
+    m_eff: f64,
+) -> ContactCoeffs {
+    let s = N::size_scales(damping, r_star, m_eff);
+    ContactCoeffs {
+        kn: c.kn * s.stiffness,
+        kt: c.kt * s.stiffness,
+        eta_n: c.eta_n * s.damping,
+        eta_t: c.eta_t * s.damping,
+        r_star,
+        ..*c
+    }
+}
+
 /// A normal contact model. Implemented by zero-sized types; the force stage is generic over
 /// one of them.
 pub trait NormalSubModel: Copy + Default + Send + Sync + 'static {
@@ -125,6 +182,18 @@ pub trait NormalSubModel: Copy + Default + Send + Sync + 'static {
 
     /// Energy stored in the normal contact at overlap `delta`, J (zero at first touch).
     fn energy(c: &ContactCoeffs, delta: f64) -> f64;
+
+    /// How its stiffness and damping scale with a contact's own effective radius R* and mass
+    /// m_eff under the damping rule `damping` (beyond what the rule's own ×m_eff or ×√m_eff
+    /// does), for [`ContactSizes::Own`](super::ContactSizes::Own). Branch-free.
+    fn size_scales(damping: NormalDamping, r_star: f64, m_eff: f64) -> SizeScales;
+
+    /// How its pull-off distance scales with R* (1 for a model that does not reach beyond
+    /// the touch).
+    #[inline(always)]
+    fn pull_off_scale(_r_star: f64) -> f64 {
+        1.0
+    }
 
     /// Whether a pair at centre distance² `d2`, radii `ri`, `rj`, is in contact; `touched` if
     /// it was at the last evaluation, `reach` its pull-off distance (used where
@@ -279,6 +348,12 @@ impl NormalSubModel for LinearSpringDashpot {
     fn energy(c: &ContactCoeffs, delta: f64) -> f64 {
         0.5 * c.kn * delta * delta
     }
+
+    /// k_n is given, not derived: only a damping formed from √(k_n·m_eff) scales, by √m_eff.
+    #[inline(always)]
+    fn size_scales(damping: NormalDamping, _r_star: f64, m_eff: f64) -> SizeScales {
+        SizeScales { stiffness: 1.0, damping: set_up_mass_scale(damping, m_eff) }
+    }
 }
 
 /// Hertz (MFIX `HERTZIAN`, LAMMPS `hertz/material`): F_n = K_n·δ^1.5 + η_n·δ^¼·v_n with
@@ -359,6 +434,15 @@ impl NormalSubModel for Hertz {
     #[inline]
     fn energy(c: &ContactCoeffs, delta: f64) -> f64 {
         0.4 * c.kn * delta * delta * delta.sqrt()
+    }
+
+    /// K_n, K_t ∝ √R*; a damping α√(K_n·m_eff) ∝ R*^¼ (times √m_eff where formed at set-up);
+    /// γ_n·m_eff (`MassVelocity`) does not take R*.
+    #[inline(always)]
+    fn size_scales(damping: NormalDamping, r_star: f64, m_eff: f64) -> SizeScales {
+        let root = r_star.sqrt();
+        let quarter = if damping == NormalDamping::MassVelocity { 1.0 } else { root.sqrt() };
+        SizeScales { stiffness: root, damping: quarter * set_up_mass_scale(damping, m_eff) }
     }
 }
 
@@ -511,6 +595,19 @@ impl NormalSubModel for Jkr {
         let (a, _) = Jkr::contact_radius(e_star, c.r_star, c.surface_energy, delta);
         let (a0, _) = Jkr::contact_radius(e_star, c.r_star, c.surface_energy, 0.0);
         Jkr::work(e_star, c.r_star, c.surface_energy, a) - Jkr::work(e_star, c.r_star, c.surface_energy, a0)
+    }
+
+    /// (4/3)E* and 8G* do not take R* (the contact radius a does, through the coefficients'
+    /// R*), and Tsuji's damping, the only one JKR takes, scales with m_eff already.
+    #[inline(always)]
+    fn size_scales(_damping: NormalDamping, _r_star: f64, _m_eff: f64) -> SizeScales {
+        SizeScales { stiffness: 1.0, damping: 1.0 }
+    }
+
+    /// δ_c = a_c²/(3R*) with a_c ∝ R*^⅔: δ_c ∝ R*^⅓.
+    #[inline(always)]
+    fn pull_off_scale(r_star: f64) -> f64 {
+        r_star.cbrt()
     }
 
     /// Touching (δ ≥ 0, MFIX's test) forms a contact; a formed one holds while the centres

@@ -9,7 +9,7 @@
 use std::ops::Range;
 
 use super::ForceInputs;
-use crate::contact::pair::kept_or_zero;
+use crate::contact::pair::{contact_reach, kept_or_zero};
 use crate::contact::submodel::{NormalSubModel, formed};
 use crate::math::Vec3;
 
@@ -125,14 +125,16 @@ pub(super) fn find_contacts<N: NormalSubModel>(
     }
 }
 
-/// The pull-off distance of the pair of slots a, b (for a normal model that reaches beyond
-/// the touch).
+/// The pull-off distance of the pair of slots a, b (for a normal model `N` that reaches
+/// beyond the touch).
 #[inline(always)]
-pub(super) fn pair_reach(x: &ForceInputs, a: usize, b: usize) -> f64 {
-    match x.coeffs.uniform_pair() {
-        Some(c) => c.pull_off,
-        None => x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize).pull_off,
-    }
+pub(super) fn pair_reach<N: NormalSubModel>(x: &ForceInputs, a: usize, b: usize) -> f64 {
+    let c = match x.coeffs.uniform_pair() {
+        Some(c) => c,
+        None => x.coeffs.pair(x.phase[a] as usize, x.phase[b] as usize),
+    };
+    let (ra, rb) = (x.radius[a], x.radius[b]);
+    contact_reach::<N>(x.coeffs, c, ra * rb / (ra + rb))
 }
 
 /// [`find_contacts`] for domains with (`PERIODIC`) or without periodic axes: the choice made
@@ -174,7 +176,7 @@ fn find_contacts_in<N: NormalSubModel, const PERIODIC: bool>(
             let (keep, fresh) = if b < r1 {
                 let d = position[b] - xa;
                 let d = if PERIODIC { images.nearest_on_periodic_axes(d) } else { d };
-                let reach = if N::REACHES { pair_reach(x, a, b) } else { 0.0 };
+                let reach = if N::REACHES { pair_reach::<N>(x, a, b) } else { 0.0 };
                 let touching = N::touching(d.length_squared(), ra, radius[b], reach, *flag);
                 let fresh = !*flag;
                 *flag = touching;
@@ -210,7 +212,11 @@ pub(super) fn find_wall_contacts<N: NormalSubModel>(
         let [i, w] = wall_pairs[*at];
         let (i, wall) = (i as usize, &x.walls[w as usize]);
         let overlap = x.radius[i] - (x.position[i] - wall.point).dot(wall.normal);
-        let reach = if N::REACHES { x.coeffs.wall(x.phase[i] as usize, wall.material).pull_off } else { 0.0 };
+        let reach = if N::REACHES {
+            contact_reach::<N>(x.coeffs, x.coeffs.wall(x.phase[i] as usize, wall.material), x.radius[i])
+        } else {
+            0.0
+        };
         let touching = N::wall_touching(overlap, reach, N::REACHES && formed(hist[*at]));
         hist[*at] = kept_or_zero(hist[*at], touching);
         found[n] = *at;

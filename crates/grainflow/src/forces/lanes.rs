@@ -15,8 +15,8 @@ use super::{Accumulators, CrossingLoad, ForceInputs, Peak, Quanta};
 use crate::boundary::Images;
 use crate::contact::law::parts;
 use crate::contact::pair::{
-    CommonMass, LoadBound, PairInput, PairLoad, common_pair_mass, kept_or_zero, pair_law, pair_mass,
-    wall_geometry_for, wall_law,
+    CommonMass, LoadBound, PairInput, PairLoad, common_pair_mass, contact_coeffs, kept_or_zero, pair_law,
+    pair_mass, wall_geometry_for, wall_law,
 };
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw};
@@ -143,7 +143,7 @@ impl InputLanes {
     /// lane is left as it is); `hist` holds the histories of the pairs from index `k0` on.
     #[inline(always)]
     fn gather_pairs(&mut self, x: &ForceInputs, r1: usize, k0: usize, group: &[Found], hist: &[Vec3]) {
-        let (per_mass, held) = (x.law.damping.per_particle_mass(), !x.held.is_empty());
+        let (per_mass, held) = (takes_mass(x), !x.held.is_empty());
         match (x.images.any(), per_mass, held) {
             (true, true, true) => self.gather_pairs_for::<true, true, true>(x, r1, k0, group, hist),
             (true, true, false) => self.gather_pairs_for::<true, true, false>(x, r1, k0, group, hist),
@@ -343,6 +343,7 @@ impl Lanes {
         contact_loads::<N, T, WALL>(
             &x.law,
             x.coeffs.rolling(),
+            x.coeffs.sized(),
             x.dt,
             Some((x.quanta, live, &mut self.peak)),
             &self.input,
@@ -418,7 +419,7 @@ impl Lanes {
             let (a, b) = (a as usize, x.partners[k] as usize);
             let d = s.separation(a, b);
             let flag = &mut flags[k - k0];
-            let reach = if N::REACHES { super::detect::pair_reach(x, a, b) } else { 0.0 };
+            let reach = if N::REACHES { super::detect::pair_reach::<N>(x, a, b) } else { 0.0 };
             let touching = N::touching(d.length_squared(), s.radius[a], s.radius[b], reach, *flag);
             let fresh = !*flag;
             *flag = touching;
@@ -464,7 +465,13 @@ impl Lanes {
                     wa: x.omega[i],
                     wb: Vec3::ZERO,
                     h: hist[j],
-                    c: *x.coeffs.wall(x.phase[i] as usize, wall.material),
+                    c: contact_coeffs(
+                        x.coeffs,
+                        &x.law,
+                        x.coeffs.wall(x.phase[i] as usize, wall.material),
+                        x.radius[i],
+                        x.mass[i],
+                    ),
                     m_eff: x.mass[i],
                 };
                 self.input.set(lane, &input);
@@ -489,26 +496,32 @@ const LAMMPS_MINDLIN: u8 = parts::LAMMPS_CAP | parts::ROTATE | parts::TSUJI;
 /// MFIX's law: its Coulomb cap and lever arms to the radical plane.
 const MFIX: u8 = parts::MFIX_CAP | parts::RADICAL;
 
+/// Every part, pairs' coefficients per unit size included.
+const ALL_SIZED: u8 = parts::ALL | parts::SIZED;
+
 /// The loads of a batch of touching pairs ([`pair_law`] on every lane) or, with `WALL`, of
-/// particles touching walls ([`wall_law`]); `rolling` if some contact has rolling friction.
+/// particles touching walls ([`wall_law`]); `rolling` if some contact has rolling friction,
+/// `sized` if the pairs' coefficients are per unit size (a wall batch's are its contacts').
 ///
 /// The loop has no branches, so it compiles to vector instructions. It is compiled for the
 /// settings most runs use — LAMMPS's `gran/hooke/history` and `granular … mindlin … tsuji`,
 /// MFIX's law — with only the parts of the law they pick ([`parts`]), and once for any
-/// settings; the values are the same.
+/// settings, with and without sizes of their own; the values are the same.
 #[inline(always)]
 fn contact_loads<N: NormalSubModel, T: TangentialSubModel, const WALL: bool>(
     law: &ContactLaw,
     rolling: bool,
+    sized: bool,
     dt: f64,
     q: Option<(Quanta, &Live, &mut PeakLanes)>,
     input: &InputLanes,
     output: &mut OutputLanes,
 ) {
-    match parts::needed(law, rolling) {
+    match parts::needed(law, rolling, sized && !WALL) {
         parts::LAMMPS_CAP => loads_widest::<N, T, WALL, { parts::LAMMPS_CAP }>(law, dt, q, input, output),
         LAMMPS_MINDLIN => loads_widest::<N, T, WALL, LAMMPS_MINDLIN>(law, dt, q, input, output),
         MFIX => loads_widest::<N, T, WALL, MFIX>(law, dt, q, input, output),
+        p if p & parts::SIZED != 0 => loads_widest::<N, T, WALL, ALL_SIZED>(law, dt, q, input, output),
         _ => loads_widest::<N, T, WALL, { parts::ALL }>(law, dt, q, input, output),
     }
 }
@@ -610,11 +623,18 @@ struct PairData<'a> {
     /// The phases, if the phase pairs have coefficients of their own.
     phase: Option<&'a [u32]>,
     coeffs: &'a CoeffTable,
-    /// The damping takes the contact's effective mass.
+    /// The law takes the contact's effective mass ([`takes_mass`]).
     per_mass: bool,
     /// See [`ForceInputs::common_mass`].
     common_mass: Option<CommonMass>,
     images: Images,
+}
+
+/// True if a pair's law takes its effective mass: damping that scales with it, or
+/// coefficients per unit size formed for it.
+#[inline(always)]
+fn takes_mass(x: &ForceInputs) -> bool {
+    x.law.damping.per_particle_mass() || x.coeffs.sized()
 }
 
 impl<'a> PairData<'a> {
@@ -630,7 +650,7 @@ impl<'a> PairData<'a> {
             held: if x.held.is_empty() { &[] } else { &x.held[..n] },
             phase: x.coeffs.uniform_pair().is_none().then(|| &x.phase[..n]),
             coeffs: x.coeffs,
-            per_mass: x.law.damping.per_particle_mass(),
+            per_mass: takes_mass(x),
             common_mass: x.common_mass,
             images: x.images,
         }
@@ -795,6 +815,7 @@ mod tests {
                             damping,
                             clip_attraction,
                             coulomb,
+                            sizes: crate::contact::ContactSizes::Own,
                         };
                         let dt = 1e-6;
                         for k in 0..8 {
@@ -805,6 +826,8 @@ mod tests {
                             if !rolling {
                                 input.coeffs[5] = [0.0; LANES];
                             }
+                            // Half of them with the pairs' coefficients per unit size.
+                            let sized = (k / 2) % 2 == 1;
                             let mut scalar = OutputLanes::ZERO;
                             let mut wall_scalar = OutputLanes::ZERO;
                             for i in 0..LANES {
@@ -812,20 +835,27 @@ mod tests {
                                 // turning this loop into vector code as well), every part of
                                 // the law compiled.
                                 let p = std::hint::black_box(input.get(i));
-                                scalar.set(i, pair_law::<N, T, { parts::ALL }>(&law, dt, &p));
+                                let pair = if sized {
+                                    pair_law::<N, T, ALL_SIZED>(&law, dt, &p)
+                                } else {
+                                    pair_law::<N, T, { parts::ALL }>(&law, dt, &p)
+                                };
+                                scalar.set(i, pair);
                                 wall_scalar.set(i, wall_law::<N, T, { parts::ALL }>(&law, dt, &p));
                             }
                             let expected = [bits(&scalar), bits(&wall_scalar)];
                             let mut batch = OutputLanes::ZERO;
-                            contact_loads::<N, T, false>(&law, rolling, dt, None, &input, &mut batch);
+                            contact_loads::<N, T, false>(&law, rolling, sized, dt, None, &input, &mut batch);
                             assert_eq!(bits(&batch), expected[0], "{law:?}");
-                            contact_loads::<N, T, true>(&law, rolling, dt, None, &input, &mut batch);
+                            contact_loads::<N, T, true>(&law, rolling, sized, dt, None, &input, &mut batch);
                             assert_eq!(bits(&batch), expected[1], "{law:?} (walls)");
                             // Every loop compiled for parts that include the law's, on every
                             // instruction set.
-                            let needed = parts::needed(&law, rolling);
-                            for p in [parts::LAMMPS_CAP, LAMMPS_MINDLIN, MFIX, parts::ALL] {
-                                if needed & !p != 0 {
+                            let needed = parts::needed(&law, rolling, sized);
+                            for p in [parts::LAMMPS_CAP, LAMMPS_MINDLIN, MFIX, parts::ALL, ALL_SIZED] {
+                                // Sizing is not a part a loop may have unneeded: it changes the
+                                // coefficients.
+                                if needed & !p != 0 || (p ^ needed) & parts::SIZED != 0 {
                                     continue;
                                 }
                                 let copies = match p {
@@ -834,6 +864,7 @@ mod tests {
                                     }
                                     LAMMPS_MINDLIN => every_copy::<N, T, LAMMPS_MINDLIN>(&law, dt, &input),
                                     MFIX => every_copy::<N, T, MFIX>(&law, dt, &input),
+                                    ALL_SIZED => every_copy::<N, T, ALL_SIZED>(&law, dt, &input),
                                     _ => every_copy::<N, T, { parts::ALL }>(&law, dt, &input),
                                 };
                                 for (copy, got) in copies {

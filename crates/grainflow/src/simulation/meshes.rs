@@ -22,15 +22,16 @@
 //! than half the skin): so no contact is missed.
 
 use super::Simulation;
-use crate::contact::LeverArm;
 use crate::contact::law::parts;
-use crate::contact::pair::{PairInput, wall_law};
+use crate::contact::pair::{PairInput, contact_coeffs, contact_reach, wall_law};
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
+use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm};
 use crate::forces::{Peak, Quanta, Quantum, max_peak};
 use crate::math::Vec3;
 use crate::mesh::grid::NearScratch;
 use crate::mesh::motion::Anchor;
 use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, TriangleGrid, sphere_contacts};
+use crate::state::Particles;
 
 /// A contact's normal may turn this far (cosine) from one evaluation to the next and still
 /// carry its history to another triangle: 60°.
@@ -423,7 +424,7 @@ impl Simulation {
         let (mut contacts, mut triangles) = (Vec::new(), Vec::new());
         for i in st.active() {
             for (m, MeshWall { mesh, material, .. }) in self.meshes.iter().enumerate() {
-                let c = self.coeffs.wall(p.phase[i] as usize, *material);
+                let c = &self.wall_coeffs(i, *material);
                 let reach = if reaches { c.pull_off } else { 0.0 };
                 st.contacts_of(
                     i,
@@ -487,6 +488,14 @@ impl Simulation {
     /// time `t`, once per evaluation; `None` for a mesh whose surface does not move.
     fn mesh_rates(&self, t: f64) -> Vec<Rates> {
         self.meshes.iter().map(|w| w.moves().then(|| w.motion.rates(t - self.mesh_stage.t0))).collect()
+    }
+
+    /// The coefficients of slot `i`'s contacts with wall material `material`: its phase's,
+    /// formed for its own radius and mass where the table is per unit size (the pull-off
+    /// distance too).
+    #[inline]
+    pub(super) fn wall_coeffs(&self, i: usize, material: usize) -> ContactCoeffs {
+        wall_coeffs_of(&self.coeffs, &self.law, &self.particles, i, material)
     }
 
     /// The wall law's input for slot `i`'s contact `k` (placed) with mesh `m`, whose motion
@@ -611,7 +620,7 @@ impl Simulation {
                 let pose = &poses[m];
                 let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
                 st.centres[i * n_meshes + m] = y;
-                let reach = self.coeffs.wall(p.phase[i] as usize, wall.material).pull_off;
+                let reach = wall_coeffs_of(&self.coeffs, &self.law, p, i, wall.material).pull_off;
                 grid.near_with_distances(
                     &wall.mesh,
                     y,
@@ -688,7 +697,7 @@ impl Simulation {
             claimed.resize(mine.len(), false);
             for (m, MeshWall { mesh, material, .. }) in self.meshes.iter().enumerate() {
                 let p = &self.particles;
-                let c = self.coeffs.wall(p.phase[i] as usize, *material);
+                let c = &self.wall_coeffs(i, *material);
                 let reach = if N::REACHES { c.pull_off } else { 0.0 };
                 let radius = p.radius[i];
                 self.mesh_stage.contacts_of(
@@ -757,4 +766,23 @@ fn carried(mine: &[MeshHistory], claimed: &[bool], mesh: u32, normal: Vec3) -> O
         }
     }
     best.map(|(j, _)| j)
+}
+
+/// [`Simulation::wall_coeffs`] from the table, law and particles.
+#[inline]
+fn wall_coeffs_of(
+    coeffs: &CoeffTable,
+    law: &ContactLaw,
+    p: &Particles,
+    i: usize,
+    material: usize,
+) -> ContactCoeffs {
+    let c = coeffs.wall(p.phase[i] as usize, material);
+    if !coeffs.sized() {
+        return *c;
+    }
+    let r = p.radius[i];
+    let mut sized = contact_coeffs(coeffs, law, c, r, p.mass[i]);
+    sized.pull_off = crate::with_normal_submodel!(law.normal, |N| contact_reach::<N>(coeffs, c, r));
+    sized
 }

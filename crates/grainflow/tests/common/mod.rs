@@ -4,7 +4,8 @@
 #![allow(dead_code)]
 
 use grainflow::contact::{
-    ContactParams, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel, TangentialModel,
+    ContactParams, ContactSizes, CoulombCap, HistoryFrame, LeverArm, NormalDamping, NormalModel,
+    TangentialModel,
 };
 use grainflow::state::ParticleInit;
 use grainflow::{
@@ -226,6 +227,7 @@ pub fn lammps_mindlin() -> (ContactLaw, ContactParams) {
         damping: NormalDamping::Tsuji,
         clip_attraction: false,
         coulomb: CoulombCap::Lammps,
+        sizes: ContactSizes::Own,
     };
     (law, ContactParams { etat_fac: 1.0, ..hertz_params(0.9, 0.9, 0.5) })
 }
