@@ -857,7 +857,8 @@ fn validate<'h>(
 
     // Insertions and outlets.
     let mesh_set = crate::flow::Meshes { walls: &meshes, names: &mesh_names };
-    let insertions = crate::flow::insertions(&raw.insertions, &phases, &mesh_set, t_start)?;
+    let read_particles = |file: &str| particles::read_csv_from(&mut open(file)?, &phases);
+    let insertions = crate::flow::insertions(&raw.insertions, &phases, &mesh_set, t_start, &read_particles)?;
     let outlets = crate::flow::outlets(&raw.outlets, &mesh_set, domain.leaving.as_deref(), (min, max), axes)?;
 
     // Particles (none needed when an insertion brings them).

@@ -9,6 +9,7 @@ use grainflow::insertion::psd::{Basis, Mixture, MixturePart, SizeDistribution};
 use grainflow::insertion::region::Region;
 use grainflow::insertion::{Amount, Insertion, Outlet, OutletShape, Rate, Schedule};
 use grainflow::mesh::MeshWall;
+use grainflow::state::ParticleInit;
 use grainflow::{Phase, Vec3};
 
 /// Default time between a rate insertion's batches, s.
@@ -33,11 +34,25 @@ fn finite(table: &str, key: &str, v: f64) -> Result<f64, CaseError> {
 }
 
 /// A region table.
-pub(crate) fn region(r: &RawRegion, table: &str, meshes: &Meshes) -> Result<Region, CaseError> {
+/// A stream's motion, for a `face` region: the insertion's velocity, its batches' interval
+/// and its particles' largest diameter.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Stream {
+    velocity: Vec3,
+    every: Option<f64>,
+    max_diameter: f64,
+}
+
+pub(crate) fn region(
+    r: &RawRegion,
+    table: &str,
+    meshes: &Meshes,
+    stream: Option<Stream>,
+) -> Result<Region, CaseError> {
     let kind = r
         .kind
         .as_deref()
-        .ok_or_else(|| CaseError::missing(table, "kind", "\"box\", \"cylinder\" or \"mesh\""))?;
+        .ok_or_else(|| CaseError::missing(table, "kind", "\"box\", \"cylinder\", \"mesh\" or \"face\""))?;
     let given = |k: &str| match k {
         "min" => r.min.is_some(),
         "max" => r.max.is_some(),
@@ -52,12 +67,13 @@ pub(crate) fn region(r: &RawRegion, table: &str, meshes: &Meshes) -> Result<Regi
         "box" => &["min", "max"],
         "cylinder" => &["base", "axis", "length", "radius"],
         "mesh" => &["mesh"],
+        "face" => &["base", "radius"],
         other => {
             return Err(CaseError::invalid(
                 table,
                 "kind",
                 format!("\"{other}\""),
-                "must be \"box\", \"cylinder\" or \"mesh\"",
+                "must be \"box\", \"cylinder\", \"mesh\" or \"face\"",
             ));
         }
     };
@@ -96,6 +112,30 @@ pub(crate) fn region(r: &RawRegion, table: &str, meshes: &Meshes) -> Result<Regi
             let length = positive(table, "length", r.length.ok_or_else(|| need("length"))?)?;
             let radius = positive(table, "radius", r.radius.ok_or_else(|| need("radius"))?)?;
             Region::cylinder(base, axis, length, radius)
+        }
+        "face" => {
+            // A stream through a disc: each batch fills the column upstream of the face that
+            // the stream carries through it before the next batch (at least one particle deep).
+            let (velocity, every, max_d) = match stream {
+                Some(Stream { velocity, every: Some(every), max_diameter })
+                    if velocity.length_squared() > 0.0 =>
+                {
+                    (velocity, every, max_diameter)
+                }
+                _ => {
+                    return Err(CaseError::invalid(
+                        table,
+                        "kind",
+                        "\"face\"",
+                        "is the region of a stream: an insertion at a rate (rate or mass_rate) with a non-zero velocity, through the face along it",
+                    ));
+                }
+            };
+            let centre = vec3(r.base.ok_or_else(|| need("base"))?, table, "base")?;
+            let radius = positive(table, "radius", r.radius.ok_or_else(|| need("radius"))?)?;
+            let depth = (velocity.length() * every).max(max_d);
+            let along = velocity.normalize();
+            Region::cylinder(centre - depth * along, along, depth, radius)
         }
         _ => {
             let name = r.mesh.as_deref().ok_or_else(|| need("mesh"))?;
@@ -209,6 +249,7 @@ pub(crate) fn insertions(
     phases: &[Phase],
     meshes: &Meshes,
     t_start: f64,
+    read_particles: &dyn Fn(&str) -> Result<Vec<ParticleInit>, CaseError>,
 ) -> Result<Vec<Insertion>, CaseError> {
     let mut out: Vec<Insertion> = Vec::with_capacity(raw.len());
     for (k, ins) in raw.iter().enumerate() {
@@ -226,14 +267,14 @@ pub(crate) fn insertions(
             ));
         }
         let table = format!("[[insertions]] '{name}'");
-        let region_table = format!("{table} region");
-        let region = region(
-            ins.region
-                .as_ref()
-                .ok_or_else(|| CaseError::missing(&table, "region", "a [insertions.region] table"))?,
-            &region_table,
-            meshes,
-        )?;
+        if let Some(file) = &ins.file {
+            out.push(given(ins, &table, name, file, t_start, read_particles)?);
+            continue;
+        }
+        let raw_region = ins
+            .region
+            .as_ref()
+            .ok_or_else(|| CaseError::missing(&table, "region", "a [insertions.region] table"))?;
         let amounts = [
             ins.count.map(Amount::Count),
             ins.volume_fraction.map(Amount::VolumeFraction),
@@ -352,6 +393,12 @@ pub(crate) fn insertions(
         let mixture = Mixture { parts, basis: by };
         mixture.check().map_err(|e| CaseError::invalid(&table, "phases", "the fractions", e.to_string()))?;
         let velocity = vec3(ins.velocity.unwrap_or([0.0; 3]), &table, "velocity")?;
+        let every = match schedule {
+            Schedule::Rate { every, .. } => Some(every),
+            Schedule::Once { .. } => None,
+        };
+        let stream = Stream { velocity, every, max_diameter: mixture.max_diameter() };
+        let region = region(raw_region, &format!("{table} region"), meshes, Some(stream))?;
         out.push(Insertion {
             name,
             region,
@@ -360,9 +407,48 @@ pub(crate) fn insertions(
             schedule,
             velocity,
             seed: ins.seed.unwrap_or(k as u64 + 1),
+            given: Vec::new(),
         });
     }
     Ok(out)
+}
+
+/// An insertion of the particles of `file`, as they are, at `at`: no other key that draws or
+/// places particles may be given.
+fn given(
+    ins: &RawInsertion,
+    table: &str,
+    name: String,
+    file: &str,
+    t_start: f64,
+    read_particles: &dyn Fn(&str) -> Result<Vec<ParticleInit>, CaseError>,
+) -> Result<Insertion, CaseError> {
+    let others = [
+        ("region", ins.region.is_some()),
+        ("count", ins.count.is_some()),
+        ("volume_fraction", ins.volume_fraction.is_some()),
+        ("mass", ins.mass.is_some()),
+        ("rate", ins.rate.is_some()),
+        ("mass_rate", ins.mass_rate.is_some()),
+        ("start", ins.start.is_some()),
+        ("every", ins.every.is_some()),
+        ("velocity", ins.velocity.is_some()),
+        ("seed", ins.seed.is_some()),
+        ("fractions_by", ins.fractions_by.is_some()),
+        ("[[insertions.phases]]", !ins.phases.is_empty()),
+    ];
+    if let Some((key, _)) = others.iter().find(|(_, given)| *given) {
+        return Err(CaseError::invalid(
+            table,
+            *key,
+            "with file",
+            "the file's particles come as they are (positions, diameters, velocities); give only name, file and at",
+        ));
+    }
+    let at = finite(table, "at", ins.at.unwrap_or(t_start))?;
+    let particles = read_particles(file)?;
+    Insertion::of_given(name, at, particles)
+        .ok_or_else(|| CaseError::invalid(table, "file", format!("\"{file}\""), "holds no particles"))
 }
 
 /// The `[[outlets]]` tables, and the domain's faces as the outlet "domain" if particles
@@ -391,7 +477,9 @@ pub(crate) fn outlets(
         }
         let table = format!("[[outlets]] '{name}'");
         let shape = match (&o.region, o.point, o.normal) {
-            (Some(r), None, None) => OutletShape::Region(region(r, &format!("{table} region"), meshes)?),
+            (Some(r), None, None) => {
+                OutletShape::Region(region(r, &format!("{table} region"), meshes, None)?)
+            }
             (None, Some(p), Some(n)) => {
                 let normal = vec3(n, &table, "normal")?;
                 if normal.length_squared() == 0.0 {

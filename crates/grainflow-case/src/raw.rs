@@ -527,9 +527,13 @@ pub struct RawInsertion {
     /// Name for messages and outputs. Required, unique among the insertions.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
-    /// Where the particles are placed. Required.
+    /// Where the particles are placed. Required, unless they come from `file`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub region: Option<RawRegion>,
+    /// A particle file (CSV: id,phase,x,y,z,diameter,u,v,w) whose particles come in as they
+    /// are, all at once at `at`, instead of drawn ones.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
     /// How many particles in all (or `volume_fraction` or `mass`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub count: Option<u64>,
@@ -612,7 +616,7 @@ pub struct RawInsertPhase {
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawRegion {
-    /// "box", "cylinder" or "mesh". Required.
+    /// "box", "cylinder", "mesh" or "face" (a stream through a disc). Required.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kind: Option<String>,
     /// box: the lower corner, m.
@@ -621,7 +625,7 @@ pub struct RawRegion {
     /// box: the upper corner, m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max: Option<[f64; 3]>,
-    /// cylinder: the centre of one end, m.
+    /// cylinder: the centre of one end; face: the disc's centre, m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub base: Option<[f64; 3]>,
     /// cylinder: the direction from `base` to the other end.
@@ -630,7 +634,7 @@ pub struct RawRegion {
     /// cylinder: the distance between its ends, m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub length: Option<f64>,
-    /// cylinder: its radius, m.
+    /// cylinder, face: the radius, m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub radius: Option<f64>,
     /// mesh: the name of a closed `[[meshes]]` entry whose inside is the region.

@@ -102,6 +102,10 @@ pub struct RunSummary {
     pub wall_seconds: f64,
     /// Particle-steps per wall-clock second.
     pub particle_steps_per_second: f64,
+    /// Particles at the start and at the end of the run (insertions and outlets change them).
+    pub particles: (usize, usize),
+    /// Particle-steps taken: the steps times the particles there, summed over the run.
+    pub particle_steps: f64,
     /// Threads of the force stage.
     pub threads: usize,
     /// Heap bytes of the particles, the neighbour list and the threads' plan at the end.
@@ -783,6 +787,10 @@ fn run_simulation(
     let mut checkpoint = None;
     let mut last = first;
     let mut interrupted = false;
+    let n_start = sim.particles().len();
+    // Counted at each look at the state, for the steps since the last (a batch inserted or
+    // drained within them counts from the look after it).
+    let mut particle_steps = 0.0;
     // The steps between two looks at the state are taken in one call (which saves a pass over
     // the particles per step with velocity Verlet): up to the next step that is due for a
     // health check, an output or a checkpoint, and never more than `MAX_STEPS_UNSEEN`, so that
@@ -793,6 +801,7 @@ fn run_simulation(
         let ahead =
             periods.iter().flatten().filter(|&&p| p > 0).fold(MAX_STEPS_UNSEEN, |k, &p| k.min(p - step % p));
         sim.advance(ahead);
+        particle_steps += (sim.step_index() - step) as f64 * sim.particles().len() as f64;
         let step = sim.step_index();
         let end = sim.finished();
         let output_now = step.is_multiple_of(every) || end;
@@ -872,11 +881,9 @@ fn run_simulation(
         first,
         last,
         wall_seconds: wall,
-        particle_steps_per_second: if wall > 0.0 {
-            (steps as f64) * (sim.particles().len() as f64) / wall
-        } else {
-            0.0
-        },
+        particle_steps_per_second: if wall > 0.0 { particle_steps / wall } else { 0.0 },
+        particles: (n_start, sim.particles().len()),
+        particle_steps,
         threads: sim.threads(),
         memory: sim.heap_bytes(),
         interrupted,

@@ -258,7 +258,6 @@ pub fn main(args: RunArgs) -> ExitCode {
     for w in &case.warnings {
         eprintln!("warning: {w}");
     }
-    let n = case.particles.len();
     let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
     println!("grainflow {}: {title}", env!("CARGO_PKG_VERSION"));
     let stop = Arc::new(AtomicBool::new(false));
@@ -304,9 +303,14 @@ pub fn main(args: RunArgs) -> ExitCode {
     match result {
         Ok(s) => {
             println!("{}", s.time_step_explanation);
+            let (n0, n) = s.particles;
+            let count = if n0 == n {
+                format!("{n} particles")
+            } else {
+                format!("{n0} particles at the start, {n} at the end")
+            };
             println!(
-                "{} particles, {} steps of {:.6e} s to t = {:.6e} s; {} outputs (every {} steps) in {}",
-                n,
+                "{count}, {} steps of {:.6e} s to t = {:.6e} s; {} outputs (every {} steps) in {}",
                 s.steps,
                 s.dt,
                 s.last.time,

@@ -60,6 +60,7 @@ fn pour_config(rate: f64, outlet: bool) -> SimulationConfig {
         schedule: Schedule::Rate { rate: Rate::Particles(rate), start: 0.0, every: 0.01 },
         velocity: Vec3::new(0.0, 0.0, -0.5),
         seed: 7,
+        given: Vec::new(),
     }];
     if outlet {
         c.outlets = vec![

@@ -19,6 +19,7 @@ pub mod region;
 pub type InsertRng = rand_chacha::ChaCha8Rng;
 
 use crate::math::Vec3;
+use crate::state::ParticleInit;
 use psd::Mixture;
 use region::Region;
 
@@ -39,6 +40,55 @@ pub struct Insertion {
     pub velocity: Vec3,
     /// The seed of the insertion's random stream.
     pub seed: u64,
+    /// Particles given as they are (read from a file) rather than drawn: inserted all at once
+    /// at [`Schedule::Once`]'s time where they are, with their own velocities and spins, ids
+    /// following the largest there has been; `region` and `mixture` then describe them
+    /// ([`Insertion::of_given`]). Empty for drawn particles.
+    pub given: Vec<ParticleInit>,
+}
+
+impl Insertion {
+    /// The insertion of the `given` particles, as they are, at time `at`: its region their
+    /// bounding box, its mixture one part per phase and density spanning their diameters.
+    /// None if `given` is empty.
+    pub fn of_given(name: String, at: f64, given: Vec<ParticleInit>) -> Option<Insertion> {
+        let first = given.first()?;
+        let (mut lo, mut hi) = (first.position, first.position);
+        let mut parts: Vec<psd::MixturePart> = Vec::new();
+        for p in &given {
+            let r = Vec3::splat(p.radius);
+            (lo, hi) = (lo.min(p.position - r), hi.max(p.position + r));
+            let d = 2.0 * p.radius;
+            match parts.iter_mut().find(|q| q.phase == p.phase && q.density == p.density) {
+                Some(q) => {
+                    if let psd::SizeDistribution::Uniform { min, max } = &mut q.sizes {
+                        (*min, *max) = (min.min(d), max.max(d));
+                    }
+                }
+                None => parts.push(psd::MixturePart {
+                    phase: p.phase,
+                    density: p.density,
+                    fraction: 0.0,
+                    sizes: psd::SizeDistribution::Uniform { min: d, max: d },
+                }),
+            }
+        }
+        let n = given.len() as u64;
+        let share = 1.0 / parts.len() as f64;
+        for q in &mut parts {
+            q.fraction = share;
+        }
+        Some(Insertion {
+            name,
+            region: Region::Box { lo, hi },
+            mixture: Mixture { parts, basis: psd::Basis::Number },
+            amount: Some(Amount::Count(n)),
+            schedule: Schedule::Once { at },
+            velocity: Vec3::ZERO,
+            seed: 0,
+            given,
+        })
+    }
 }
 
 /// How much an insertion puts in, in all.

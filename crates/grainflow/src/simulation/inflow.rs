@@ -309,6 +309,21 @@ fn check_insertion(ins: &Insertion, n_phases: usize) -> Result<(), EngineError> 
         }
         s => return Err(bad(format!("{s:?} is not a schedule: finite times and a positive interval"))),
     }
+    if !ins.given.is_empty() {
+        if !matches!(ins.schedule, Schedule::Once { .. })
+            || ins.amount != Some(Amount::Count(ins.given.len() as u64))
+        {
+            return Err(bad("given particles are inserted all at once, all of them".into()));
+        }
+        if ins.given.len() > MAX_BATCH {
+            return Err(bad(format!(
+                "{} particles given; at most {MAX_BATCH} may come at once",
+                ins.given.len()
+            )));
+        }
+        let p = crate::state::Particles::from_init(&ins.given);
+        return super::check_particles(&p, n_phases).map_err(|e| bad(e.to_string()));
+    }
     let batch = batch_estimate(ins, ins.region.volume());
     if batch.is_nan() || batch > MAX_BATCH as f64 / 2.0 {
         return Err(bad(format!(
@@ -438,8 +453,39 @@ impl Simulation {
         result
     }
 
+    /// Inserts insertion `k`'s given particles, `ins` lent out, as they are (new ids).
+    fn insert_given(&mut self, k: usize, ins: &Insertion) -> Result<(), EngineError> {
+        let mut new = ins.given.clone();
+        for p in &mut new {
+            p.id = u32::try_from(self.flow.next_id).map_err(|_| {
+                EngineError::BadReference(format!(
+                    "insertion '{}': particle ids beyond {}",
+                    ins.name,
+                    u32::MAX
+                ))
+            })?;
+            self.flow.next_id += 1;
+        }
+        let feed = &mut self.flow.feeds[k];
+        feed.batches += 1;
+        for p in &new {
+            let v = std::f64::consts::FRAC_PI_6 * (2.0 * p.radius).powi(3);
+            feed.drawn = (feed.drawn.0 + 1, feed.drawn.1 + v, feed.drawn.2 + p.density * v);
+        }
+        let first = self.particles.len();
+        self.insert(&new)?;
+        let units: Vec<i128> = self.particles.mass[first..].iter().map(|&m| self.flow.units(m)).collect();
+        for u in units {
+            self.flow.feeds[k].placed.add(u);
+        }
+        Ok(())
+    }
+
     /// [`insert_batch`](Self::insert_batch) with insertion `k`, `ins`, lent out.
     fn insert_batch_of(&mut self, k: usize, ins: &Insertion) -> Result<(), EngineError> {
+        if !ins.given.is_empty() {
+            return self.insert_given(k, ins);
+        }
         let volume = ins.region.volume();
         let target = batch_target(ins, self.flow.feeds[k].batches, volume);
         // Draw until the batch's target is reached.
