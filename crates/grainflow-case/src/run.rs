@@ -202,12 +202,13 @@ pub fn run_case(
         None => Simulation::new(case.config, case.particles)?,
         Some(path) => {
             let case_particles = options.accept_changed_case.then(|| particle_keys(&case.particles));
+            let flow = !(case.config.insertions.is_empty() && case.config.outlets.is_empty());
             // The checkpoint holds the particles: the case's initial ones go before it is read
             // (on a large bed they would hold a second copy of the state meanwhile).
             drop(case.particles);
             let sim = restore(case.config, path, options.accept_changed_case, &hash)?;
             if let Some(keys) = case_particles {
-                same_particles(&keys, &particle_keys(sim.particles()))
+                same_particles(&keys, &particle_keys(sim.particles()), flow)
                     .map_err(|message| RunError::Restart { path: path.clone(), message })?;
             }
             sim
@@ -294,9 +295,35 @@ fn particle_keys(p: &grainflow::Particles) -> Vec<(u32, u32, u64)> {
     keys
 }
 
-/// Why the case's particles and the checkpoint's differ, if they do.
-fn same_particles(case: &[(u32, u32, u64)], checkpoint: &[(u32, u32, u64)]) -> Result<(), String> {
+/// Why the case's particles and the checkpoint's differ, if they do. With insertions or
+/// outlets (`flow`) the checkpoint may hold fewer of the case's particles (removed) and more
+/// (inserted, with ids above the case's): each of the case's it holds must be the case's.
+fn same_particles(
+    case: &[(u32, u32, u64)],
+    checkpoint: &[(u32, u32, u64)],
+    flow: bool,
+) -> Result<(), String> {
     let advice = "--accept-changed-case accepts changed settings (time step, stiffness, outputs), not other particles: restore the case's particle file, or start a fresh run";
+    if flow {
+        let largest = case.iter().map(|c| c.0).max().unwrap_or(0);
+        for k in checkpoint.iter().filter(|k| k.0 <= largest) {
+            match case.binary_search_by_key(&k.0, |c| c.0) {
+                Ok(i) if case[i].1 == k.1 && case[i].2 == k.2 => {}
+                Ok(i) => {
+                    return Err(format!(
+                        "particle {} is of phase {} with radius {:e} m in the case but of phase {} with radius {:e} m in the checkpoint; {advice}",
+                        k.0,
+                        case[i].1 + 1,
+                        f64::from_bits(case[i].2),
+                        k.1 + 1,
+                        f64::from_bits(k.2)
+                    ));
+                }
+                Err(_) => return Err(format!("particle {} is missing from the case; {advice}", k.0)),
+            }
+        }
+        return Ok(());
+    }
     if case.len() != checkpoint.len() {
         return Err(format!(
             "the checkpoint holds {} particles and the case {}; {advice}",

@@ -123,3 +123,35 @@ phase = "glass"
     assert_eq!(books.inserted[0].count, 100, "{books:?}");
     assert!(books.close());
 }
+
+/// A run with an insertion restarts from its checkpoint with a changed case (a later end):
+/// the checkpoint's particles are the case's and the inserted ones, which the check of the
+/// case's particles accepts; it continues with all of them.
+#[test]
+fn a_run_with_insertions_restarts_with_a_changed_case() {
+    use grainflow_case::run::{CheckpointEvery, RunOptions, run_case};
+    let dir = tempfile::tempdir().expect("temp dir");
+    let extra = "[[insertions]]\nname = \"pour\"\nrate = 2000.0\nevery = 0.005\n[insertions.region]\nkind = \"box\"\nmin = [0.0, 0.0, 0.02]\nmax = [0.04, 0.04, 0.04]\n[[insertions.phases]]\nphase = \"glass\"\n";
+    let path = write_case(dir.path(), extra);
+    let text = std::fs::read_to_string(&path).expect("case").replace("t_stop = 0.05", "t_stop = 0.02");
+    std::fs::write(&path, text).expect("write");
+    let first = RunOptions { checkpoint_every: Some(CheckpointEvery::Steps(1000)), ..RunOptions::default() };
+    let out = dir.path().join("out");
+    let s = run_case(grainflow_case::load(&path).expect("case"), &out, &first, |_| {}).expect("first run");
+    assert!(s.particles.1 > s.particles.0, "{:?}", s.particles);
+    let checkpoint = s.checkpoint.expect("a checkpoint");
+    let text = std::fs::read_to_string(&path).expect("case").replace("t_stop = 0.02", "t_stop = 0.03");
+    std::fs::write(&path, text).expect("write");
+    let again = RunOptions {
+        restart: Some(checkpoint),
+        accept_changed_case: true,
+        overwrite: true,
+        ..RunOptions::default()
+    };
+    let r = run_case(grainflow_case::load(&path).expect("case"), &out, &again, |_| {})
+        .expect("the changed case restarts");
+    // The checkpoint of step 1000 (t = 0.01 s) holds the present particle and the batches
+    // of 0 and 5 ms; the restart runs on to 0.03 s, past the first run's end.
+    assert_eq!(r.particles.0, 21, "the restart starts with the checkpoint's particles");
+    assert!(r.particles.1 > s.particles.1, "and goes on inserting: {:?} {:?}", r.particles, s.particles);
+}
