@@ -251,7 +251,7 @@ fn build(spec: &Spec) -> Case {
     let parts: Vec<MixturePart> = (0..spec.parts)
         .map(|i| {
             let scale = if i == 0 { d } else { d * u(0.4, 1.0) };
-            let mut r = InsertRng::seed_from_u64(spec.seed ^ (i as u64 + 1) * 0x9E37_79B9);
+            let mut r = InsertRng::seed_from_u64(spec.seed ^ ((i as u64 + 1) * 0x9E37_79B9));
             MixturePart {
                 phase: i as u32,
                 density: 2500.0,
