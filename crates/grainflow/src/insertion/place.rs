@@ -10,7 +10,10 @@
 //!   shrunk by its radius) and kept at the first that is clear. RSA jams near φ ≈ 0.38 for
 //!   equal spheres, and the chance of a clear trial falls steeply on the way (about 3 % at
 //!   φ = 0.25); the spheres it fails to place go on to the lattice below, clear of those it
-//!   placed.
+//!   placed, and those the lattice cannot place either (its sites all blocked, as in a region
+//!   a few diameters wide, where the centres are crowded even at a low φ) are tried again at
+//!   up to [`RSA_RETRY_TRIALS`] random centres each (at most as many trials in all as the
+//!   first pass could take).
 //! - φ > 0.25: a **jittered lattice**. Face-centred cubic (FCC) sites with nearest-neighbour
 //!   spacing s fill the region's bounding box; a site is used if a sphere of the largest
 //!   diameter fits there, clear of the region's boundary and the obstacles. The sites are
@@ -71,6 +74,10 @@ pub const RSA_MAX_FRACTION: f64 = 0.25;
 /// Random centres tried per sphere by random sequential addition.
 pub const RSA_TRIALS: usize = 200;
 
+/// The most random centres tried again per sphere that neither random sequential addition
+/// nor the lattice placed (for a dilute request only).
+pub const RSA_RETRY_TRIALS: usize = 20 * RSA_TRIALS;
+
 /// Spare lattice sites asked for unequal spheres, as a fraction of their number: a site
 /// whose neighbours are large takes no sphere.
 pub const SPARE_SITES: f64 = 0.03;
@@ -130,9 +137,22 @@ pub fn place<R: Rng + ?Sized>(
     let mut order = valid;
     order.sort_by(|&a, &b| diameters[b].total_cmp(&diameters[a]));
     if solid <= RSA_MAX_FRACTION * volume {
-        let failed = rsa(&mut scene, &order, &radii, &mut out, rng);
+        let failed = rsa(&mut scene, &order, &radii, RSA_TRIALS, &mut out, rng);
         if !failed.is_empty() {
             lattice(&scene, &failed, &radii, Spacing::Densest, &mut out, rng);
+            // The lattice's sites are fixed: where the spheres RSA placed block them all
+            // (centres crowded in a region a few diameters wide), more random trials may
+            // still find room. At most as many again as the first pass could take.
+            let left: Vec<usize> = failed.iter().copied().filter(|&i| out[i].is_none()).collect();
+            if !left.is_empty() {
+                for &i in &failed {
+                    if let Some(x) = out[i] {
+                        scene.placed.insert(x, radii[i]);
+                    }
+                }
+                let trials = (RSA_TRIALS * order.len() / left.len()).min(RSA_RETRY_TRIALS);
+                rsa(&mut scene, &left, &radii, trials, &mut out, rng);
+            }
         }
     } else {
         lattice(&scene, &order, &radii, Spacing::FromCount, &mut out, rng);
@@ -140,12 +160,13 @@ pub fn place<R: Rng + ?Sized>(
     out
 }
 
-/// Random sequential addition of the spheres `order` (indices into `radii`); returns those
-/// not placed, in their order.
+/// Random sequential addition of the spheres `order` (indices into `radii`), `trials` random
+/// centres each; returns those not placed, in their order.
 fn rsa<R: Rng + ?Sized>(
     scene: &mut Scene,
     order: &[usize],
     radii: &[f64],
+    trials: usize,
     out: &mut [Option<Vec3>],
     rng: &mut R,
 ) -> Vec<usize> {
@@ -154,7 +175,7 @@ fn rsa<R: Rng + ?Sized>(
         let r = radii[i];
         let need = r + scene.margin;
         let mut at = None;
-        for _ in 0..RSA_TRIALS {
+        for _ in 0..trials {
             let Some(x) = scene.sample(r, rng) else { break };
             if scene.clearance(x, need, need) >= need {
                 at = Some(x);
