@@ -161,7 +161,7 @@ fn the_gated_hopper_fills_then_discharges_through_its_outlet() {
     assert_eq!(sum(ins, -1.0, 0.35), 3000.0, "the fill");
     assert_eq!(sum(ins, 0.35, 9.0), 0.0, "inserted after the fill");
     assert_eq!(sum(rem, -1.0, t_open), 0.0, "beads left before the gate opened");
-    let closed = rows.iter().filter(|r| r[t] <= t_open + 1e-9).last().expect("a row before the opening");
+    let closed = rows.iter().rfind(|r| r[t] <= t_open + 1e-9).expect("a row before the opening");
     assert!(closed[gate_fz] < -0.1, "the closed gate carries {} N", closed[gate_fz]);
     // The outlet removes beads once it is open; the books close.
     let removed = sum(rem, t_open, 9.0);
