@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the meshes and the hand-placed particles of the rotating-drum and conical-hopper
-examples (pure Python 3; the files it writes are shipped, so users need not run it).
+examples, and the hopper and its gate of the hopper-fill-discharge example (pure Python 3; the files it writes are shipped, so users need not run it).
 
     python3 examples/make_geometry.py
 
@@ -89,7 +89,8 @@ def hopper():
         for k in range(n):
             faces.append((lo(k), hi(k + 1), lo(k + 1)))
             faces.append((lo(k), hi(k), hi(k + 1)))
-    write_obj(os.path.join(HERE, "conical-hopper", "hopper.obj"), "conical hopper, orifice 24 mm, 60 degrees, D = 80 mm", v, faces)
+    for example in ("conical-hopper", "hopper-fill-discharge"):
+        write_obj(os.path.join(HERE, example, "hopper.obj"), "conical hopper, orifice 24 mm, 60 degrees, D = 80 mm", v, faces)
     s, r = 1.1 * d, d / 2
     pts = []
     m = int(r1 / s) + 1
@@ -109,6 +110,15 @@ def hopper():
     return len(pts)
 
 
+def gate():
+    """The hopper-fill-discharge example's gate: a square plate 32 mm across, 0.5 mm under the
+    orifice (24 mm across at z = 0), two triangles facing up, towards the beads."""
+    h, z = 0.016, -0.0005
+    v = [(-h, -h, z), (h, -h, z), (h, h, z), (-h, h, z)]
+    write_obj(os.path.join(HERE, "hopper-fill-discharge", "gate.obj"), "gate under the orifice, 32 mm square", v, [(0, 1, 2), (0, 2, 3)])
+
+
 if __name__ == "__main__":
+    gate()
     print("drum:", drum(), "particles")
     print("hopper:", hopper(), "particles")

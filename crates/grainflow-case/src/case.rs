@@ -11,7 +11,7 @@ use grainflow::contact::{
     TangentialModel,
 };
 use grainflow::mesh::{
-    Mesh, MeshError, MeshMotion, MeshTransform, MeshWall, SurfaceMotion, TriangleGrid,
+    Mesh, MeshError, MeshMotion, MeshTransform, MeshWall, MotionWindow, SurfaceMotion, TriangleGrid,
     closest_point_on_triangle,
 };
 use grainflow::simulation::STANDARD_GRAVITY;
@@ -478,6 +478,8 @@ fn validate<'h>(
     let mut meshes: Vec<MeshWall> = Vec::new();
     let mut mesh_names: Vec<String> = Vec::new();
     let mut mesh_torque_about: Vec<Vec3> = Vec::new();
+    // The meshes' motions are timed from the run's start ([time] is checked below).
+    let t_start_given = raw.time.as_ref().and_then(|t| t.t_start).filter(|t| t.is_finite()).unwrap_or(0.0);
     for (k, m) in raw.meshes.iter().enumerate() {
         let table = format!("[[meshes]] #{}", k + 1);
         let name = require(m.name.clone(), &table, "name", "a unique mesh name, for messages")?;
@@ -526,8 +528,9 @@ fn validate<'h>(
             )));
         }
         let motion = mesh_motion(m.motion.as_ref(), &table)?;
+        let window = mesh_motion_window(m.motion.as_ref(), &table, t_start_given)?;
         let surface = mesh_surface(m.surface.as_ref(), &table)?;
-        let wall = MeshWall { mesh, material, motion, surface };
+        let wall = MeshWall { mesh, material, motion, window, surface };
         let about = match m.torque_about {
             Some(p) => vec3(p, &table, "torque_about")?,
             None => crate::output::rotation_axis(&wall).map_or(Vec3::ZERO, |(origin, _)| origin),
@@ -1348,6 +1351,36 @@ fn mesh_motion(m: Option<&RawMeshMotion>, table: &str) -> Result<MeshMotion, Cas
             }
         }
     })
+}
+
+/// `[meshes.motion]`'s `start` and `stop` (times, s) as the engine's window, timed from the
+/// run's start `t_start` as the motion is.
+fn mesh_motion_window(
+    m: Option<&RawMeshMotion>,
+    table: &str,
+    t_start: f64,
+) -> Result<MotionWindow, CaseError> {
+    let Some(m) = m else { return Ok(MotionWindow::ALWAYS) };
+    let table = format!("{table} [motion]");
+    let start = m.start.unwrap_or(t_start);
+    if !(start.is_finite() && start >= t_start) {
+        return Err(CaseError::invalid(
+            &table,
+            "start",
+            start,
+            format!("must be a finite time in s, at or after [time] t_start = {t_start}"),
+        ));
+    }
+    let stop = m.stop.unwrap_or(f64::INFINITY);
+    if m.stop.is_some() && !(stop.is_finite() && stop > start) {
+        return Err(CaseError::invalid(
+            &table,
+            "stop",
+            stop,
+            format!("must be a finite time in s after the motion's start {start}"),
+        ));
+    }
+    Ok(MotionWindow { start: start - t_start, stop: stop - t_start })
 }
 
 /// `[meshes.surface]` as the engine's surface motion.

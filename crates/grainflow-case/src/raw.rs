@@ -235,6 +235,13 @@ pub struct RawMeshMotion {
     /// oscillate: frequency, Hz.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frequency: Option<f64>,
+    /// Any kind: the time the motion starts, s (the mesh is as loaded before it; the motion's
+    /// clock starts there). Default: the run's start time.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start: Option<f64>,
+    /// Any kind: the time the motion stops, s (the mesh stays where it got to). Default: never.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stop: Option<f64>,
 }
 
 /// `[meshes.surface]`: a surface velocity, either `velocity` or a turning (`axis`, `origin`,

@@ -251,4 +251,34 @@ fn motion_tables_check_their_keys() {
         &sq,
         &["speed"],
     );
+    refused(
+        &with("[meshes.motion]\nkind = \"translate\"\nvelocity = [1.0, 0.0, 0.0]\nstart = -0.1\n"),
+        &sq,
+        &["`start`", "t_start = 0"],
+    );
+    refused(
+        &with("[meshes.motion]\nkind = \"translate\"\nvelocity = [1.0, 0.0, 0.0]\nstart = 0.2\nstop = 0.2\n"),
+        &sq,
+        &["`stop`", "after the motion's start 0.2"],
+    );
+}
+
+/// `start` and `stop` of any kind of motion become the engine's window; without them the
+/// motion acts over the whole run.
+#[test]
+fn a_motions_start_and_stop_become_its_window() {
+    use grainflow::mesh::MotionWindow;
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let case = write_case(
+        dir.path(),
+        "[[meshes]]\nname = \"gate\"\nfile = \"square.obj\"\nscale = 1e-3\n\
+         [meshes.motion]\nkind = \"translate\"\nvelocity = [0.5, 0.0, 0.0]\nstart = 0.0004\nstop = 0.0009\n\
+         [[meshes]]\nname = \"drum\"\nfile = \"square.obj\"\nscale = 1e-3\ntranslate = [0.0, 0.0, -0.05]\n\
+         [meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\nomega = 1.0\n",
+    );
+    let c = grainflow_case::load(&case).expect("valid case");
+    let m = &c.config.meshes;
+    assert_eq!(m[0].window, MotionWindow { start: 0.0004, stop: 0.0009 });
+    assert_eq!(m[1].window, MotionWindow::ALWAYS);
 }

@@ -50,6 +50,15 @@ const EXAMPLES: &[Example] = &[
         ],
     },
     Example {
+        name: "hopper-fill-discharge",
+        summary: "the conical hopper filled by an insertion behind a slide gate (a mesh with a start time), then opened: 3 000 beads discharged through an outlet, counted",
+        files: &[
+            ("case.toml", include_str!("../../../examples/hopper-fill-discharge/case.toml")),
+            ("hopper.obj", include_str!("../../../examples/hopper-fill-discharge/hopper.obj")),
+            ("gate.obj", include_str!("../../../examples/hopper-fill-discharge/gate.obj")),
+        ],
+    },
+    Example {
         name: "pour-bed",
         summary: "a bed of glass beads (1.6–2.4 mm) and steel shot poured into a box by an insertion: no particle file",
         files: &[("case.toml", include_str!("../../../examples/pour-bed/case.toml"))],
@@ -79,8 +88,9 @@ const EXAMPLES: &[Example] = &[
 
 pub fn main(args: ExampleArgs) -> ExitCode {
     let Some(name) = args.name else {
+        let width = EXAMPLES.iter().map(|e| e.name.len()).max().unwrap_or(0);
         for e in EXAMPLES {
-            println!("{:<14} {}", e.name, e.summary);
+            println!("{:<width$} {}", e.name, e.summary);
         }
         return ExitCode::SUCCESS;
     };

@@ -1089,18 +1089,19 @@ fn check_mesh_motion(m: &MeshWall) -> Result<(), EngineError> {
         MeshMotion::Oscillate { amplitude, frequency } => {
             amplitude.is_finite() && frequency.is_finite() && frequency >= 0.0
         }
-    } && match m.surface {
-        SurfaceMotion::None => true,
-        SurfaceMotion::Translate { velocity } => velocity.is_finite(),
-        SurfaceMotion::Rotate { origin, axis, omega } => {
-            origin.is_finite() && unit(axis) && omega.is_finite()
-        }
-    };
+    } && m.window.is_valid()
+        && match m.surface {
+            SurfaceMotion::None => true,
+            SurfaceMotion::Translate { velocity } => velocity.is_finite(),
+            SurfaceMotion::Rotate { origin, axis, omega } => {
+                origin.is_finite() && unit(axis) && omega.is_finite()
+            }
+        };
     if ok {
         Ok(())
     } else {
         Err(EngineError::BadReference(format!(
-            "mesh '{}' has a motion with a non-finite value, an axis that is not a unit vector, or a negative ramp or frequency",
+            "mesh '{}' has a motion with a non-finite value, an axis that is not a unit vector, a negative ramp or frequency, or a window that does not start at or after the run's start and stop after its start",
             m.mesh.name()
         )))
     }

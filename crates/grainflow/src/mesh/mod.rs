@@ -28,7 +28,7 @@ pub mod motion;
 
 pub use contact::{ClosestPoint, MeshContact, Primitive, Region, closest_point_on_triangle, sphere_contacts};
 pub use grid::TriangleGrid;
-pub use motion::{MeshMotion, Pose, SurfaceMotion};
+pub use motion::{MeshMotion, MotionWindow, Pose, SurfaceMotion};
 
 use crate::math::Vec3;
 use std::fmt;
@@ -364,20 +364,28 @@ impl Default for MeshTransform {
 }
 
 /// A triangle-mesh wall of a simulation: its surface (as loaded, in its reference pose), its
-/// material (an index into the simulation's wall materials), how it moves and how its surface
-/// slides.
+/// material (an index into the simulation's wall materials), how it moves and when, and how its
+/// surface slides.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshWall {
     pub mesh: Mesh,
     pub material: usize,
     pub motion: MeshMotion,
+    /// When `motion` acts (the whole run unless told).
+    pub window: MotionWindow,
     pub surface: SurfaceMotion,
 }
 
 impl MeshWall {
     /// An immovable mesh wall of `material`.
     pub fn fixed(mesh: Mesh, material: usize) -> MeshWall {
-        MeshWall { mesh, material, motion: MeshMotion::Fixed, surface: SurfaceMotion::None }
+        MeshWall {
+            mesh,
+            material,
+            motion: MeshMotion::Fixed,
+            window: MotionWindow::ALWAYS,
+            surface: SurfaceMotion::None,
+        }
     }
 
     /// True if the contact velocity of its surface may be non-zero.

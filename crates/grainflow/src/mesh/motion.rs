@@ -8,8 +8,9 @@
 //! again.
 //!
 //! The pose is a closed form of τ (no integration, so no drift): a rotation by θ(τ) about a
-//! fixed axis, a translation v·τ, or an oscillation A·sin(2πfτ). A restart that changed the
-//! motion continues from where the mesh was ([`Anchor`]). Rotations take the platform's `sin`
+//! fixed axis, a translation v·τ, or an oscillation A·sin(2πfτ). A motion may act only over a
+//! window of time ([`MotionWindow`]: a gate that opens at a given time). A restart that changed
+//! the motion continues from where the mesh was ([`Anchor`]). Rotations take the platform's `sin`
 //! and `cos` (the same bits on one machine, so restarts are bit-identical).
 
 use crate::math::Vec3;
@@ -129,6 +130,51 @@ impl MeshMotion {
     }
 }
 
+/// When a mesh's motion acts, in s since the run's start (τ): the mesh stays in its pose as
+/// loaded until `start`, then moves by its motion timed from `start` (the motion's own clock
+/// reads τ − `start`), and from `stop` on stays where the motion took it. A gate that opens at
+/// `start` by sliding away until `stop`; [`ALWAYS`](Self::ALWAYS) is the whole run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotionWindow {
+    pub start: f64,
+    pub stop: f64,
+}
+
+impl MotionWindow {
+    /// From the run's start, without end: the motion's clock is τ itself.
+    pub const ALWAYS: MotionWindow = MotionWindow { start: 0.0, stop: f64::INFINITY };
+
+    /// The motion's own clock at τ: 0 before `start`, τ − `start` within the window,
+    /// `stop` − `start` after it (for [`ALWAYS`](Self::ALWAYS), τ to the bit).
+    #[inline]
+    pub fn clock(&self, tau: f64) -> f64 {
+        (tau.min(self.stop) - self.start).max(0.0)
+    }
+
+    /// True while the motion acts: `start` ≤ τ < `stop`.
+    #[inline]
+    pub fn acts(&self, tau: f64) -> bool {
+        self.start <= tau && tau < self.stop
+    }
+
+    /// A start no earlier than the run's and a stop after it (`stop` may be infinite).
+    pub fn is_valid(&self) -> bool {
+        self.start.is_finite() && self.start >= 0.0 && !self.stop.is_nan() && self.stop > self.start
+    }
+}
+
+impl MeshMotion {
+    /// The pose at τ of this motion acting over `window`.
+    pub fn pose_within(&self, window: &MotionWindow, tau: f64) -> Pose {
+        self.pose(window.clock(tau))
+    }
+
+    /// The rates at τ of this motion acting over `window`: its own inside, at rest outside.
+    pub fn rates_within(&self, window: &MotionWindow, tau: f64) -> (Vec3, Vec3, Vec3) {
+        if window.acts(tau) { self.rates(window.clock(tau)) } else { (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO) }
+    }
+}
+
 /// A velocity of a mesh's surface in its own plane while the mesh stays where it is: at a
 /// contact its component along the contact's normal is removed, so the surface slides without
 /// pushing. (A drum's shell turning in place, as MFIX's drum tutorial moves its wall; a belt.)
@@ -155,8 +201,8 @@ impl SurfaceMotion {
     }
 }
 
-/// The start of a mesh's motion: its pose is that of the motion from τ to `tau`, after
-/// `pose`. A run starts from (0, the pose as loaded), so its poses are the motion's closed
+/// The start of a mesh's motion: its pose is that of the motion (over its window) from τ to
+/// `tau`, after `pose`. A run starts from (0, the pose as loaded), so its poses are the motion's closed
 /// form; a restart whose case changed the motion anchors it at the checkpoint's pose and time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Anchor {
@@ -168,24 +214,26 @@ impl Anchor {
     /// The anchor of a run's start.
     pub const START: Anchor = Anchor { tau: 0.0, pose: Pose::IDENTITY };
 
-    /// The pose of a mesh with `motion` at τ.
-    pub fn pose(&self, motion: &MeshMotion, tau: f64) -> Pose {
+    /// The pose of a mesh with `motion` acting over `window` at τ.
+    pub fn pose(&self, motion: &MeshMotion, window: &MotionWindow, tau: f64) -> Pose {
         if *self == Anchor::START {
-            return motion.pose(tau);
+            return motion.pose_within(window, tau);
         }
+        // The motion's own clock now and at the anchor.
+        let (now, then) = (window.clock(tau), window.clock(self.tau));
         let relative = match *motion {
             MeshMotion::Fixed => Pose::IDENTITY,
             MeshMotion::Translate { velocity } => {
-                Pose { rotation: DQuat::IDENTITY, translation: velocity * (tau - self.tau) }
+                Pose { rotation: DQuat::IDENTITY, translation: velocity * (now - then) }
             }
             MeshMotion::Rotate { origin, axis, .. } => {
-                let turned = motion.angle(tau) - motion.angle(self.tau);
+                let turned = motion.angle(now) - motion.angle(then);
                 let rotation = DQuat::from_axis_angle(axis, turned);
                 Pose { rotation, translation: origin - rotation * origin }
             }
             MeshMotion::Oscillate { .. } => Pose {
                 rotation: DQuat::IDENTITY,
-                translation: motion.pose(tau).translation - motion.pose(self.tau).translation,
+                translation: motion.pose(now).translation - motion.pose(then).translation,
             },
         };
         relative.after(&self.pose)
@@ -247,11 +295,57 @@ mod tests {
         let m = MeshMotion::Rotate { origin: Vec3::ZERO, axis: Vec3::Z, omega: 1.0, ramp: 0.0 };
         let start = Pose { rotation: DQuat::from_axis_angle(Vec3::Z, 0.3), translation: Vec3::ZERO };
         let a = Anchor { tau: 2.0, pose: start };
-        let p = a.pose(&m, 2.0);
+        let all = MotionWindow::ALWAYS;
+        let p = a.pose(&m, &all, 2.0);
         assert!((p.apply(Vec3::X) - start.apply(Vec3::X)).length() < 1e-15);
-        let later = a.pose(&m, 2.5).apply(Vec3::X);
+        let later = a.pose(&m, &all, 2.5).apply(Vec3::X);
         assert!((later - Vec3::new(0.8f64.cos(), 0.8f64.sin(), 0.0)).length() < 1e-15);
-        assert_eq!(Anchor::START.pose(&m, 0.7), m.pose(0.7));
+        assert_eq!(Anchor::START.pose(&m, &all, 0.7), m.pose(0.7));
+    }
+
+    /// A gate sliding at v = (0.5, 0, 0) m/s over the window [0.2, 0.3) s: as loaded (and at
+    /// rest) before 0.2 s, at v·(τ − 0.2) inside, and stopped at v·0.1 = 50 mm from 0.3 s on.
+    /// The whole run's window is the motion itself, to the bit.
+    #[test]
+    fn a_windowed_motion_waits_for_its_start_and_stays_after_its_stop() {
+        let v = Vec3::new(0.5, 0.0, 0.0);
+        let m = MeshMotion::Translate { velocity: v };
+        let w = MotionWindow { start: 0.2, stop: 0.3 };
+        let at = |tau: f64| m.pose_within(&w, tau).translation;
+        for tau in [0.0, 0.1, 0.2] {
+            assert_eq!(at(tau), Vec3::ZERO, "τ {tau}");
+        }
+        assert_eq!(m.rates_within(&w, 0.1999).0, Vec3::ZERO);
+        for tau in [0.21, 0.25, 0.2999] {
+            assert!((at(tau) - v * (tau - 0.2)).length() < 1e-15, "τ {tau}");
+            assert_eq!(m.rates_within(&w, tau).0, v, "τ {tau}");
+        }
+        for tau in [0.3, 0.5, 10.0] {
+            assert!((at(tau) - Vec3::new(0.05, 0.0, 0.0)).length() < 1e-15, "τ {tau}");
+            assert_eq!(m.rates_within(&w, tau).0, Vec3::ZERO, "τ {tau}");
+        }
+        // A rotation's ramp runs from the window's start: ½ω τ'²/ramp at τ' = τ − start.
+        let r = MeshMotion::Rotate { origin: Vec3::ZERO, axis: Vec3::Z, omega: 2.0, ramp: 0.5 };
+        let late = MotionWindow { start: 1.0, stop: f64::INFINITY };
+        assert_eq!(r.pose_within(&late, 0.9), Pose::IDENTITY);
+        let p = r.pose_within(&late, 1.25).apply(Vec3::X);
+        let angle: f64 = 0.5 * 2.0 * 0.25 * 0.25 / 0.5;
+        assert!((p - Vec3::new(angle.cos(), angle.sin(), 0.0)).length() < 1e-15);
+        assert!((r.rates_within(&late, 1.25).1 - Vec3::new(0.0, 0.0, 1.0)).length() < 1e-15);
+        // An anchor inside the window continues by the motion since then; one before the
+        // window's start waits for it.
+        let a = Anchor { tau: 0.25, pose: Pose { rotation: DQuat::IDENTITY, translation: Vec3::Y } };
+        assert!((a.pose(&m, &w, 0.5).translation - (Vec3::Y + v * 0.05)).length() < 1e-15);
+        let early = Anchor { tau: 0.1, pose: Pose::IDENTITY };
+        assert_eq!(early.pose(&m, &w, 0.15), Pose::IDENTITY);
+        for tau in [0.0, 0.3, 1.7, 123.456] {
+            assert_eq!(MotionWindow::ALWAYS.clock(tau), tau);
+            assert_eq!(m.pose_within(&MotionWindow::ALWAYS, tau), m.pose(tau));
+            assert_eq!(m.rates_within(&MotionWindow::ALWAYS, tau), m.rates(tau));
+        }
+        assert!(w.is_valid() && MotionWindow::ALWAYS.is_valid());
+        assert!(!MotionWindow { start: 0.3, stop: 0.3 }.is_valid());
+        assert!(!MotionWindow { start: -0.1, stop: 1.0 }.is_valid());
     }
 
     /// A surface velocity slides in the tangent plane: its normal component is removed.

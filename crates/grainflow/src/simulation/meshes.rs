@@ -326,7 +326,7 @@ impl Simulation {
         if !wall.motion.moves() {
             return Pose::IDENTITY;
         }
-        self.mesh_stage.anchor(m).pose(&wall.motion, t - self.mesh_stage.t0)
+        self.mesh_stage.anchor(m).pose(&wall.motion, &wall.window, t - self.mesh_stage.t0)
     }
 
     /// Where mesh `m` is now (its pose as loaded moved by its motion so far).
@@ -487,7 +487,10 @@ impl Simulation {
     /// Each mesh's motion rates (linear velocity, angular velocity, a point on the axis) at
     /// time `t`, once per evaluation; `None` for a mesh whose surface does not move.
     fn mesh_rates(&self, t: f64) -> Vec<Rates> {
-        self.meshes.iter().map(|w| w.moves().then(|| w.motion.rates(t - self.mesh_stage.t0))).collect()
+        self.meshes
+            .iter()
+            .map(|w| w.moves().then(|| w.motion.rates_within(&w.window, t - self.mesh_stage.t0)))
+            .collect()
     }
 
     /// The coefficients of slot `i`'s contacts with wall material `material`: its phase's,
