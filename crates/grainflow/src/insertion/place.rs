@@ -286,16 +286,6 @@ fn lattice<R: Rng + ?Sized>(
 
     let lat = Lattice::new(scene, m, r_ref);
     let s = lat.spacing;
-    if std::env::var("PLACE_DEBUG").is_ok() {
-        eprintln!(
-            "s {s} hmin {} floor {s_floor} sites {} m {:?} h {:?} count {}",
-            lat.half,
-            lat.sites(),
-            lat.m,
-            lat.h,
-            count(m)
-        );
-    }
     let reach = reach_of(&lat);
     let need_min = r_min + margin;
     // Each usable site's clearance from the region's boundary and the obstacles.
