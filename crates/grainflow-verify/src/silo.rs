@@ -2,8 +2,8 @@
 //! circular orifice in the centre of its floor, against Beverloo's correlation
 //! W = C ρ_b √g (D − k d)^{5/2}.
 //!
-//! **Set-up.** For each orifice diameter D (in mean bead diameters d, [`REDUCED`] and
-//! [`FULL`]), a silo of its own: a cylinder of diameter D_s = 2.5 D + 5 d (so that the walls
+//! **Set-up.** For each orifice diameter D (in mean bead diameters d, [`reduced()`] and
+//! [`full()`]), a silo of its own: a cylinder of diameter D_s = 2.5 D + 5 d (so that the walls
 //! are farther than the 2.5 D beyond which the rate no longer depends on them, plus a few
 //! beads), [`FACETS`] facets, normals inwards, and a flat floor that extends a bead past the
 //! cylinder, both triangle meshes built here. The floor is first closed (the orifice's disc is
