@@ -19,7 +19,9 @@ pub struct VerifyArgs {
     out: PathBuf,
     /// Also run the converged and full variants (DEM05: both models again at dt = 2.5e-9 s,
     /// about 5 000 steps per contact, separating the model from MFIX's coarse time stepping;
-    /// drum: Fr = 1e-4, 1e-3, 1e-2 over half a revolution each instead of Fr = 1e-2 only).
+    /// drum: Fr = 1e-4, 1e-3, 1e-2 over half a revolution each instead of Fr = 1e-2 only;
+    /// silo: five orifices from 5 to 15 d instead of three; packing: seven friction
+    /// coefficients instead of three).
     #[arg(long)]
     converged: bool,
     /// Integrator of the converged runs (MFIX's own runs keep the case's integrator).

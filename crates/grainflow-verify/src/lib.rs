@@ -12,8 +12,10 @@ pub mod drum;
 pub mod error;
 pub mod jkr;
 pub mod kharaz;
+pub mod packing;
 pub mod plot;
 pub mod rolling;
+pub mod silo;
 pub mod suite;
 
 pub use check::{Check, CheckKind};

@@ -14,7 +14,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SuiteOptions {
     /// Also run the converged (small time step) variants where a case has them (DEM05), and
-    /// the full versions of reduced cases (drum: the Fr sweep).
+    /// the full versions of reduced cases (drum: the Fr sweep; silo: five orifices; packing:
+    /// seven friction coefficients).
     pub converged: bool,
     /// Integrator for the converged runs.
     pub integrator: Option<Integrator>,
@@ -110,6 +111,16 @@ pub fn cases() -> Vec<CaseEntry> {
             name: "drum",
             summary: "rotating drum (quasi-2D, turning mesh walls): dynamic angle of repose in the rolling regime against rotating-drum measurements (Kleinhans et al. 2011) and its rise with Fr (Brucks et al. 2007)",
             run: crate::drum::run_case,
+        },
+        CaseEntry {
+            name: "silo",
+            summary: "silo discharge (flat-bottomed cylinder and floor as triangle meshes, insertion, outlet): the rate against Beverloo's correlation, C and k fitted over the orifice size",
+            run: crate::silo::run_case,
+        },
+        CaseEntry {
+            name: "packing",
+            summary: "poured packing of monodisperse spheres (rate insertion, periodic box): volume fraction ≈ 0.64 without friction, falling with μ (Silbert et al. 2002)",
+            run: crate::packing::run_case,
         },
     ]
 }
