@@ -40,7 +40,7 @@ pub fn default_skin(max_radius: f64) -> f64 {
 }
 
 /// The sizes a run's particles take, per phase, from its particles and insertions: what
-/// [`ContactSizes::Own`](crate::contact::ContactSizes::Own) needs to know at set-up.
+/// [`ContactSizes::Own`] needs to know at set-up.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSizes {
     /// The phases with the smallest diameter any of their particles has or can be inserted
