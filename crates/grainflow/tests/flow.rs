@@ -216,3 +216,31 @@ fn an_insertion_at_the_start_is_placed_without_overlaps() {
         "{v} vs {target}"
     );
 }
+
+/// Two parts of one phase with their own densities (solid and porous beads): each particle has
+/// the density of the part it was drawn from, and both parts come in (50/50 by number among
+/// some 700 particles: each count is binomial, about 350 ± 13, so more than 100 of each).
+#[test]
+fn two_parts_of_one_phase_keep_their_own_densities() {
+    let mut c = pour_config(1.0, false);
+    let ins = &mut c.insertions[0];
+    ins.schedule = Schedule::Once { at: 0.0 };
+    ins.amount = Some(Amount::VolumeFraction(0.3));
+    ins.region = Region::Box { lo: Vec3::new(0.0, 0.0, 0.0), hi: Vec3::new(0.02, 0.02, 0.03) };
+    ins.mixture.parts[1].phase = 0;
+    ins.mixture.basis = Basis::Number;
+    ins.mixture.parts[0].fraction = 0.5;
+    ins.mixture.parts[1].fraction = 0.5;
+    let sim = start(c);
+    let p = sim.particles();
+    let mut counts = [0usize; 2];
+    for i in 0..p.len() {
+        assert_eq!(p.phase[i], 0);
+        let m = |rho: f64| sphere_mass(p.radius[i], rho);
+        // The mass from the density, as the engine forms it, to rounding (1e-14).
+        let k = [RHO, 2.0 * RHO].iter().position(|&rho| (p.mass[i] - m(rho)).abs() <= 1e-14 * m(rho));
+        counts[k.expect("a part's density")] += 1;
+    }
+    assert!(counts.iter().all(|&n| n > 100), "{counts:?}");
+    assert!(sim.flow_books().close());
+}

@@ -504,6 +504,13 @@ impl Mixture {
     /// uniform variate picks the part by its number fraction; then its sizes draw the diameter
     /// ([`SizeDistribution::sample`]). A single part draws only its diameter.
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> (u32, f64) {
+        let (part, d) = self.draw(rng);
+        (part.phase, d)
+    }
+
+    /// [`sample`](Self::sample) with the part drawn (its phase and density), from the same
+    /// variates.
+    pub fn draw<R: Rng + ?Sized>(&self, rng: &mut R) -> (&MixturePart, f64) {
         let part = if self.parts.len() == 1 {
             &self.parts[0]
         } else {
@@ -523,7 +530,7 @@ impl Mixture {
             }
             chosen.unwrap_or(&self.parts[0])
         };
-        (part.phase, part.sizes.sample(rng))
+        (part, part.sizes.sample(rng))
     }
 
     /// The mean volume of a particle, by number, m³.

@@ -491,15 +491,15 @@ impl Simulation {
         // Draw until the batch's target is reached.
         let feed = &mut self.flow.feeds[k];
         let mut drawn: Vec<(u32, f64, f64)> = Vec::new();
-        let rho = |phase: u32| ins.mixture.parts.iter().find(|p| p.phase == phase).map_or(0.0, |p| p.density);
         // (The set-up's check keeps batches far below `MAX_BATCH`: the cap only bounds memory.)
         while !target.reached(feed.drawn) && !amount_reached(ins.amount, feed.drawn, volume) {
             if drawn.len() >= MAX_BATCH {
                 break;
             }
-            let (phase, d) = ins.mixture.sample(&mut feed.rng);
+            // The part's own density: two parts of one phase may differ in it.
+            let (part, d) = ins.mixture.draw(&mut feed.rng);
+            let (phase, density) = (part.phase, part.density);
             let v = std::f64::consts::FRAC_PI_6 * d * d * d;
-            let density = rho(phase);
             feed.drawn.0 += 1;
             feed.drawn.1 += v;
             feed.drawn.2 += density * v;
