@@ -11,8 +11,8 @@ use grainflow::contact::{
     TangentialModel,
 };
 use grainflow::mesh::{
-    Mesh, MeshError, MeshMotion, MeshTransform, MeshWall, MotionWindow, SurfaceMotion, TriangleGrid,
-    closest_point_on_triangle,
+    KeyFrames, Mesh, MeshError, MeshMotion, MeshTransform, MeshWall, MotionWindow, SurfaceMotion,
+    TriangleGrid, closest_point_on_triangle,
 };
 use grainflow::simulation::STANDARD_GRAVITY;
 use grainflow::state::ParticleInit;
@@ -515,8 +515,15 @@ fn validate<'h>(
             rotation_deg: rotation.to_array(),
             translation,
             flip_normals: m.flip_normals.unwrap_or(false),
+            skip_degenerate: m.skip_degenerate.unwrap_or(false),
         };
         let mesh = load_mesh(&file, &transform, read_bytes).map_err(|e| e.into_case_error(&table))?;
+        if mesh.skipped_degenerate() > 0 {
+            warnings.push(format!(
+                "{table}: {} of {file}'s triangles have no area and are left out (skip_degenerate = true)",
+                mesh.skipped_degenerate()
+            ));
+        }
         if mesh.outside_box(min, max) {
             let (lo, hi) = mesh.bounds();
             return Err(CaseError::Geometry(format!(
@@ -530,7 +537,8 @@ fn validate<'h>(
         let motion = mesh_motion(m.motion.as_ref(), &table)?;
         let window = mesh_motion_window(m.motion.as_ref(), &table, t_start_given)?;
         let surface = mesh_surface(m.surface.as_ref(), &table)?;
-        let wall = MeshWall { mesh, material, motion, window, surface };
+        let surface_factor = mesh_surface_factor(m.surface.as_ref(), &table, t_start_given, read_bytes)?;
+        let wall = MeshWall { mesh, material, motion, window, surface, surface_factor };
         let about = match m.torque_about {
             Some(p) => vec3(p, &table, "torque_about")?,
             None => crate::output::rotation_axis(&wall).map_or(Vec3::ZERO, |(origin, _)| origin),
@@ -1407,6 +1415,64 @@ fn mesh_surface(s: Option<&RawMeshSurface>, table: &str) -> Result<SurfaceMotion
             "`velocity` (a belt) or `axis` with `omega` or `rpm` (a turning surface)",
         )),
     }
+}
+
+/// `[meshes.surface]`'s `keyframes` and `keyframe_column`: the factor of the surface's
+/// velocity in time, column `keyframe_column` of the MFIX key-frame file `keyframes` (read
+/// through `read_bytes`, so its text is in the case hash), timed from the run's start
+/// `t_start` (the file's times are the case's, as MFIX's are its run's).
+fn mesh_surface_factor(
+    s: Option<&RawMeshSurface>,
+    table: &str,
+    t_start: f64,
+    read_bytes: &dyn Fn(&str) -> Result<Vec<u8>, CaseError>,
+) -> Result<Option<KeyFrames>, CaseError> {
+    let Some(s) = s else { return Ok(None) };
+    let table = format!("{table} [surface]");
+    let Some(file) = &s.keyframes else {
+        return match s.keyframe_column {
+            None => Ok(None),
+            Some(c) => Err(CaseError::invalid(
+                &table,
+                "keyframe_column",
+                c,
+                "is given without `keyframes`, the key-frame file it picks a column of",
+            )),
+        };
+    };
+    let column = s.keyframe_column.unwrap_or(1);
+    if column < 1 {
+        return Err(CaseError::invalid(
+            &table,
+            "keyframe_column",
+            column,
+            "must be a variable of the key-frame file, counted from 1 (the column after the time)",
+        ));
+    }
+    let shown = format!("\"{file}\"");
+    let bytes = read_bytes(file).map_err(|e| match e {
+        CaseError::Read { source, .. } => CaseError::invalid(
+            &table,
+            "keyframes",
+            &shown,
+            format!("the key-frame file cannot be read: {source}"),
+        ),
+        other => other,
+    })?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        CaseError::invalid(
+            &table,
+            "keyframes",
+            &shown,
+            format!("the key-frame file is not text (UTF-8): {e}"),
+        )
+    })?;
+    let frames = KeyFrames::from_mfix(text, usize::try_from(column).unwrap_or(usize::MAX))
+        .and_then(|k| k.shifted(t_start))
+        .map_err(|e| {
+            CaseError::invalid(&table, "keyframes", &shown, format!("not a usable MFIX key-frame file: {e}"))
+        })?;
+    Ok(Some(frames))
 }
 
 /// The mesh in `file` (named as in the case file, read through `read_bytes`), an STL or OBJ

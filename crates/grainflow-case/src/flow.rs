@@ -160,9 +160,9 @@ pub(crate) fn region(
 }
 
 /// One phase's size distribution.
-fn sizes(p: &RawInsertPhase, table: &str, phase: &Phase) -> Result<SizeDistribution, CaseError> {
+pub(crate) fn sizes(p: &RawInsertPhase, table: &str, phase: &Phase) -> Result<SizeDistribution, CaseError> {
     let kind = p.distribution.as_deref().unwrap_or("constant");
-    let keys: [(&str, bool); 8] = [
+    let keys: [(&str, bool); 9] = [
         ("diameter", p.diameter.is_some()),
         ("mean", p.mean.is_some()),
         ("sigma", p.sigma.is_some()),
@@ -171,18 +171,20 @@ fn sizes(p: &RawInsertPhase, table: &str, phase: &Phase) -> Result<SizeDistribut
         ("diameters", p.diameters.is_some()),
         ("weights", p.weights.is_some()),
         ("weights_by", p.weights_by.is_some()),
+        ("cdf", p.cdf.is_some()),
     ];
     let own: &[&str] = match kind {
         "constant" => &["diameter"],
         "uniform" => &["min_diameter", "max_diameter"],
         "normal" | "lognormal" => &["mean", "sigma", "min_diameter", "max_diameter"],
         "table" => &["diameters", "weights", "weights_by"],
+        "cdf" => &["diameters", "cdf"],
         other => {
             return Err(CaseError::invalid(
                 table,
                 "distribution",
                 format!("\"{other}\""),
-                "must be \"constant\", \"uniform\", \"normal\", \"lognormal\" or \"table\"",
+                "must be \"constant\", \"uniform\", \"normal\", \"lognormal\", \"table\" or \"cdf\"",
             ));
         }
     };
@@ -215,6 +217,15 @@ fn sizes(p: &RawInsertPhase, table: &str, phase: &Phase) -> Result<SizeDistribut
             } else {
                 SizeDistribution::LogNormal { mean, sigma, min, max }
             }
+        }
+        "cdf" => {
+            let diameters = p.diameters.clone().ok_or_else(|| need("diameters"))?;
+            for &x in &diameters {
+                check(limits::DIAMETER, table, "diameters", x)?;
+            }
+            let cdf =
+                p.cdf.clone().ok_or_else(|| CaseError::missing(table, "cdf", "P(D ≤ d) at each diameter"))?;
+            SizeDistribution::Cdf { diameters, cdf }
         }
         _ => {
             let diameters = p.diameters.clone().ok_or_else(|| need("diameters"))?;

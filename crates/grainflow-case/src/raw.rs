@@ -191,6 +191,9 @@ pub struct RawMesh {
     /// away from the particles). Default false.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub flip_normals: Option<bool>,
+    /// Leave out triangles of zero area instead of refusing the file. Default false.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skip_degenerate: Option<bool>,
     /// How the mesh moves. Default: it does not.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub motion: Option<RawMeshMotion>,
@@ -264,6 +267,13 @@ pub struct RawMeshSurface {
     /// Revolutions per minute (or `omega`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rpm: Option<f64>,
+    /// A key-frame file in MFIX's format (relative to the case file): the velocity (or the
+    /// angular velocity) is multiplied by its value at the time.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub keyframes: Option<String>,
+    /// Which of the key-frame file's variables is the factor, from 1. Default 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub keyframe_column: Option<i64>,
 }
 
 /// `[contact]`
@@ -589,7 +599,7 @@ pub struct RawInsertPhase {
     /// Its share of the insertion (by `fractions_by`). Default 1 when it is the only phase.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fraction: Option<f64>,
-    /// "constant" (default), "uniform", "normal", "lognormal" or "table".
+    /// "constant" (default), "uniform", "normal", "lognormal", "table" or "cdf".
     #[serde(skip_serializing_if = "Option::is_none")]
     pub distribution: Option<String>,
     /// constant: the diameter, m. Default: the phase's diameter.
@@ -607,7 +617,7 @@ pub struct RawInsertPhase {
     /// uniform, normal, lognormal: the largest diameter, m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_diameter: Option<f64>,
-    /// table: the diameters, m.
+    /// table, cdf: the diameters, m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub diameters: Option<Vec<f64>>,
     /// table: each diameter's share (by `weights_by`).
@@ -616,6 +626,9 @@ pub struct RawInsertPhase {
     /// table: "number" (default) or "mass".
     #[serde(skip_serializing_if = "Option::is_none")]
     pub weights_by: Option<String>,
+    /// cdf: P(D ≤ d) at each of `diameters`, by number, linear between them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cdf: Option<Vec<f64>>,
 }
 
 /// `[insertions.region]`, `[outlets.region]`: a box, a cylinder, or the inside of a closed

@@ -279,6 +279,7 @@ const TILT: MeshTransform = MeshTransform {
     rotation_deg: [30.0, 20.0, 10.0],
     translation: Vec3::new(0.1, -0.2, 0.3),
     flip_normals: false,
+    skip_degenerate: false,
 };
 
 /// Flat floors in no coordinate plane, whose triangles' normals are no longer exact: the random
@@ -740,6 +741,7 @@ fn the_transform_scales_then_rotates_x_y_z_then_translates() {
         rotation_deg: [90.0, 0.0, 90.0],
         translation: v(0.5, 0.0, -1.0),
         flip_normals: false,
+        skip_degenerate: false,
     };
     let m = Mesh::from_indexed("t", &one, &[[0, 1, 2]], &transform).unwrap();
     // x about x stays x, then about z becomes y; y about x becomes z, then stays; z about x

@@ -230,6 +230,7 @@ fn build(spec: &Spec) -> Case {
                 rotation_deg: [u(0.0, 360.0), u(0.0, 360.0), u(0.0, 360.0)],
                 translation: plo + 0.5 * plen,
                 flip_normals: false,
+                skip_degenerate: false,
             };
             let size = plen.min_element();
             let mesh = if spec.region == 4 {

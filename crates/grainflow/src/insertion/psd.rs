@@ -123,6 +123,15 @@ pub enum SizeDistribution {
         /// What the fractions count.
         basis: Basis,
     },
+    /// A cumulative distribution by number given at points and linear between them, as
+    /// MFIX's `CUSTOM` size distribution files give it: the diameter is drawn by inverting
+    /// it at one uniform variate.
+    Cdf {
+        /// Increasing, positive, m.
+        diameters: Vec<f64>,
+        /// P(D ≤ d) at each diameter: non-decreasing from 0 at the first to 1 at the last.
+        cdf: Vec<f64>,
+    },
 }
 
 /// A size distribution or mixture that cannot be used.
@@ -171,6 +180,9 @@ pub enum PsdError {
     /// A table without rows.
     #[error("the table has no rows")]
     EmptyTable,
+    /// A cumulative distribution that is not one.
+    #[error("the cumulative distribution {0}")]
+    BadCdf(String),
     /// A table whose columns differ in length.
     #[error("the table has {diameters} diameters but {fractions} fractions")]
     TableLengths {
@@ -271,6 +283,7 @@ impl SizeDistribution {
                     None => Ok(()),
                 }
             }
+            SizeDistribution::Cdf { diameters, cdf } => check_cdf(diameters, cdf),
         }
     }
 
@@ -285,6 +298,11 @@ impl SizeDistribution {
             SizeDistribution::Table { diameters, fractions, .. } => {
                 table_support(diameters, fractions).fold(f64::INFINITY, f64::min)
             }
+            SizeDistribution::Cdf { diameters, cdf } => {
+                // The last point where the cdf is still 0 starts the support.
+                let k = cdf.iter().rposition(|&c| c == 0.0).unwrap_or(0);
+                diameters[k]
+            }
         }
     }
 
@@ -298,6 +316,11 @@ impl SizeDistribution {
             | SizeDistribution::LogNormal { max, .. } => *max,
             SizeDistribution::Table { diameters, fractions, .. } => {
                 table_support(diameters, fractions).fold(f64::NEG_INFINITY, f64::max)
+            }
+            SizeDistribution::Cdf { diameters, cdf } => {
+                // The first point where the cdf reaches 1 ends the support.
+                let k = cdf.iter().position(|&c| c >= 1.0).unwrap_or(cdf.len() - 1);
+                diameters[k]
             }
         }
     }
@@ -352,6 +375,10 @@ impl SizeDistribution {
                 }
                 diameters[last]
             }
+            SizeDistribution::Cdf { diameters, cdf } => {
+                let u: f64 = rng.random();
+                cdf_quantile(diameters, cdf, u)
+            }
         }
     }
 
@@ -401,6 +428,18 @@ impl SizeDistribution {
                 }
                 (below / total).clamp(0.0, 1.0)
             }
+            SizeDistribution::Cdf { diameters, cdf } => {
+                let n = diameters.len();
+                if d <= diameters[0] {
+                    return if n == 1 { 1.0 } else { cdf[0] };
+                }
+                if d >= diameters[n - 1] {
+                    return 1.0;
+                }
+                let k = diameters.partition_point(|&x| x <= d);
+                let (d0, d1, c0, c1) = (diameters[k - 1], diameters[k], cdf[k - 1], cdf[k]);
+                (c0 + (c1 - c0) * (d - d0) / (d1 - d0)).clamp(0.0, 1.0)
+            }
         }
     }
 
@@ -445,6 +484,17 @@ impl SizeDistribution {
                     total += w;
                 }
                 weighted / total
+            }
+            SizeDistribution::Cdf { diameters, cdf } => {
+                // Uniform within each segment: E[d³] there is (b⁴ − a⁴)/(4(b − a)).
+                let mut m = 0.0;
+                for k in 1..diameters.len() {
+                    let (a, b, p) = (diameters[k - 1], diameters[k], cdf[k] - cdf[k - 1]);
+                    if p > 0.0 {
+                        m += p * (a + b) * (a * a + b * b) / 4.0;
+                    }
+                }
+                m
             }
         }
     }
@@ -616,6 +666,54 @@ fn check_fractions(
     } else {
         Err(PsdError::FractionSum { what: whose, sum })
     }
+}
+
+/// A cumulative distribution: at least two points, diameters finite, positive and
+/// increasing, the cdf finite and non-decreasing from 0 to 1.
+fn check_cdf(diameters: &[f64], cdf: &[f64]) -> Result<(), PsdError> {
+    let bad = |m: String| Err(PsdError::BadCdf(m));
+    if diameters.len() != cdf.len() {
+        return bad(format!("has {} diameters but {} values", diameters.len(), cdf.len()));
+    }
+    if diameters.len() < 2 {
+        return bad("needs at least two points".into());
+    }
+    for (k, &d) in diameters.iter().enumerate() {
+        if !(d.is_finite() && d > 0.0) {
+            return bad(format!("diameter {} is {d} m, not finite and positive", k + 1));
+        }
+        if k > 0 && d <= diameters[k - 1] {
+            return bad(format!("diameter {} ({d} m) does not exceed the one before it", k + 1));
+        }
+    }
+    for (k, &c) in cdf.iter().enumerate() {
+        if !(c.is_finite() && (0.0..=1.0).contains(&c)) {
+            return bad(format!("value {} is {c}, not in [0, 1]", k + 1));
+        }
+        if k > 0 && c < cdf[k - 1] {
+            return bad(format!("value {} ({c}) is less than the one before it", k + 1));
+        }
+    }
+    if cdf[0] != 0.0 {
+        return bad(format!("starts at {}, not 0", cdf[0]));
+    }
+    if (cdf[cdf.len() - 1] - 1.0).abs() > FRACTION_TOLERANCE {
+        return bad(format!("ends at {}, not 1", cdf[cdf.len() - 1]));
+    }
+    Ok(())
+}
+
+/// The diameter where the piecewise-linear cdf reaches `u` ∈ [0, 1).
+fn cdf_quantile(diameters: &[f64], cdf: &[f64], u: f64) -> f64 {
+    let top = cdf[cdf.len() - 1];
+    let u = u * top;
+    // The first segment whose upper value exceeds u (a flat segment is never chosen).
+    let k = cdf.partition_point(|&c| c <= u).clamp(1, cdf.len() - 1);
+    let (d0, d1, c0, c1) = (diameters[k - 1], diameters[k], cdf[k - 1], cdf[k]);
+    if c1 <= c0 {
+        return d1;
+    }
+    (d0 + (d1 - d0) * (u - c0) / (c1 - c0)).clamp(d0, d1)
 }
 
 /// Row k's unnormalised number fraction.
@@ -942,6 +1040,49 @@ mod tests {
         println!("{sizes:?}: D = {same:.5}, shifted mean D = {shifted:.5}, critical {:.5}", ks_critical());
         assert!(same < ks_critical(), "{sizes:?}: D = {same} ≥ {}", ks_critical());
         assert!(shifted > ks_critical(), "{other:?}: D = {shifted} ≤ {}", ks_critical());
+    }
+
+    /// A bimodal cumulative distribution like MFIX's custom files: two ramps with a flat
+    /// stretch between them.
+    fn bimodal_cdf(shift: f64) -> SizeDistribution {
+        SizeDistribution::Cdf {
+            diameters: [1.0e-3, 1.2e-3, 2.0e-3, 2.2e-3, 2.6e-3].map(|d| d * shift).to_vec(),
+            cdf: vec![0.0, 0.4, 0.4, 0.7, 1.0],
+        }
+    }
+
+    #[test]
+    fn a_cdf_distribution_draws_its_cdf() {
+        kolmogorov_smirnov(&bimodal_cdf(1.0), &bimodal_cdf(1.1), 71);
+        // Nothing is drawn on the flat stretch (its probability is 0).
+        let xs = draws(&bimodal_cdf(1.0), 72);
+        assert!(xs.iter().all(|&d| !(d > 1.2e-3 && d < 2.0e-3)));
+    }
+
+    #[test]
+    fn a_two_point_cdf_is_the_uniform_distribution() {
+        // Linear between (a, 0) and (b, 1) is exactly Uniform(a, b): the cdf and E[d³] agree
+        // with the uniform's closed forms to rounding.
+        let (a, b) = (0.8e-3, 1.3e-3);
+        let c = SizeDistribution::Cdf { diameters: vec![a, b], cdf: vec![0.0, 1.0] };
+        let u = SizeDistribution::Uniform { min: a, max: b };
+        c.check().unwrap();
+        for d in [0.5e-3, 0.8e-3, 0.9e-3, 1.05e-3, 1.3e-3, 2e-3] {
+            assert!((c.cdf(d) - u.cdf(d)).abs() < 1e-15, "{d}");
+        }
+        assert!((c.mean_cube() / u.mean_cube() - 1.0).abs() < 1e-14);
+        assert_eq!((c.min_diameter(), c.max_diameter()), (a, b));
+    }
+
+    #[test]
+    fn a_bad_cdf_is_refused() {
+        let bad = |d: Vec<f64>, c: Vec<f64>| SizeDistribution::Cdf { diameters: d, cdf: c }.check().is_err();
+        assert!(bad(vec![1e-3], vec![1.0]));
+        assert!(bad(vec![1e-3, 1e-3], vec![0.0, 1.0]));
+        assert!(bad(vec![1e-3, 2e-3], vec![0.0, 0.9]));
+        assert!(bad(vec![1e-3, 2e-3, 3e-3], vec![0.0, 0.6, 0.5]));
+        assert!(bad(vec![1e-3, 2e-3], vec![0.1, 1.0]));
+        assert!(bad(vec![-1e-3, 2e-3], vec![0.0, 1.0]));
     }
 
     fn uniform() -> SizeDistribution {

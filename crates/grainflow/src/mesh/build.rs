@@ -106,15 +106,32 @@ pub(crate) fn build(
         welded.push(w);
     }
 
+    // Each kept triangle's index in the file.
+    let mut orig: Vec<u32> = Vec::with_capacity(welded.len());
+    let mut kept = Vec::with_capacity(welded.len());
     for (t, w) in (0u32..).zip(&welded) {
         let c = w.map(|v| vertices[v as usize]);
         let (m, longest2) = area_vector(c);
         let area = 0.5 * m.length();
         // (NaN only if the coordinates are so large that their squares overflow.)
         if area <= DEGENERATE_AREA * longest2 || area.is_nan() {
+            if transform.skip_degenerate && !area.is_nan() {
+                continue;
+            }
             return Err(MeshError::Degenerate { file: file(), at: at(t), area, longest: longest2.sqrt() });
         }
+        orig.push(t);
+        kept.push(*w);
     }
+    let skipped = welded.len() - kept.len();
+    if kept.is_empty() {
+        return Err(MeshError::Empty { file: file() });
+    }
+    let welded = kept;
+    let at = |t: u32| {
+        let o = orig[t as usize];
+        Location { triangle: o, line: lines.map(|l| l[o as usize]) }
+    };
 
     let mut first_with: HashMap<[u32; 3], u32> = HashMap::with_capacity(welded.len());
     for (t, w) in (0u32..).zip(&welded) {
@@ -240,6 +257,7 @@ pub(crate) fn build(
         lo,
         hi,
         extent,
+        skipped: skipped as u32,
     })
 }
 

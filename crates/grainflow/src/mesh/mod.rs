@@ -23,11 +23,13 @@
 pub mod build;
 pub mod contact;
 pub mod grid;
+pub mod keyframes;
 pub mod load;
 pub mod motion;
 
 pub use contact::{ClosestPoint, MeshContact, Primitive, Region, closest_point_on_triangle, sphere_contacts};
 pub use grid::TriangleGrid;
+pub use keyframes::{Interpolation, KeyFrameError, KeyFrames};
 pub use motion::{MeshMotion, MotionWindow, Pose, SurfaceMotion};
 
 use crate::math::Vec3;
@@ -99,9 +101,17 @@ pub struct Mesh {
     /// The largest coordinate magnitude, m: the scale of the coordinates' rounding, which the
     /// contact tests' tolerances follow.
     extent: f64,
+    /// Degenerate triangles left out ([`MeshTransform::skip_degenerate`]).
+    skipped: u32,
 }
 
 impl Mesh {
+    /// How many degenerate triangles of the file were left out
+    /// ([`MeshTransform::skip_degenerate`]).
+    pub fn skipped_degenerate(&self) -> usize {
+        self.skipped as usize
+    }
+
     /// The name given at load (the file's path), for messages.
     pub fn name(&self) -> &str {
         &self.name
@@ -354,12 +364,22 @@ pub struct MeshTransform {
     pub translation: Vec3,
     /// Reverse every triangle's winding (a file whose normals point away from the particles).
     pub flip_normals: bool,
+    /// Leave out triangles of (nearly) zero area instead of refusing the file: such a
+    /// triangle has no face a sphere can touch (CAD exporters leave slivers at T-junctions).
+    /// Its neighbours' edges along it are then open edges.
+    pub skip_degenerate: bool,
 }
 
 impl Default for MeshTransform {
     /// The identity: coordinates in metres, as they are.
     fn default() -> Self {
-        MeshTransform { scale: 1.0, rotation_deg: [0.0; 3], translation: Vec3::ZERO, flip_normals: false }
+        MeshTransform {
+            scale: 1.0,
+            rotation_deg: [0.0; 3],
+            translation: Vec3::ZERO,
+            flip_normals: false,
+            skip_degenerate: false,
+        }
     }
 }
 
@@ -374,6 +394,9 @@ pub struct MeshWall {
     /// When `motion` acts (the whole run unless told).
     pub window: MotionWindow,
     pub surface: SurfaceMotion,
+    /// A factor of `surface` in time (MFIX's key frames): at τ s after the run's start the
+    /// surface's velocity (or angular velocity) is `surface`'s × k(τ). `None`: × 1, exactly.
+    pub surface_factor: Option<KeyFrames>,
 }
 
 impl MeshWall {
@@ -385,6 +408,17 @@ impl MeshWall {
             motion: MeshMotion::Fixed,
             window: MotionWindow::ALWAYS,
             surface: SurfaceMotion::None,
+            surface_factor: None,
+        }
+    }
+
+    /// The surface's motion at τ s after the run's start: `surface`, scaled by
+    /// `surface_factor` at τ if there is one (and `surface` itself, to the bit, if not).
+    #[inline]
+    pub fn surface_at(&self, tau: f64) -> SurfaceMotion {
+        match &self.surface_factor {
+            None => self.surface,
+            Some(k) => self.surface.scaled(k.value(tau)),
         }
     }
 

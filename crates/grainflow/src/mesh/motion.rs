@@ -189,6 +189,17 @@ pub enum SurfaceMotion {
 }
 
 impl SurfaceMotion {
+    /// The same motion with its velocity (or angular velocity) multiplied by `k`.
+    pub fn scaled(&self, k: f64) -> SurfaceMotion {
+        match *self {
+            SurfaceMotion::None => SurfaceMotion::None,
+            SurfaceMotion::Translate { velocity } => SurfaceMotion::Translate { velocity: velocity * k },
+            SurfaceMotion::Rotate { origin, axis, omega } => {
+                SurfaceMotion::Rotate { origin, axis, omega: omega * k }
+            }
+        }
+    }
+
     /// The surface's sliding velocity at the point `x` where the normal is `normal`.
     #[inline]
     pub fn velocity(&self, x: Vec3, normal: Vec3) -> Vec3 {

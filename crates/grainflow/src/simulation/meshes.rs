@@ -30,7 +30,7 @@ use crate::forces::{Peak, Quanta, Quantum, max_peak};
 use crate::math::Vec3;
 use crate::mesh::grid::NearScratch;
 use crate::mesh::motion::Anchor;
-use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, TriangleGrid, sphere_contacts};
+use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, SurfaceMotion, TriangleGrid, sphere_contacts};
 use crate::state::Particles;
 
 /// A contact's normal may turn this far (cosine) from one evaluation to the next and still
@@ -105,8 +105,8 @@ pub(crate) struct MeshStage {
 }
 
 /// A mesh's motion rates at an evaluation: (linear velocity, angular velocity, a point on the
-/// axis), `None` if its surface does not move.
-type Rates = Option<(Vec3, Vec3, Vec3)>;
+/// axis, the surface's own motion then), `None` if its surface does not move.
+type Rates = Option<(Vec3, Vec3, Vec3, SurfaceMotion)>;
 
 /// One mesh contact's load on its particle: the force, and the torque about the centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -469,7 +469,7 @@ impl Simulation {
                 .history
                 .binary_search_by_key(&(i as u32, m as u32, k.triangle), |h| (h.slot, h.mesh, h.triangle))
                 .map_or(Vec3::ZERO, |j| st.history[j].h);
-            let input = self.mesh_input(i, m, k, overlap, c, h, rates[m]);
+            let input = self.mesh_input(i, k, overlap, c, h, rates[m]);
             let (load, _, _) = wall_law::<N, T, { parts::ALL }>(&law, 0.0, &input);
             let f_n = load.f.dot(k.normal);
             out.push(super::ContactInfo {
@@ -489,7 +489,13 @@ impl Simulation {
     fn mesh_rates(&self, t: f64) -> Vec<Rates> {
         self.meshes
             .iter()
-            .map(|w| w.moves().then(|| w.motion.rates_within(&w.window, t - self.mesh_stage.t0)))
+            .map(|w| {
+                w.moves().then(|| {
+                    let tau = t - self.mesh_stage.t0;
+                    let (v, o, x) = w.motion.rates_within(&w.window, tau);
+                    (v, o, x, w.surface_at(tau))
+                })
+            })
             .collect()
     }
 
@@ -501,14 +507,12 @@ impl Simulation {
         wall_coeffs_of(&self.coeffs, &self.law, &self.particles, i, material)
     }
 
-    /// The wall law's input for slot `i`'s contact `k` (placed) with mesh `m`, whose motion
-    /// has `rates`.
-    #[allow(clippy::too_many_arguments)]
+    /// The wall law's input for slot `i`'s contact `k` (placed) with a mesh whose motion has
+    /// `rates`.
     #[inline]
     fn mesh_input(
         &self,
         i: usize,
-        m: usize,
         k: &MeshContact,
         overlap: f64,
         c: &crate::contact::ContactCoeffs,
@@ -521,7 +525,7 @@ impl Simulation {
             d: -k.normal,
             ra: overlap,
             rb: lever,
-            dv: p.velocity[i] - self.mesh_velocity(m, rates, k.point, k.normal),
+            dv: p.velocity[i] - self.mesh_velocity(rates, k.point, k.normal),
             wa: p.omega[i],
             wb: Vec3::ZERO,
             h,
@@ -530,13 +534,13 @@ impl Simulation {
         }
     }
 
-    /// The velocity of mesh `m`'s surface (its motion's `rates`) at the point `x` (normal
-    /// `normal`).
+    /// The velocity of a mesh's surface (its motion's and its surface's `rates`) at the point
+    /// `x` (normal `normal`).
     #[inline]
-    fn mesh_velocity(&self, m: usize, rates: Rates, x: Vec3, normal: Vec3) -> Vec3 {
+    fn mesh_velocity(&self, rates: Rates, x: Vec3, normal: Vec3) -> Vec3 {
         match rates {
             None => Vec3::ZERO,
-            Some((v, w, o)) => v + w.cross(x - o) + self.meshes[m].surface.velocity(x, normal),
+            Some((v, w, o, surface)) => v + w.cross(x - o) + surface.velocity(x, normal),
         }
     }
 
@@ -723,7 +727,7 @@ impl Simulation {
                         claimed[j] = true;
                         mine[j].h
                     });
-                    let input = self.mesh_input(i, m, k, overlap, c, h, rates[m]);
+                    let input = self.mesh_input(i, k, overlap, c, h, rates[m]);
                     let (load, h_new, bound) = wall_law::<N, T, { parts::ALL }>(&law, dt, &input);
                     let round = |q: Quantum, v: Vec3| Vec3::new(q.round(v.x), q.round(v.y), q.round(v.z));
                     let (f, ta) = (round(quanta.force, load.f), round(quanta.torque, load.ta));
