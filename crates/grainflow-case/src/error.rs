@@ -66,6 +66,21 @@ pub enum CaseError {
     /// The engine refused the set-up.
     #[error("{0}")]
     Engine(#[from] grainflow::EngineError),
+    /// Several things stop an MFIX deck from running; each is reported, in the deck's order.
+    #[error("{}", blockers_text(.0))]
+    Blockers(Vec<CaseError>),
+}
+
+fn blockers_text(list: &[CaseError]) -> String {
+    let mut s = format!(
+        "{} thing{} in this deck grainflow cannot run:",
+        list.len(),
+        if list.len() == 1 { "" } else { "s" }
+    );
+    for (k, e) in list.iter().enumerate() {
+        s.push_str(&format!("\n  {}. {e}", k + 1));
+    }
+    s
 }
 
 impl CaseError {

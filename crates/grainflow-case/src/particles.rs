@@ -9,7 +9,7 @@ use grainflow::state::ParticleInit;
 /// Reads MFIX's legacy `particle_input.dat` (3-D): one particle per line,
 /// `x y z radius density u v w` (SI), no header. Blank lines and lines starting with `#` or `!`
 /// are skipped. The phase is found as MFIX does: the phase whose diameter and density match
-/// the particle's (relative tolerance 1e-6). Ids are the 1-based particle numbers.
+/// the particle's (exactly, else to a relative 1e-4: [`match_phase`]). Ids are the 1-based particle numbers.
 pub fn read_mfix(text: &str, path: &str, phases: &[Phase]) -> Result<Vec<ParticleInit>, CaseError> {
     read_mfix_from(&mut Stream::from_text(text, path), phases)
 }
@@ -199,11 +199,30 @@ fn parse_number(s: &str) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
-/// The phase whose diameter and density match, relative tolerance 1e-6.
+/// The phase of a particle, by MFIX's rule (`des/set_phase_index.f`): the first phase whose
+/// diameter and density equal the particle's to MFIX's `SMALL_NUMBER` (1e-15, absolute, in SI
+/// here); failing that, the first within a relative 1e-4 of both.
 pub fn match_phase(diameter: f64, density: f64, phases: &[Phase]) -> Option<usize> {
-    let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.abs().max(b.abs());
-    phases.iter().position(|p| close(p.diameter, diameter) && close(p.density, density))
+    match_phase_within(diameter, density, phases, (SMALL_NUMBER, SMALL_NUMBER))
 }
+
+/// [`match_phase`] with the absolute tolerances of the first pass given, for diameter (m) and
+/// density (kg/m³): MFIX's `SMALL_NUMBER` in the deck's units, converted to SI.
+pub fn match_phase_within(diameter: f64, density: f64, phases: &[Phase], exact: (f64, f64)) -> Option<usize> {
+    let first = phases
+        .iter()
+        .position(|p| (diameter - p.diameter).abs() < exact.0 && (density - p.density).abs() < exact.1);
+    first.or_else(|| {
+        let close = |a: f64, b: f64| (a - b).abs() / b < MATCH_TOLERANCE;
+        phases.iter().position(|p| close(diameter, p.diameter) && close(density, p.density))
+    })
+}
+
+/// MFIX's `SMALL_NUMBER`: the absolute tolerance of its first matching pass.
+pub const SMALL_NUMBER: f64 = 1e-15;
+
+/// MFIX's relative tolerance for matching a particle to a phase when no phase matches exactly.
+pub const MATCH_TOLERANCE: f64 = 1e-4;
 
 fn describe_phases(phases: &[Phase]) -> String {
     phases

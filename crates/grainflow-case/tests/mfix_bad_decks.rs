@@ -83,7 +83,7 @@ fn bad_motion_files_and_particle_files_are_reported_with_their_names() {
     assert!(e.contains("particle_input.dat, line 1") && e.contains("expected 8 numbers"), "{e}");
     std::fs::write(dir.path().join("particle_input.dat"), "Version 2.0\n").expect("write");
     let e = grainflow_case::mfix::load(&deck, &[], Some(&motion)).expect_err("version 2").to_string();
-    assert!(e.contains("version 2.0") && e.contains("legacy format"), "{e}");
+    assert!(e.contains("version 2.0") && e.contains("header of 34 lines"), "{e}");
     std::fs::write(dir.path().join("particle_input.dat"), "0.5 0.5 0.5 0.05 1000.0 0 0 0\n").expect("write");
     grainflow_case::mfix::load(&deck, &[], Some(&motion)).expect("valid with its motion file");
     std::fs::write(&motion, "[[motion]]\nparticle = 1\n").expect("write");

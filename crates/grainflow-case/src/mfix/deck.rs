@@ -101,28 +101,36 @@ impl Deck {
                         show(&a.key, &vec![1; d as usize])
                     )));
                 }
-                let mut rest = Vec::new();
-                for s in &subs[1..] {
-                    match s {
-                        Sub::Index(i) => rest.push(*i),
-                        Sub::Range(..) => return Err(bad("only the first subscript may be a range".into())),
+                // The values run along the subscript that is a range (any one of them, as
+                // MFIX reads `BC_U_S(1,1:5)`), else along the first from its index on.
+                let ranges: Vec<usize> =
+                    (0..subs.len()).filter(|&k| matches!(subs[k], Sub::Range(..))).collect();
+                if ranges.len() > 1 {
+                    return Err(bad("only one subscript may be a range".into()));
+                }
+                let along = ranges.first().copied().unwrap_or(0);
+                let mut fixed: Vec<i64> = subs
+                    .iter()
+                    .map(|s| match s {
+                        Sub::Index(i) => *i,
+                        Sub::Range(i, _) => *i,
+                    })
+                    .collect();
+                if let Sub::Range(i, j) = subs[along] {
+                    let room = (j - i + 1) as usize;
+                    if n > room {
+                        return Err(bad(format!("{n} values for a range of {room} elements")));
                     }
                 }
-                let (start, room) = match subs[0] {
-                    Sub::Index(i) => (i, None),
-                    Sub::Range(i, j) => (i, Some((j - i + 1) as usize)),
-                };
-                if let Some(room) = room
-                    && n > room
-                {
-                    return Err(bad(format!("{n} values for a range of {room} elements")));
-                }
-                let all_idx = std::iter::once(start).chain(rest.iter().copied());
-                if let Some(low) = all_idx.clone().find(|&i| i < base) {
+                if let Some(low) = fixed.iter().copied().find(|&i| i < base) {
                     return Err(bad(format!("subscript {low} is below the first element, {base}")));
                 }
+                let start = fixed[along];
                 (0..n as i64)
-                    .map(|k| std::iter::once(start + k).chain(rest.iter().copied()).collect())
+                    .map(|k| {
+                        fixed[along] = start + k;
+                        fixed.clone()
+                    })
                     .collect()
             }
         };

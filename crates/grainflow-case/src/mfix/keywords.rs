@@ -39,6 +39,8 @@ pub enum Unit {
     Acceleration,
     /// cm/s → m/s.
     Velocity,
+    /// g/s → kg/s.
+    MassFlow,
 }
 
 impl Unit {
@@ -49,7 +51,7 @@ impl Unit {
             Unit::None => v,
             Unit::Length | Unit::Acceleration | Unit::Velocity => v / 100.0,
             Unit::Density => v * 1000.0,
-            Unit::Stiffness => v / 1000.0,
+            Unit::Stiffness | Unit::MassFlow => v / 1000.0,
             Unit::Modulus => v / 10.0,
         }
     }
@@ -64,6 +66,7 @@ impl Unit {
             Unit::Modulus => "Pa",
             Unit::Acceleration => "m/s²",
             Unit::Velocity => "m/s",
+            Unit::MassFlow => "kg/s",
         }
     }
 
@@ -77,6 +80,7 @@ impl Unit {
             Unit::Modulus => "barye (dyne/cm²)",
             Unit::Acceleration => "cm/s²",
             Unit::Velocity => "cm/s",
+            Unit::MassFlow => "g/s",
         }
     }
 }
@@ -113,7 +117,7 @@ impl Why {
         match self {
             Why::Gas => "gas phase and gas–particle coupling (RO_G0 = 0: there is no gas)",
             Why::Fields => {
-                "initial and boundary conditions of the gas and continuum fields (the particles come from particle_input.dat and the faces of the box are DEM walls)"
+                "initial and boundary conditions of the gas and continuum fields (they do not act on the particles once there is no gas)"
             }
             Why::FluidSolver => "fluid solver settings (no fluid is solved)",
             Why::Grid => "fluid grid (the DEM needs no grid)",
@@ -244,9 +248,8 @@ use Dflt::*;
 use Ty as T;
 use Unit as U;
 
-const NO_PERIODIC: &str = "periodic (cyclic) boundaries are not read from decks; give walls on every face";
-const NO_2D: &str = "2-D runs are not supported, grainflow is 3-D; give KMAX and ZLENGTH for a 3-D box";
-const NO_GEOMETRY: &str = "walls other than the six faces of the box (STL files, cut cells) are not read from decks; use [[walls]] planes in a TOML case";
+const NO_2D: &str = "axisymmetric 2-D runs are not supported, grainflow is Cartesian";
+const NO_IMPLICIT: &str = "implicit cut-cell geometry (quadrics, polygons, user functions) is not read; describe the walls as STL (USE_STL)";
 
 /// Every keyword grainflow knows, with MFIX 21.3's default (see the module documentation).
 pub const KEYWORDS: &[Keyword] = &[
@@ -287,16 +290,48 @@ pub const KEYWORDS: &[Keyword] = &[
     ignored("NODESI", Why::Grid),
     ignored("NODESJ", Why::Grid),
     ignored("NODESK", Why::Grid),
-    refused("NO_K", Allow::False, NO_2D),
-    refused("CYCLIC_X", Allow::False, NO_PERIODIC),
-    refused("CYCLIC_X_PD", Allow::False, NO_PERIODIC),
-    refused("CYCLIC_Y", Allow::False, NO_PERIODIC),
-    refused("CYCLIC_Y_PD", Allow::False, NO_PERIODIC),
-    refused("CYCLIC_Z", Allow::False, NO_PERIODIC),
-    refused("CYCLIC_Z_PD", Allow::False, NO_PERIODIC),
+    used("NO_K", T::Bool, 0, U::None, Bool(false)),
+    used("CYCLIC_X", T::Bool, 0, U::None, Bool(false)),
+    used("CYCLIC_X_PD", T::Bool, 0, U::None, Bool(false)),
+    used("CYCLIC_Y", T::Bool, 0, U::None, Bool(false)),
+    used("CYCLIC_Y_PD", T::Bool, 0, U::None, Bool(false)),
+    used("CYCLIC_Z", T::Bool, 0, U::None, Bool(false)),
+    used("CYCLIC_Z_PD", T::Bool, 0, U::None, Bool(false)),
     refused("CYLINDRICAL_2D", Allow::False, NO_2D),
-    refused("USE_STL", Allow::False, NO_GEOMETRY),
-    refused("CARTESIAN_GRID", Allow::False, NO_GEOMETRY),
+    used("CARTESIAN_GRID", T::Bool, 0, U::None, Bool(false)),
+    used("USE_STL", T::Bool, 0, U::None, Bool(false)),
+    used("SCALE_STL", T::Real, 0, U::None, Real(1.0)),
+    used("TX_STL", T::Real, 0, U::Length, Real(0.0)),
+    used("TY_STL", T::Real, 0, U::Length, Real(0.0)),
+    used("TZ_STL", T::Real, 0, U::Length, Real(0.0)),
+    refused("USE_MSH", Allow::False, "Gmsh geometry (.msh) is not read; export the surface as STL (USE_STL)"),
+    refused("USE_POLYGON", Allow::False, NO_IMPLICIT),
+    refused("N_QUADRIC", Allow::Zero, NO_IMPLICIT),
+    refused("QUADRIC_FORM", Allow::Never, NO_IMPLICIT),
+    refused("N_USR_DEF", Allow::Zero, NO_IMPLICIT),
+    ignored("TOL_SMALL_CELL", Why::Grid),
+    ignored("TOL_SMALL_AREA", Why::Grid),
+    ignored("TOL_SNAP", Why::Grid),
+    ignored("TOL_MERGE", Why::Grid),
+    ignored("TOL_DELH", Why::Grid),
+    ignored("TOL_STL", Why::Grid),
+    ignored("TOL_STL_DP", Why::Grid),
+    ignored("TOL_F", Why::Grid),
+    ignored("TOL_POLYGON", Why::Grid),
+    ignored("FAC_DIM_MAX_CUT_CELL", Why::Grid),
+    ignored("DIM_FACETS_PER_CELL", Why::Grid),
+    ignored("STL_SMALL_ANGLE", Why::Grid),
+    ignored("OUT_STL_VALUE", Why::Grid),
+    ignored("ITERMAX_INT", Why::Grid),
+    ignored("SET_CORNER_CELLS", Why::Grid),
+    ignored("PRINT_PROGRESS_BAR", Why::Grid),
+    ignored("CG_*", Why::Grid),
+    ignored("RE_INDEXING", Why::Grid),
+    ignored("ADJUST_PROC_DOMAIN_SIZE", Why::Grid),
+    ignored("REPORT_BEST_DOMAIN_SIZE", Why::Grid),
+    ignored("MINIMIZE_SEND_RECV", Why::Grid),
+    ignored("CG_SAFE_MODE", Why::Grid),
+    ignored("STL_BC_ID", Why::Grid),
     // Gas phase.
     checked("RO_G0", T::Real, 0, U::Density, Rule("undefined: ideal-gas density, gas and particles coupled")),
     ignored("MU_G0", Why::Gas),
@@ -343,6 +378,33 @@ pub const KEYWORDS: &[Keyword] = &[
     ignored("NFACTOR", Why::Gas),
     ignored("DTSOLID_UPDATE_DT", Why::Gas),
     // Initial and boundary conditions.
+    used("GENER_PART_CONFIG", T::Bool, 0, U::None, Bool(false)),
+    checked("IC_X_W", T::Real, 1, U::Length, Undefined),
+    checked("IC_X_E", T::Real, 1, U::Length, Undefined),
+    checked("IC_Y_S", T::Real, 1, U::Length, Undefined),
+    checked("IC_Y_N", T::Real, 1, U::Length, Undefined),
+    checked("IC_Z_B", T::Real, 1, U::Length, Undefined),
+    checked("IC_Z_T", T::Real, 1, U::Length, Undefined),
+    used("IC_EP_S", T::Real, 2, U::None, Real(0.0)),
+    used("IC_U_S", T::Real, 2, U::Velocity, Real(0.0)),
+    used("IC_V_S", T::Real, 2, U::Velocity, Real(0.0)),
+    used("IC_W_S", T::Real, 2, U::Velocity, Real(0.0)),
+    used("IC_PSD_TYPE", T::Str, 2, U::None, Str("MONO")),
+    used("IC_PSD_MEAN_DP", T::Real, 2, U::Length, Undefined),
+    used("IC_PSD_STDEV", T::Real, 2, U::Length, Undefined),
+    used("IC_PSD_MIN_DP", T::Real, 2, U::Length, Undefined),
+    used("IC_PSD_MAX_DP", T::Real, 2, U::Length, Undefined),
+    used("IC_THETA_M", T::Real, 2, U::None, Real(0.0)),
+    used("IC_DES_LATTICE", T::Str, 2, U::None, Str("HEXA")),
+    used("IC_DES_SPACING", T::Real, 2, U::None, Real(0.05)),
+    used("IC_DES_SPACE_FACTOR_X", T::Real, 2, U::None, Real(1.0)),
+    used("IC_DES_SPACE_FACTOR_Y", T::Real, 2, U::None, Real(1.0)),
+    used("IC_DES_SPACE_FACTOR_Z", T::Real, 2, U::None, Real(1.0)),
+    used("IC_DES_RAND", T::Real, 2, U::None, Real(0.0)),
+    used("IC_DES_RAND_FACTOR_X", T::Real, 2, U::None, Real(1.0)),
+    used("IC_DES_RAND_FACTOR_Y", T::Real, 2, U::None, Real(1.0)),
+    used("IC_DES_RAND_FACTOR_Z", T::Real, 2, U::None, Real(1.0)),
+    used("IC_DES_CHECK_STL_OVERLAP", T::Bool, 2, U::None, Bool(true)),
     ignored("IC_*", Why::Fields),
     checked("BC_TYPE", T::Str, 1, U::None, Undefined),
     checked("BC_X_W", T::Real, 1, U::Length, Undefined),
@@ -360,6 +422,16 @@ pub const KEYWORDS: &[Keyword] = &[
     checked("BC_UW_S", T::Real, 2, U::Velocity, Real(0.0)),
     checked("BC_VW_S", T::Real, 2, U::Velocity, Real(0.0)),
     checked("BC_WW_S", T::Real, 2, U::Velocity, Real(0.0)),
+    used("BC_EP_S", T::Real, 2, U::None, Undefined),
+    used("BC_U_S", T::Real, 2, U::Velocity, Real(0.0)),
+    used("BC_V_S", T::Real, 2, U::Velocity, Real(0.0)),
+    used("BC_W_S", T::Real, 2, U::Velocity, Real(0.0)),
+    used("BC_MASSFLOW_S", T::Real, 2, U::MassFlow, Undefined),
+    used("BC_PSD_TYPE", T::Str, 2, U::None, Str("MONO")),
+    used("BC_PSD_MEAN_DP", T::Real, 2, U::Length, Undefined),
+    used("BC_PSD_STDEV", T::Real, 2, U::Length, Undefined),
+    used("BC_PSD_MIN_DP", T::Real, 2, U::Length, Undefined),
+    used("BC_PSD_MAX_DP", T::Real, 2, U::Length, Undefined),
     ignored("BC_*", Why::Fields),
     refused(
         "PS_*",
@@ -458,11 +530,6 @@ pub const KEYWORDS: &[Keyword] = &[
     ),
     // Discrete element simulation.
     used("PARTICLES", T::Int, 0, U::None, Int(1)),
-    refused(
-        "GENER_PART_CONFIG",
-        Allow::False,
-        "particles are not generated from IC regions; list them in particle_input.dat (MFIX writes one with WRITE_PART_OUT = .TRUE.)",
-    ),
     refused(
         "PART_IN_*",
         Allow::Never,

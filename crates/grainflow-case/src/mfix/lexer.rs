@@ -86,7 +86,9 @@ pub struct Assignment {
 pub struct Lexed {
     /// Every assignment, in order.
     pub assignments: Vec<Assignment>,
-    /// `#!MFIX-GUI key = value` comments (the GUI's project data in `.mfx` files), key lower case.
+    /// `#!MFIX-GUI key = value` comments (the GUI's project data in `.mfx` files), key lower case;
+    /// continuation lines (`#!MFIX-GUI` and two or more blanks) are joined to the value with one
+    /// blank, the location being the first line's.
     pub gui: Vec<(String, String, Loc)>,
     /// Lines of `@(RXNS)`/`@(DES_RXNS)` chemistry blocks: where the first block starts.
     pub reactions: Option<Loc>,
@@ -128,6 +130,21 @@ pub fn lex_deck(text: &str, file: &str) -> Result<Lexed, CaseError> {
             continue;
         }
         if let Some(rest) = trimmed.strip_prefix("#!MFIX-GUI") {
+            // The GUI wraps long (JSON) values: a line whose text starts with two or more
+            // blanks continues the previous value (MFIX's `project.py` reads it so), whatever
+            // it holds, `=` included.
+            if rest.starts_with("  ") {
+                if let Some((_, value, _)) = out.gui.last_mut() {
+                    let more = rest.trim();
+                    if !more.is_empty() {
+                        if !value.is_empty() {
+                            value.push(' ');
+                        }
+                        value.push_str(more);
+                    }
+                }
+                continue;
+            }
             if let Some((key, value)) = rest.split_once('=') {
                 out.gui.push((key.trim().to_ascii_lowercase(), value.trim().to_string(), loc));
             }

@@ -51,8 +51,11 @@
 //! as `[[motion]]` tables in a small TOML file passed beside the deck (`--motion FILE`).
 
 pub mod deck;
+mod equipment;
+pub mod geometry;
 pub mod keywords;
 pub mod lexer;
+mod seed;
 
 use crate::case::{Case, DEFAULT_MAX_INITIAL_OVERLAP};
 use crate::error::CaseError;
@@ -70,6 +73,9 @@ use std::path::Path;
 
 /// The particle file MFIX reads, beside the deck.
 pub const PARTICLE_FILE: &str = "particle_input.dat";
+
+/// The largest overlap a deck's run may reach, as a fraction of the smaller radius.
+pub const DECK_MAX_OVERLAP: f64 = 1.0;
 
 /// Standard gravity in SI, MFIX's default for `UNITS = 'SI'` (980.665 cm/s² in CGS).
 const MFIX_GRAVITY: f64 = 9.80665;
@@ -142,7 +148,15 @@ fn parse_opened(
     }
     deck.check_types()?;
     let rules = motion.map(|(t, o)| parse_motion(input::strip_bom(t), o)).transpose()?;
-    let mut tr = Translator { deck: &deck, lexed: &lexed, origin, cgs: false, notes: Vec::new() };
+    let mut tr = Translator {
+        deck: &deck,
+        lexed: &lexed,
+        origin,
+        cgs: false,
+        notes: Vec::new(),
+        blockers: Vec::new(),
+        mesh_bcs: Vec::new(),
+    };
     let (raw, extra_source) = tr.translate(rules, read_file)?;
     let notes = tr.notes;
     // The case hash covers the deck, the overrides, the motion file and every file read.
@@ -164,24 +178,52 @@ fn parse_opened(
     Ok(DeckCase { case, raw, notes })
 }
 
-/// The `[[motion]]` file given with `--motion`.
-#[derive(Debug, Deserialize)]
+/// The file given with `--motion`: what a deck's user-defined functions did, in grainflow's
+/// terms: `[[motion]]` rules for particles, `[[walls]]` for the deck's STL walls.
+#[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MotionFile {
     #[serde(default)]
     motion: Vec<RawMotion>,
+    #[serde(default)]
+    walls: Vec<WallRule>,
 }
 
-fn parse_motion(text: &str, origin: &str) -> Result<Vec<RawMotion>, CaseError> {
+/// `[[walls]]` of a motion file: how the STL wall of boundary condition `bc` moves.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WallRule {
+    /// The deck's boundary condition (a `CG_NSW`, `CG_FSW` or `CG_PSW` wall).
+    bc: i64,
+    /// The mesh moving as a rigid body (`[meshes.motion]`).
+    motion: Option<RawMeshMotion>,
+    /// A velocity of its surface, the mesh staying in place (`[meshes.surface]`).
+    surface: Option<RawMeshSurface>,
+}
+
+fn parse_motion(text: &str, origin: &str) -> Result<MotionFile, CaseError> {
     let m: MotionFile = toml::from_str(text).map_err(|e| {
         CaseError::Syntax(format!(
-            "{origin}: {e}\n(a motion file holds only [[motion]] tables, as in a case file)"
+            "{origin}: {e}\n(a motion file holds [[motion]] tables for particles, as in a case file, and [[walls]] tables for the deck's STL walls, docs/mfix-decks.md)"
         ))
     })?;
-    if m.motion.is_empty() {
-        return Err(CaseError::missing(origin, "[[motion]]", "at least one prescribed-motion rule"));
+    if m.motion.is_empty() && m.walls.is_empty() {
+        return Err(CaseError::missing(
+            origin,
+            "[[motion]] or [[walls]]",
+            "at least one rule: a prescribed particle motion or a wall's motion",
+        ));
     }
-    Ok(m.motion)
+    for (k, w) in m.walls.iter().enumerate() {
+        if w.motion.is_none() && w.surface.is_none() {
+            return Err(CaseError::missing(
+                format!("{origin}: [[walls]] #{}", k + 1),
+                "motion or surface",
+                "how the wall of this boundary condition moves",
+            ));
+        }
+    }
+    Ok(m)
 }
 
 /// Validation errors name grainflow's tables and keys; say that they come from the translated
@@ -236,6 +278,10 @@ struct Translator<'a> {
     origin: &'a str,
     cgs: bool,
     notes: Vec<String>,
+    /// What stops the deck from running, collected so that a user sees the whole list.
+    blockers: Vec<CaseError>,
+    /// The boundary condition of each mesh wall, in the order of the case's meshes.
+    mesh_bcs: Vec<i64>,
 }
 
 /// A validated number in SI with its source.
@@ -244,6 +290,12 @@ struct Num {
 }
 
 impl Translator<'_> {
+    /// Records something that stops the deck from running; the translation goes on, so that
+    /// every such thing is reported at once.
+    fn block(&mut self, e: CaseError) {
+        self.blockers.push(e);
+    }
+
     fn note(&mut self, s: impl Into<String>) {
         self.notes.push(s.into());
     }
@@ -315,9 +367,26 @@ impl Translator<'_> {
         CaseError::invalid(g.loc.to_string(), g.key.clone(), format!("'{}'", g.v), valid)
     }
 
+    /// The translation, with every blocker reported at once: the stages go on past what they
+    /// cannot run (recorded by [`Self::block`]), and a stage's own error ends the list.
     fn translate(
         &mut self,
-        motion: Option<Vec<RawMotion>>,
+        motion: Option<MotionFile>,
+        read_file: &input::Opener<'_>,
+    ) -> Result<(RawCase, String), CaseError> {
+        let result = self.stages(motion, read_file);
+        let mut blockers = std::mem::take(&mut self.blockers);
+        match result {
+            Ok(r) if blockers.is_empty() => return Ok(r),
+            Ok(_) => {}
+            Err(e) => blockers.push(e),
+        }
+        if blockers.len() == 1 { Err(blockers.remove(0)) } else { Err(CaseError::Blockers(blockers)) }
+    }
+
+    fn stages(
+        &mut self,
+        motion: Option<MotionFile>,
         read_file: &input::Opener<'_>,
     ) -> Result<(RawCase, String), CaseError> {
         let d = self.deck;
@@ -337,12 +406,27 @@ impl Translator<'_> {
 
         self.refusals(motion.is_some())?;
         let mmax = self.phases_count()?;
-        let (lo, hi) = self.domain()?;
-        self.boundary_conditions(lo, hi)?;
+        let (mut lo, mut hi) = self.domain()?;
+        let mut periodic = self.cyclic()?;
         let gravity = self.gravity()?;
         let mut phases = self.phases(mmax)?;
         let contact = self.contact(&mut phases)?;
         let time = self.time()?;
+        let t_start = time.t_start.unwrap_or(0.0);
+        let no_k = self.flag("NO_K")?;
+        if no_k {
+            // MFIX's 2-D DEM: spheres in the plane z = 0, moving in x and y. A 3-D run whose
+            // particles all start at z = 0 with no z velocity stays in that plane exactly
+            // (every contact normal and force lies in it), so the box is given a depth of two
+            // largest diameters and no walls in z.
+            let dmax = phases.iter().map(|p| p.diameter).fold(0.0, f64::max);
+            lo.z = -dmax;
+            hi.z = dmax;
+            periodic[2] = false;
+            self.two_d_checks(gravity)?;
+        }
+        let exists = |name: &str| read_file(name).is_ok();
+        let mut equipment = self.equipment(lo, hi, periodic, &phases, t_start, &exists, read_file)?;
         let dmax = phases.iter().map(|p| p.diameter).fold(0.0, f64::max);
         let rlm = self.with_default(
             "FACTOR_RLM",
@@ -352,8 +436,65 @@ impl Translator<'_> {
         )?;
         let neighbor = RawNeighbor { skin: Some((rlm - 1.0) * dmax) };
         let output = self.output()?;
-        let (particles, extra_source) = self.particles(&phases, lo, hi, read_file)?;
-        let motion = motion.unwrap_or_default();
+        let no_file = d.int("PARTICLES", &[])?.is_some_and(|g| g.v == 0);
+        if no_file && equipment.insertions.is_empty() {
+            let g = d.int("PARTICLES", &[])?.expect("given");
+            self.block(CaseError::invalid(
+                g.loc.to_string(),
+                g.key,
+                g.text,
+                "PARTICLES = 0 reads no particle file, and no mass inflow (BC_TYPE = 'MI') or GENER_PART_CONFIG brings particles: the run would have none",
+            ));
+        }
+        let (particles, extra_source) = if no_file && !self.flag("GENER_PART_CONFIG")? {
+            (RawParticles { max_overlap: Some(DECK_MAX_OVERLAP), ..RawParticles::default() }, String::new())
+        } else if self.flag("GENER_PART_CONFIG")? {
+            if let Some(g) = d.int("PARTICLES", &[])? {
+                self.note(format!(
+                    "{}: PARTICLES is not used: GENER_PART_CONFIG generates the particles (MFIX's rule)",
+                    g.loc
+                ));
+            }
+            let list = std::mem::take(&mut equipment.particles);
+            self.note(format!(
+                "{}: GENER_PART_CONFIG seeds {} particles in the IC regions, on MFIX's lattice",
+                self.origin,
+                list.len()
+            ));
+            (
+                RawParticles { max_overlap: Some(DECK_MAX_OVERLAP), list, ..RawParticles::default() },
+                String::new(),
+            )
+        } else {
+            self.particles(&phases, lo, hi, read_file)?
+        };
+        let MotionFile { motion, walls: wall_rules } = motion.unwrap_or_default();
+        let mut meshes = equipment.meshes;
+        for (k, rule) in wall_rules.iter().enumerate() {
+            let mine: Vec<usize> =
+                (0..meshes.len()).filter(|&j| self.mesh_bcs.get(j) == Some(&rule.bc)).collect();
+            if mine.is_empty() {
+                let mut bcs = self.mesh_bcs.clone();
+                bcs.dedup();
+                self.block(CaseError::invalid(
+                    format!("the --motion file's [[walls]] #{}", k + 1),
+                    "bc",
+                    rule.bc,
+                    if bcs.is_empty() {
+                        "the deck has no STL walls (cut-cell walls CG_NSW, CG_FSW, CG_PSW with USE_STL)"
+                            .to_string()
+                    } else {
+                        format!(
+                            "not an STL wall of the deck; its STL walls are the boundary conditions {bcs:?}"
+                        )
+                    },
+                ));
+            }
+            for j in mine {
+                meshes[j].motion = rule.motion.clone();
+                meshes[j].surface = rule.surface.clone();
+            }
+        }
 
         let title = match (d.string("RUN_NAME", &[], false)?, d.string("DESCRIPTION", &[], false)?) {
             (Some(n), Some(t)) => format!("{}: {}", n.v, t.v),
@@ -395,10 +536,14 @@ impl Translator<'_> {
             domain: Some(RawDomain {
                 min: Some(lo.to_array()),
                 max: Some(hi.to_array()),
-                walls: WallSelection::All(true),
-                periodic: None,
+                walls: if equipment.walls.len() + 2 * equipment.periodic.len() == 6 {
+                    WallSelection::All(true)
+                } else {
+                    WallSelection::Faces(equipment.walls.iter().map(|f| f.to_string()).collect())
+                },
+                periodic: (!equipment.periodic.is_empty()).then(|| equipment.periodic.clone()),
                 wall_material: None,
-                leaving: None,
+                leaving: equipment.open.then(|| "remove".to_string()),
             }),
             physics: RawPhysics { gravity: Some(gravity) },
             phases: phases
@@ -413,15 +558,15 @@ impl Translator<'_> {
                 .collect(),
             wall_materials,
             walls: Vec::new(),
-            meshes: Vec::new(),
+            meshes,
             contact: Some(contact.0),
             time: Some(time),
             neighbor,
             output,
             particles: Some(particles),
             motion,
-            insertions: Vec::new(),
-            outlets: Vec::new(),
+            insertions: equipment.insertions,
+            outlets: equipment.outlets,
         };
         Ok((raw, extra_source))
     }
@@ -446,7 +591,7 @@ impl Translator<'_> {
                         Allow::Zero => " (only 0, MFIX's default, can be run)",
                         Allow::Never => "",
                     };
-                    return Err(CaseError::invalid(
+                    self.block(CaseError::invalid(
                         e.loc.to_string(),
                         show(key, idx),
                         written,
@@ -456,7 +601,7 @@ impl Translator<'_> {
             }
         }
         if let Some(loc) = &self.lexed.reactions {
-            return Err(CaseError::invalid(
+            self.block(CaseError::invalid(
                 loc.to_string(),
                 "@(RXNS)",
                 "(a chemical reaction block)",
@@ -469,13 +614,13 @@ impl Translator<'_> {
         match self.word("RUN_TYPE", &[])? {
             Some(g) if g.v == "NEW" => {}
             Some(g) if g.v == "RESTART_1" || g.v == "RESTART_2" => {
-                return Err(Self::invalid_word(
+                self.block(Self::invalid_word(
                     &g,
                     "grainflow cannot run this: MFIX restart files cannot be read; use RUN_TYPE = 'NEW' (grainflow restarts from its own checkpoints: grainflow run --restart)",
                 ));
             }
             Some(g) => {
-                return Err(Self::invalid_word(
+                self.block(Self::invalid_word(
                     &g,
                     "must be 'NEW' (or MFIX's 'RESTART_1', 'RESTART_2', which grainflow cannot read)",
                 ));
@@ -485,13 +630,13 @@ impl Translator<'_> {
         match self.word("COORDINATES", &[])? {
             Some(g) if g.v == "CARTESIAN" => {}
             Some(g) if g.v == "CYLINDRICAL" => {
-                return Err(Self::invalid_word(
+                self.block(Self::invalid_word(
                     &g,
                     "grainflow cannot run this: only COORDINATES = 'CARTESIAN' is supported",
                 ));
             }
             Some(g) => {
-                return Err(Self::invalid_word(
+                self.block(Self::invalid_word(
                     &g,
                     "must be 'CARTESIAN' (or 'CYLINDRICAL', which grainflow cannot run)",
                 ));
@@ -501,7 +646,7 @@ impl Translator<'_> {
         match self.real("RO_G0", &[])? {
             Some(g) if g.v == 0.0 => {}
             Some(g) => {
-                return Err(CaseError::invalid(
+                self.block(CaseError::invalid(
                     g.loc.to_string(),
                     g.key,
                     g.text,
@@ -509,7 +654,7 @@ impl Translator<'_> {
                 ));
             }
             None => {
-                return Err(CaseError::missing(
+                self.block(CaseError::missing(
                     self.origin,
                     "RO_G0",
                     "a pure granular (DEM-only) run needs RO_G0 = 0.0; without it MFIX computes a gas density from the ideal-gas law and couples gas and particles, which grainflow cannot",
@@ -518,16 +663,16 @@ impl Translator<'_> {
         }
         if let Some(g) = d.bool("CALL_USR", &[])? {
             if g.v && !have_motion {
-                return Err(CaseError::invalid(
+                self.block(CaseError::invalid(
                     g.loc.to_string(),
                     g.key,
                     g.text,
-                    "grainflow cannot run user-defined Fortran functions (usr0.f, usr1_des.f, …), which can change any result; if they only hold or move particles (as MFIX's DEM05 does), give the same rules as [[motion]] tables in a TOML file: grainflow run DECK --motion FILE (docs/mfix-decks.md); if they only write output, set CALL_USR = .FALSE.",
+                    "grainflow cannot run user-defined Fortran functions (usr0.f, usr1_des.f, …), which can change any result. If they only write output, run without them: grainflow run DECK CALL_USR=.F. (the deck stays as it is). If they prescribe motion — particles held or moved (MFIX's DEM05), a drum or a belt turned by a key-frame table (data_kf_NNNN.txt) — say the same in a motion file of [[motion]] and [[walls]] tables and run grainflow run DECK --motion FILE (docs/mfix-decks.md, \"User-defined functions\")",
                 ));
             }
             if g.v {
                 self.note(format!(
-                    "{}: CALL_USR = .TRUE.: the deck's user-defined functions are replaced by the [[motion]] rules of the --motion file",
+                    "{}: CALL_USR = .TRUE.: the deck's user-defined functions are replaced by the rules of the --motion file",
                     g.loc
                 ));
             }
@@ -578,7 +723,12 @@ impl Translator<'_> {
     fn domain(&self) -> Result<(Vec3, Vec3), CaseError> {
         let mut lo = [0.0; 3];
         let mut hi = [0.0; 3];
+        let no_k = self.flag("NO_K")?;
         for (a, ax) in ["X", "Y", "Z"].iter().enumerate() {
+            if a == 2 && no_k {
+                // 2-D: the particles lie in z = 0; the box's depth is set from their size.
+                continue;
+            }
             let (kmin, kmax, klen) = (format!("{ax}_MIN"), format!("{ax}_MAX"), format!("{ax}LENGTH"));
             let (vmin, vmax, vlen) = (self.real(&kmin, &[])?, self.real(&kmax, &[])?, self.real(&klen, &[])?);
             for g in [&vmin, &vmax, &vlen].into_iter().flatten() {
@@ -649,91 +799,6 @@ impl Translator<'_> {
             hi[a] = x1;
         }
         Ok((Vec3::from_array(lo), Vec3::from_array(hi)))
-    }
-
-    /// Wall boundary conditions on the faces of the box are what MFIX's DEM does anyway; flow
-    /// boundaries, walls inside the box and moving walls are refused.
-    fn boundary_conditions(&mut self, lo: Vec3, hi: Vec3) -> Result<(), CaseError> {
-        let d = self.deck;
-        let mut bcs: Vec<i64> = Vec::new();
-        for key in ["BC_TYPE", "BC_X_W", "BC_X_E", "BC_Y_S", "BC_Y_N", "BC_Z_B", "BC_Z_T"] {
-            bcs.extend(d.indices(key).into_iter().filter_map(|i| i.first().copied()));
-        }
-        bcs.sort_unstable();
-        bcs.dedup();
-        let imax = [d.int("IMAX", &[])?, d.int("JMAX", &[])?, d.int("KMAX", &[])?].map(|g| g.map(|g| g.v));
-        let mut accepted = Vec::new();
-        for i in bcs {
-            let Some(t) = self.word("BC_TYPE", &[i])? else { continue };
-            let wall = matches!(
-                t.v.as_str(),
-                "NSW"
-                    | "FSW"
-                    | "PSW"
-                    | "NO_SLIP_WALL"
-                    | "FREE_SLIP_WALL"
-                    | "PAR_SLIP_WALL"
-                    | "CG_NSW"
-                    | "CG_FSW"
-                    | "CG_PSW"
-            );
-            if !wall {
-                return Err(Self::invalid_word(
-                    &t,
-                    "grainflow cannot run this: only wall boundary conditions ('NSW', 'FSW', 'PSW') are accepted; flow boundaries (inflow, outflow, pressure) open the box, and grainflow's box is closed",
-                ));
-            }
-            for key in ["BC_UW_S", "BC_VW_S", "BC_WW_S"] {
-                for idx in d.indices(key).into_iter().filter(|x| x.first() == Some(&i)) {
-                    if let Some(g) = d.real(key, &idx)?
-                        && g.v != 0.0
-                    {
-                        return Err(CaseError::invalid(
-                            g.loc.to_string(),
-                            g.key,
-                            g.text,
-                            "grainflow cannot run this: moving walls are not supported; only 0 is accepted",
-                        ));
-                    }
-                }
-            }
-            // On a face: for some axis both ends lie on the same face of the box.
-            let axes = [
-                ("BC_X_W", "BC_X_E", "BC_I_W", "BC_I_E"),
-                ("BC_Y_S", "BC_Y_N", "BC_J_S", "BC_J_N"),
-                ("BC_Z_B", "BC_Z_T", "BC_K_B", "BC_K_T"),
-            ];
-            let mut on_face = false;
-            for (a, (kw, ke, iw, ie)) in axes.iter().enumerate() {
-                let size = hi[a] - lo[a];
-                let near = |x: f64, face: f64| (x - face).abs() <= 1e-9 * size;
-                if let (Some(w), Some(e)) = (self.real(kw, &[i])?, self.real(ke, &[i])?) {
-                    on_face |=
-                        (near(w.v, lo[a]) && near(e.v, lo[a])) || (near(w.v, hi[a]) && near(e.v, hi[a]));
-                }
-                if let (Some(w), Some(e)) = (d.int(iw, &[i])?, d.int(ie, &[i])?) {
-                    let ghost_hi = imax[a].map(|n| n + 2);
-                    on_face |= (w.v == 1 && e.v == 1) || (Some(w.v) == ghost_hi && Some(e.v) == ghost_hi);
-                }
-            }
-            if !on_face {
-                return Err(Self::invalid_word(
-                    &t,
-                    format!(
-                        "grainflow cannot run this: wall region {i} does not lie on a face of the box (e.g. BC_X_W({i}) = BC_X_E({i}) = X_MIN); a wall inside the box is an obstacle, which decks cannot express: use [[walls]] planes in a TOML case"
-                    ),
-                ));
-            }
-            accepted.push(format!("{}({i}) = '{}' ({})", "BC_TYPE", t.v, t.loc));
-        }
-        if !accepted.is_empty() {
-            self.note(format!(
-                "{}: wall boundary conditions on faces of the box, which are DEM walls anyway (their gas-side settings are ignored): {}",
-                self.origin,
-                accepted.join(", ")
-            ));
-        }
-        Ok(())
     }
 
     /// MFIX's rule: components default to 0; all three 0 means GRAVITY along −y.
@@ -1145,13 +1210,13 @@ impl Translator<'_> {
     ) -> Result<(RawParticles, String), CaseError> {
         let count = self.deck.int("PARTICLES", &[])?;
         if let Some(g) = &count
-            && g.v < 1
+            && g.v < 0
         {
             return Err(CaseError::invalid(
                 g.loc.to_string(),
                 g.key.clone(),
                 g.text.clone(),
-                "must be at least 1: a run without initial particles needs a mass inflow, which grainflow does not have",
+                "must be a number of particles, 0 or more (0: no particle file, the particles come from mass inflows)",
             ));
         }
         let want = count.as_ref().map_or(default_int("PARTICLES"), |g| g.v) as usize;
@@ -1170,61 +1235,92 @@ impl Translator<'_> {
         let mut data: Vec<(usize, [f64; 8])> = Vec::new();
         let mut first_error: Option<CaseError> = None;
         let mut n_data = 0usize;
-        // Lines counted past PARTICLES for the message, at most this many.
-        const COUNT_PAST: usize = 1_000_000;
-        let mut complete = true;
+        let mut longer = false;
+        let dims = if self.flag("NO_K")? { 2 } else { 3 };
+        let mut v2: Option<V2Layout> = None;
+        let mut v2_header = V2Header::default();
+        let mut want = want;
+        let mut phases_given: Vec<Option<usize>> = Vec::new();
         while let Some((line, l)) = stream.next_line()? {
-            if line == 1 && l.trim().starts_with("Version") {
-                return Err(CaseError::ParticleFile {
-                    path: PARTICLE_FILE.into(),
-                    line: 1,
-                    message: format!(
-                        "'{}': the header format of MFIX 20.1+ (version 2.0) is not read yet; write the legacy format, one particle per line: x y z radius density u v w",
-                        l.trim()
-                    ),
-                });
+            let pf = |message: String| CaseError::ParticleFile { path: PARTICLE_FILE.into(), line, message };
+            if line == 1 && l.trim_end().starts_with("Version 2.0") {
+                v2_header.on = true;
+                continue;
             }
-            let Some(fields) = particles::mfix_fields(l) else { continue };
-            n_data += 1;
-            if n_data > want {
-                if n_data > want + COUNT_PAST {
-                    complete = false;
-                    break;
+            if v2_header.on && v2.is_none() {
+                // MFIX's fixed header: the dimension on line 19, the count on 20, the
+                // columns on 24–31, data from line 35.
+                v2_header.read(line, l, dims).map_err(pf)?;
+                if line == V2_DATA_LINE - 1 {
+                    let layout = v2_header.layout(dims).map_err(pf)?;
+                    if let Some(g) = &count
+                        && g.v as usize != layout.particles
+                    {
+                        self.note(format!(
+                            "{}: PARTICLES = {} is not used: the version 2.0 particle file gives its own count, {} (MFIX's rule)",
+                            g.loc, g.v, layout.particles
+                        ));
+                    }
+                    want = layout.particles;
+                    v2 = Some(layout);
                 }
                 continue;
             }
+            let Some(fields) = particles::mfix_fields(l) else { continue };
+            if n_data == want {
+                // MFIX reads the first PARTICLES lines of a longer file.
+                longer = true;
+                break;
+            }
+            n_data += 1;
             if first_error.is_some() {
                 continue;
             }
-            let numbers = if self.cgs { cgs_numbers(&fields) } else { particles::mfix_numbers(&fields) };
+            let numbers = match &v2 {
+                Some(layout) => layout.numbers(&fields, phases).map(|(v, m)| {
+                    phases_given.push(Some(m));
+                    v
+                }),
+                None if dims == 2 => two_d_numbers(&fields),
+                None if self.cgs => cgs_numbers(&fields),
+                None => particles::mfix_numbers(&fields),
+            };
             match numbers {
                 Ok(v) => data.push((line, v)),
-                Err(message) => {
-                    first_error = Some(CaseError::ParticleFile { path: PARTICLE_FILE.into(), line, message })
-                }
+                Err(message) => first_error = Some(pf(message)),
             }
         }
+        if v2_header.on && v2.is_none() {
+            return Err(CaseError::ParticleFile {
+                path: PARTICLE_FILE.into(),
+                line: 1,
+                message: format!(
+                    "a version 2.0 file has a header of {} lines; this one ends before its data",
+                    V2_DATA_LINE - 1
+                ),
+            });
+        }
+        // A version 2.0 file (phases given) or a 2-D one is listed in the case.
+        let longer = longer || v2.is_some() || dims == 2;
         drop(stream);
-        if n_data != want {
+        if n_data < want {
             let (loc, text) =
                 count.as_ref().map_or((self.origin.to_string(), format!("{want} (MFIX's default)")), |g| {
                     (g.loc.to_string(), g.text.clone())
                 });
-            let listed = if complete { n_data.to_string() } else { format!("more than {n_data}") };
             return Err(CaseError::invalid(
                 loc,
                 "PARTICLES",
                 text,
-                if complete {
-                    format!(
-                        "{PARTICLE_FILE} lists {listed} particle{} and MFIX reads exactly PARTICLES of them: set PARTICLES = {n_data}",
-                        if n_data == 1 { "" } else { "s" },
-                    )
-                } else {
-                    format!(
-                        "{PARTICLE_FILE} lists {listed} particles and MFIX reads exactly PARTICLES of them"
-                    )
-                },
+                format!(
+                    "{PARTICLE_FILE} lists only {n_data} particle{}, and MFIX reads PARTICLES of them: set PARTICLES = {n_data}",
+                    if n_data == 1 { "" } else { "s" },
+                ),
+            ));
+        }
+        if longer {
+            self.note(format!(
+                "{PARTICLE_FILE} lists more than PARTICLES = {want} particles: the first {want} are read, as MFIX reads them"
             ));
         }
         if let Some(e) = first_error {
@@ -1234,44 +1330,66 @@ impl Translator<'_> {
             file: None,
             format: None,
             max_initial_overlap: None,
-            max_overlap: None,
+            // MFIX stops no run for overlap: the health check stops a deck's run only at an
+            // overlap of the whole smaller radius.
+            max_overlap: Some(DECK_MAX_OVERLAP),
             order: None,
             resort: None,
             list: Vec::new(),
         };
         let mut extra_source = String::new();
-        let init = if self.cgs {
+        let init = if self.cgs || longer {
             let mut init = Vec::new();
-            for (line, v) in &data {
+            for (k, (line, v)) in data.iter().enumerate() {
                 let err = |message: String| CaseError::ParticleFile {
                     path: PARTICLE_FILE.into(),
                     line: *line,
                     message,
                 };
                 let [x, y, z, r, rho, u, vv, w] = *v;
-                let (x, y, z, r) = (x / 100.0, y / 100.0, z / 100.0, r / 100.0);
-                let rho = Unit::Density.cgs_to_si(rho);
-                let vel = [u, vv, w].map(|c| Unit::Velocity.cgs_to_si(c));
+                let (x, y, z, r, rho, vel) = if self.cgs {
+                    (
+                        x / 100.0,
+                        y / 100.0,
+                        z / 100.0,
+                        r / 100.0,
+                        Unit::Density.cgs_to_si(rho),
+                        [u, vv, w].map(|c| Unit::Velocity.cgs_to_si(c)),
+                    )
+                } else {
+                    (x, y, z, r, rho, [u, vv, w])
+                };
                 if !(r.is_finite() && r > 0.0) {
                     return Err(err(format!("radius {} cm must be positive", v[3])));
                 }
-                let phase = particles::match_phase(2.0 * r, rho, phases).ok_or_else(|| {
-                    err(format!(
-                        "no phase has diameter {} cm and density {} g/cm³ (the phases: {})",
-                        2.0 * v[3],
-                        v[4],
-                        phases
-                            .iter()
-                            .map(|p| format!(
-                                "'{}' D_P0 = {} cm, RO_S0 = {} g/cm³",
-                                p.name,
-                                p.diameter * 100.0,
-                                p.density / 1000.0
-                            ))
-                            .collect::<Vec<_>>()
-                            .join("; ")
-                    ))
-                })?;
+                // MFIX compares in the deck's units: its SMALL_NUMBER is 1e-15 cm and g/cm³ in CGS.
+                let exact = if self.cgs {
+                    (particles::SMALL_NUMBER / 100.0, particles::SMALL_NUMBER * 1000.0)
+                } else {
+                    (particles::SMALL_NUMBER, particles::SMALL_NUMBER)
+                };
+                let given = phases_given.get(k).copied().flatten();
+                let phase = given
+                    .or_else(|| particles::match_phase_within(2.0 * r, rho, phases, exact))
+                    .ok_or_else(|| {
+                        let (lu, du, lf, df) =
+                            if self.cgs { ("cm", "g/cm³", 100.0, 1e-3) } else { ("m", "kg/m³", 1.0, 1.0) };
+                        err(format!(
+                            "no phase has diameter {} {lu} and density {} {du} (the phases: {})",
+                            2.0 * v[3],
+                            v[4],
+                            phases
+                                .iter()
+                                .map(|p| format!(
+                                    "'{}' D_P0 = {} {lu}, RO_S0 = {} {du}",
+                                    p.name,
+                                    p.diameter * lf,
+                                    p.density * df
+                                ))
+                                .collect::<Vec<_>>()
+                                .join("; ")
+                        ))
+                    })?;
                 let diameter = 2.0 * r;
                 raw.list.push(RawParticle {
                     id: None,
@@ -1286,8 +1404,13 @@ impl Translator<'_> {
                     if diameter != phases[phase].diameter { r } else { phases[phase].radius() },
                 ));
             }
-            let text = String::from_utf8_lossy(&kept.borrow()).into_owned();
-            extra_source = format!("\0file\0{PARTICLE_FILE}\0{text}");
+            extra_source = if self.cgs {
+                let text = String::from_utf8_lossy(&kept.borrow()).into_owned();
+                format!("\0file\0{PARTICLE_FILE}\0{text}")
+            } else {
+                let numbers: Vec<[f64; 8]> = data.iter().map(|(_, v)| *v).collect();
+                format!("\0file\0{PARTICLE_FILE}\0{numbers:?}")
+            };
             init
         } else {
             raw.file = Some(PARTICLE_FILE.into());
@@ -1436,6 +1559,186 @@ fn cgs_numbers(fields: &[&str]) -> Result<[f64; 8], String> {
         *slot = lexer::fortran_number(f).ok_or_else(|| format!("'{f}' is not a number"))?;
     }
     Ok(v)
+}
+
+/// The numbers of a 2-D legacy line, `x y radius density u v`, as the 3-D eight with z = 0
+/// and w = 0 (MFIX's 2-D particles lie in the plane z = 0).
+fn two_d_numbers(fields: &[&str]) -> Result<[f64; 8], String> {
+    if fields.len() != 6 {
+        return Err(format!(
+            "expected 6 numbers (x y radius density u v: NO_K = .TRUE. is 2-D), found {}",
+            fields.len()
+        ));
+    }
+    let mut v = [0.0; 6];
+    for (slot, f) in v.iter_mut().zip(fields) {
+        *slot = lexer::fortran_number(f).ok_or_else(|| format!("'{f}' is not a number"))?;
+    }
+    Ok([v[0], v[1], 0.0, v[2], v[3], v[4], v[5], 0.0])
+}
+
+/// The first data line of a version 2.0 `particle_input.dat` (MFIX's fixed header).
+const V2_DATA_LINE: usize = 35;
+
+/// A column of a version 2.0 file: read from the file (its 0-based start) or one value for
+/// every particle.
+#[derive(Debug, Clone)]
+enum V2Col {
+    Read(usize),
+    Uniform(Vec<f64>),
+}
+
+/// The header of a version 2.0 file as it is read.
+#[derive(Debug, Default)]
+struct V2Header {
+    on: bool,
+    particles: Option<usize>,
+    /// (label, read, defaults) of lines 24–31.
+    options: Vec<(String, bool, Vec<f64>)>,
+}
+
+/// The labels of lines 24–31, in MFIX's order.
+const V2_OPTIONS: [&str; 8] =
+    ["Coordinates", "Phase_ID", "Diameter", "Density", "Velocity", "Temperature", "Species", "User_Scalar"];
+
+impl V2Header {
+    fn read(&mut self, line: usize, text: &str, dims: usize) -> Result<(), String> {
+        let fields: Vec<&str> =
+            text.split(|c: char| c.is_whitespace() || c == ',').filter(|f| !f.is_empty()).collect();
+        let label = |want: &str| -> Result<(), String> {
+            match fields.first() {
+                Some(f) if f.trim_end_matches(':').eq_ignore_ascii_case(want) => Ok(()),
+                _ => Err(format!(
+                    "'{}': line {line} of a version 2.0 file is its '{want}:' line (MFIX reads the header by line number)",
+                    text.trim()
+                )),
+            }
+        };
+        match line {
+            19 => {
+                label("Dimension")?;
+                let d: usize =
+                    fields.get(1).and_then(|f| f.parse().ok()).ok_or("the dimension must be 2 or 3")?;
+                if d != dims {
+                    return Err(format!("the file is {d}-D and the deck {dims}-D (NO_K)"));
+                }
+            }
+            20 => {
+                label("Particles")?;
+                let n: usize = fields
+                    .get(1)
+                    .and_then(|f| f.parse().ok())
+                    .filter(|&n| n <= 100_000_000)
+                    .ok_or("the number of particles must be a whole number (at most 10⁸)")?;
+                self.particles = Some(n);
+            }
+            24..=31 => {
+                let want = V2_OPTIONS[line - 24];
+                label(want)?;
+                let read = match fields.get(1).map(|f| f.to_ascii_uppercase()) {
+                    Some(f) if f == "T" => true,
+                    Some(f) if f == "F" => false,
+                    _ => return Err(format!("'{}': the {want} option must be T or F", text.trim())),
+                };
+                let defaults: Vec<f64> = fields[2..].iter().map_while(|f| lexer::fortran_number(f)).collect();
+                self.options.push((want.to_string(), read, defaults));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The columns, from the options read. Temperature, species and user scalars follow the
+    /// columns grainflow reads, so their widths do not move them.
+    fn layout(&self, dims: usize) -> Result<V2Layout, String> {
+        let particles = self.particles.ok_or("the header has no 'Particles:' line")?;
+        if self.options.len() != V2_OPTIONS.len() {
+            return Err("the header's variable lines (24–31) are incomplete".into());
+        }
+        let mut next = 0usize;
+        let mut col = |k: usize, width: usize| -> Result<V2Col, String> {
+            let (label, read, defaults) = &self.options[k];
+            if *read {
+                let c = V2Col::Read(next);
+                next += width;
+                Ok(c)
+            } else if defaults.len() >= width {
+                Ok(V2Col::Uniform(defaults[..width].to_vec()))
+            } else {
+                Err(format!("{label}: F needs its default value{}", if width > 1 { "s" } else { "" }))
+            }
+        };
+        let xyz = match col(0, dims)? {
+            V2Col::Read(c) => c,
+            V2Col::Uniform(_) => return Err("Coordinates must be read (T)".into()),
+        };
+        let phase = col(1, 1)?;
+        let diameter = col(2, 1)?;
+        let density = col(3, 1)?;
+        let velocity = col(4, dims)?;
+        Ok(V2Layout { particles, dims, xyz, phase, diameter, density, velocity, min_columns: next })
+    }
+}
+
+/// How a version 2.0 data line gives a particle.
+#[derive(Debug, Clone)]
+struct V2Layout {
+    particles: usize,
+    dims: usize,
+    xyz: usize,
+    phase: V2Col,
+    diameter: V2Col,
+    density: V2Col,
+    velocity: V2Col,
+    /// The columns grainflow reads; the line may have more (temperature, species, …).
+    min_columns: usize,
+}
+
+impl V2Layout {
+    /// The eight legacy numbers (x y z radius density u v w, in the deck's units) and the
+    /// phase index.
+    fn numbers(&self, fields: &[&str], phases: &[Phase]) -> Result<([f64; 8], usize), String> {
+        if fields.len() < self.min_columns {
+            return Err(format!(
+                "expected at least {} numbers (the header's T columns), found {}",
+                self.min_columns,
+                fields.len()
+            ));
+        }
+        let num = |c: usize| -> Result<f64, String> {
+            lexer::fortran_number(fields[c])
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("'{}' is not a number", fields[c]))
+        };
+        let one = |c: &V2Col| -> Result<f64, String> {
+            match c {
+                V2Col::Read(k) => num(*k),
+                V2Col::Uniform(v) => Ok(v[0]),
+            }
+        };
+        let d = self.dims;
+        let mut x = [0.0; 3];
+        for (k, slot) in x.iter_mut().enumerate().take(d) {
+            *slot = num(self.xyz + k)?;
+        }
+        let mut v = [0.0; 3];
+        for (k, slot) in v.iter_mut().enumerate().take(d) {
+            *slot = match &self.velocity {
+                V2Col::Read(c) => num(c + k)?,
+                V2Col::Uniform(u) => u[k],
+            };
+        }
+        let m = one(&self.phase)?;
+        if !(m >= 1.0 && m.fract() == 0.0 && (m as usize) <= phases.len()) {
+            return Err(format!("phase {m} is not a solids phase of the deck (1 to {})", phases.len()));
+        }
+        let diameter = one(&self.diameter)?;
+        if !(diameter > 0.0) {
+            return Err(format!("diameter {diameter} must be positive"));
+        }
+        let density = one(&self.density)?;
+        Ok(([x[0], x[1], x[2], diameter / 2.0, density, v[0], v[1], v[2]], m as usize - 1))
+    }
 }
 
 /// A reader that keeps a copy of the bytes it passes.
