@@ -288,3 +288,113 @@ fn every_blocker_is_reported_at_once() {
     }
     assert!(msg.matches(", line ").count() >= 4, "{msg}");
 }
+
+/// A closed cylinder about the z axis, radius `r`, from z = 0 to `h`, as ASCII STL with its
+/// normals outwards (as CAD writes a solid).
+fn cylinder_stl(r: f64, h: f64, n: usize) -> String {
+    let p = |k: usize, z: f64| {
+        let a = 2.0 * std::f64::consts::PI * (k % n) as f64 / n as f64;
+        [r * a.cos(), r * a.sin(), z]
+    };
+    let mut s = String::from("solid drum\n");
+    let mut facet = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+        s.push_str("facet normal 0 0 0\nouter loop\n");
+        for v in [a, b, c] {
+            s.push_str(&format!("vertex {} {} {}\n", v[0], v[1], v[2]));
+        }
+        s.push_str("endloop\nendfacet\n");
+    };
+    for k in 0..n {
+        let (a0, a1, b0, b1) = (p(k, 0.0), p(k + 1, 0.0), p(k, h), p(k + 1, h));
+        facet(a0, a1, b1);
+        facet(a0, b1, b0);
+        facet([0.0, 0.0, 0.0], a1, a0);
+        facet([0.0, 0.0, h], b0, b1);
+    }
+    s.push_str("endsolid drum\n");
+    s
+}
+
+/// A drum as MFIX's GUI describes it: the STL placed by the `#!MFIX-GUI geometry` section
+/// (translated, normals flipped), particles seeded inside, and the shell turned in place by
+/// a key-frame table in the motion file. The seeded particles keep clear of the shell, and the
+/// turning shell carries the bed round with it.
+#[test]
+fn a_drum_from_the_gui_geometry_turns_its_bed() {
+    let deck = "\
+RUN_NAME = 'DRUM'
+UNITS = 'SI'
+RUN_TYPE = 'NEW'
+TSTOP = 0.4
+COORDINATES = 'CARTESIAN'
+X_MIN = -0.03  X_MAX = 0.03  Y_MIN = -0.028  Y_MAX = 0.032  Z_MIN = 0.0  Z_MAX = 0.012
+IMAX = 6  JMAX = 6  KMAX = 2
+CARTESIAN_GRID = .T.
+USE_STL = .T.
+CALL_USR = .T.
+RO_G0 = 0.0
+MMAX = 1
+SOLIDS_MODEL(1) = 'DEM'
+D_P0(1) = 0.004
+RO_S0(1) = 2000.0
+GENER_PART_CONFIG = .T.
+KN = 1.0e3  KN_W = 1.0e3
+MEW = 0.3  MEW_W = 0.5
+DES_EN_INPUT(1) = 0.8
+DES_EN_WALL_INPUT(1) = 0.8
+IC_X_W(1) = -0.02  IC_X_E(1) = 0.02  IC_Y_S(1) = -0.018  IC_Y_N(1) = 0.002  IC_Z_B(1) = 0.0  IC_Z_T(1) = 0.012
+IC_EP_S(1,1) = 0.4
+BC_TYPE(1) = 'CG_NSW'
+BC_X_W(1) = -0.03  BC_X_E(1) = 0.03  BC_Y_S(1) = -0.028  BC_Y_N(1) = 0.032  BC_Z_B(1) = 0.0  BC_Z_T(1) = 0.012
+#!MFIX-GUI regions_dict = {\"order\": [\"shell\"], \"regions\": {\"shell\":
+#!MFIX-GUI   {\"type\": \"STL\", \"geometry_pool\": [\"drum.stl\"]}}}
+#!MFIX-GUI geometry = {\"geometry_dict\": {\"drum.stl\": {\"geo_type\": \"stl\",
+#!MFIX-GUI   \"filename\": \"${proj_dir}/drum.stl\", \"centerx\": 0.0, \"centery\": 0.0,
+#!MFIX-GUI   \"centerz\": 0.006, \"translationy\": 0.002, \"flipnormals\": true}},
+#!MFIX-GUI   \"tree\": {\"drum.stl\": []}}
+#!MFIX-GUI bc_regions = [[[1], [\"shell\"]]]
+";
+    let motion = "\
+[[walls]]
+bc = 1
+[walls.surface]
+axis = [0.0, 0.0, 1.0]
+origin = [0.0, 0.002, 0.0]
+omega = 1.0
+keyframes = \"data_kf_0001.txt\"
+";
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("drum.mfx"), deck).expect("deck");
+    std::fs::write(dir.path().join("motion.toml"), motion).expect("motion");
+    std::fs::write(dir.path().join("drum.stl"), cylinder_stl(0.028, 0.012, 48)).expect("stl");
+    // ω ramps to 10 rad/s over 0.1 s, then holds.
+    std::fs::write(dir.path().join("data_kf_0001.txt"), "2, 1\nlinear\n! t omega\n0.0 0.0\n0.1 10.0\n")
+        .expect("key frames");
+    let d =
+        mfix::load(&dir.path().join("drum.mfx"), &[], Some(&dir.path().join("motion.toml"))).expect("loads");
+    assert_eq!(d.raw.meshes.len(), 1);
+    assert_eq!(d.raw.meshes[0].translate, Some([0.0, 0.002, 0.0]));
+    let p = &d.case.particles;
+    assert!(p.len() > 20, "{} particles", p.len());
+    let centre = grainflow::Vec3::new(0.0, 0.002, 0.0);
+    for i in 0..p.len() {
+        // Inside the shell (radius 28 mm, the 48-gon's flats at 28·cos(π/48)) by more than
+        // MFIX's 1.05 radii.
+        let r = ((p.position[i] - centre) * grainflow::Vec3::new(1.0, 1.0, 0.0)).length();
+        let flat = 0.028 * (std::f64::consts::PI / 48.0).cos();
+        assert!(r < flat - 1.05 * 0.002, "particle {i} at r = {r}");
+    }
+    let mut sim = Simulation::new(d.case.config.clone(), d.case.particles.clone()).expect("set-up");
+    let steps = sim.total_steps();
+    sim.run_with(steps, |_| {});
+    // Angular momentum about the axis per unit mass: positive (the shell's sense) and a good
+    // part of rigid rotation at the shell's ω for the bed's spread of radii.
+    let q = sim.particles();
+    let (mut l, mut rigid) = (0.0, 0.0);
+    for i in 0..q.len() {
+        let x = q.position[i] - centre;
+        l += x.x * q.velocity[i].y - x.y * q.velocity[i].x;
+        rigid += 10.0 * (x.x * x.x + x.y * x.y);
+    }
+    assert!(l > 0.05 * rigid, "L_z = {l}, rigid rotation would give {rigid}");
+}

@@ -529,7 +529,7 @@ fn cases() -> Vec<Hostile> {
             base("mfix.dat"),
             text("0.5 0.5 0.5 0.05 1000.0 0 0 0\n".repeat(1_500_000)),
             &[],
-            "MFIX reads exactly PARTICLES of them",
+            "overlap by 2.000 of the smaller radius",
         ),
         deck(
             "deck: particle file of 1 GiB of zero bytes",

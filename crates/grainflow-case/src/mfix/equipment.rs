@@ -172,13 +172,14 @@ impl Translator<'_> {
         let d = self.deck;
         let size = hi - lo;
         let stl = self.flag("CARTESIAN_GRID")? && self.flag("USE_STL")?;
-        if self.flag("USE_STL")? && !self.flag("CARTESIAN_GRID")? {
-            if let Some(g) = d.bool("USE_STL", &[])? {
-                self.note(format!(
-                    "{}: USE_STL = .TRUE. without CARTESIAN_GRID = .TRUE.: MFIX reads no STL file then, and neither does grainflow",
-                    g.loc
-                ));
-            }
+        if self.flag("USE_STL")?
+            && !self.flag("CARTESIAN_GRID")?
+            && let Some(g) = d.bool("USE_STL", &[])?
+        {
+            self.note(format!(
+                "{}: USE_STL = .TRUE. without CARTESIAN_GRID = .TRUE.: MFIX reads no STL file then, and neither does grainflow",
+                g.loc
+            ));
         }
         let mut eq = Equipment {
             periodic: (0..3).filter(|&a| periodic[a]).map(|a| ["x", "y", "z"][a].to_string()).collect(),
@@ -322,7 +323,7 @@ impl Translator<'_> {
         let no_k = self.flag("NO_K")?;
         for (a, faces) in FACES.iter().enumerate() {
             for (s, face) in faces.iter().enumerate() {
-                if !periodic[a] && !open[a][s] && !(a == 2 && no_k) {
+                if !(periodic[a] || open[a][s] || (a == 2 && no_k)) {
                     eq.walls.push(face);
                 }
             }
@@ -765,7 +766,7 @@ impl Translator<'_> {
                 c[k] = c[k - 1] + 0.5 * (values[k] + values[k - 1]) * (diameters[k] - diameters[k - 1]);
             }
             let total = c[n - 1];
-            if !(total > 0.0) {
+            if total.is_nan() || total <= 0.0 {
                 return Err(err(0, "the density integrates to zero".into()));
             }
             c.iter().map(|x| x / total).collect()

@@ -249,6 +249,7 @@ use Ty as T;
 use Unit as U;
 
 const NO_2D: &str = "axisymmetric 2-D runs are not supported, grainflow is Cartesian";
+const NO_VDW: &str = "MFIX's van der Waals cohesion (Hamaker force with cut-offs and asperities) is not implemented; grainflow's cohesion is the JKR law, [contact] model = \"jkr\" in a TOML case, a different model";
 const NO_IMPLICIT: &str = "implicit cut-cell geometry (quadrics, polygons, user functions) is not read; describe the walls as STL (USE_STL)";
 
 /// Every keyword grainflow knows, with MFIX 21.3's default (see the module documentation).
@@ -441,7 +442,7 @@ pub const KEYWORDS: &[Keyword] = &[
     refused(
         "IS_*",
         Allow::Never,
-        "internal surfaces are obstacles inside the box; use [[walls]] planes in a TOML case",
+        "internal surfaces (obstacles inside the box, among them STL ones, IS_TYPE = 'STL' with is_NNNN.stl) are not read from decks; give them as [[meshes]] in a TOML case (grainflow convert writes the rest of the deck)",
     ),
     // Fluid solver.
     ignored("MAX_NIT", Why::FluidSolver),
@@ -570,8 +571,8 @@ pub const KEYWORDS: &[Keyword] = &[
     used("V_POISSON", T::Real, 1, U::None, Rule("undefined; required by HERTZIAN")),
     used("EW_YOUNG", T::Real, 0, U::Modulus, Rule("undefined; required by HERTZIAN")),
     used("VW_POISSON", T::Real, 0, U::None, Rule("undefined; required by HERTZIAN")),
-    refused("USE_COHESION", Allow::False, "cohesion (van der Waals) forces are not implemented"),
-    refused("VAN_DER_WAALS", Allow::False, "cohesion (van der Waals) forces are not implemented"),
+    refused("USE_COHESION", Allow::False, NO_VDW),
+    refused("VAN_DER_WAALS", Allow::False, NO_VDW),
     ignored("HAMAKER_CONSTANT", Why::Cohesion),
     ignored("WALL_HAMAKER_CONSTANT", Why::Cohesion),
     ignored("VDW_OUTER_CUTOFF", Why::Cohesion),

@@ -1422,6 +1422,11 @@ impl Translator<'_> {
             && ratio > DEFAULT_MAX_INITIAL_OVERLAP
         {
             let limit = ((ratio * 100.0).ceil() + 1.0) / 100.0;
+            if limit > DECK_MAX_OVERLAP {
+                return Err(CaseError::Geometry(format!(
+                    "{PARTICLE_FILE}: {what} overlap by {ratio:.3} of the smaller radius at the start; MFIX does not check this, but grainflow runs a deck's particles only up to an overlap of the whole radius: separate them"
+                )));
+            }
             raw.max_initial_overlap = Some(limit);
             self.note(format!(
                     "{PARTICLE_FILE}: {what} overlap by {ratio:.3} of the smaller radius at the start; MFIX does not check this, grainflow's own limit ({DEFAULT_MAX_INITIAL_OVERLAP}) is raised to {limit} for this deck ([particles] max_initial_overlap)"
@@ -1733,7 +1738,7 @@ impl V2Layout {
             return Err(format!("phase {m} is not a solids phase of the deck (1 to {})", phases.len()));
         }
         let diameter = one(&self.diameter)?;
-        if !(diameter > 0.0) {
+        if diameter.is_nan() || diameter <= 0.0 {
             return Err(format!("diameter {diameter} must be positive"));
         }
         let density = one(&self.density)?;

@@ -109,7 +109,7 @@ impl Translator<'_> {
             let idx = [ic, m];
             let v_mean = std::f64::consts::FRAC_PI_6 * part.sizes.mean_cube();
             let want = (part.ep * volume / v_mean).floor();
-            if !(want < MAX_SITES as f64) {
+            if want.is_nan() || want >= MAX_SITES as f64 {
                 return Err(CaseError::invalid(
                     self.origin,
                     show("IC_EP_S", &idx),
