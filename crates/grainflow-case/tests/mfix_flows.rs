@@ -398,3 +398,37 @@ keyframes = \"data_kf_0001.txt\"
     }
     assert!(l > 0.05 * rigid, "L_z = {l}, rigid rotation would give {rigid}");
 }
+
+/// An internal STL surface (`IS_TYPE = 'STL'`, MFIX's `is_NNNN.stl`) is a mesh wall that a
+/// motion file turns by `is = N`; a deck's particles overlapping an STL wall at the start are
+/// measured and allowed, as MFIX allows them.
+#[test]
+fn an_internal_stl_surface_turns_by_its_motion_file() {
+    let deck = format!(
+        "{HEAD}{ONE_PHASE}X_MIN = -0.5  X_MAX = 0.5  Y_MIN = -0.5  Y_MAX = 0.5  Z_MIN = 0.0  Z_MAX = 0.5\n\
+         CARTESIAN_GRID = .T.\nUSE_STL = .T.\nCALL_USR = .T.\nPARTICLES = 1\n\
+         IS_TYPE(1) = 'STL'\nIS_X_W(1) = -0.5  IS_X_E(1) = 0.5  IS_Y_S(1) = -0.5  IS_Y_N(1) = 0.5  IS_Z_B(1) = 0.0  IS_Z_T(1) = 0.5\n"
+    );
+    // A paddle: a vertical sheet in the plane y = 0 from x = 0.05 to 0.35.
+    let paddle = "solid p\nfacet normal 0 0 0\nouter loop\nvertex 0.05 0 0.05\nvertex 0.35 0 0.05\nvertex 0.35 0 0.45\nendloop\nendfacet\n\
+                  facet normal 0 0 0\nouter loop\nvertex 0.05 0 0.05\nvertex 0.35 0 0.45\nvertex 0.05 0 0.45\nendloop\nendfacet\nendsolid p\n";
+    let motion = "[[walls]]\nis = 1\n[walls.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\nrpm = 60.0\n";
+    // The sphere touches the paddle by 0.2 of its radius at the start.
+    let (dir, path) = folder(
+        &deck,
+        &[
+            ("particle_input.dat", "0.2 0.04 0.25 0.05 1000.0 0 0 0\n"),
+            ("is_0001.stl", paddle),
+            ("motion.toml", motion),
+        ],
+    );
+    let d = mfix::load(&path, &[], Some(&dir.path().join("motion.toml"))).expect("loads");
+    assert_eq!(d.raw.meshes.len(), 1);
+    assert!(d.raw.meshes[0].motion.is_some());
+    let limit = d.raw.particles.as_ref().and_then(|p| p.max_initial_overlap).expect("raised");
+    assert!((0.2..0.23).contains(&limit), "max_initial_overlap = {limit}");
+    // A motion file naming a wall the deck has not is refused with the walls it has.
+    std::fs::write(dir.path().join("motion.toml"), motion.replace("is = 1", "is = 2")).expect("write");
+    let e = mfix::load(&path, &[], Some(&dir.path().join("motion.toml"))).expect_err("no IS 2").to_string();
+    assert!(e.contains("its STL walls are is = 1"), "{e}");
+}

@@ -328,6 +328,29 @@ impl Translator<'_> {
                 }
             }
         }
+        // Internal surfaces: STL ones are walls too (MFIX reads is_NNNN.stl).
+        let mut is_ids: Vec<i64> =
+            d.indices("IS_TYPE").into_iter().filter_map(|i| i.first().copied()).collect();
+        is_ids.sort_unstable();
+        is_ids.dedup();
+        let mut stl_is = Vec::new();
+        for i in is_ids {
+            let Some(t) = self.word("IS_TYPE", &[i])? else { continue };
+            if t.v == "STL" && stl {
+                stl_is.push(i);
+            } else {
+                self.block(Self::invalid_word(
+                    &t,
+                    "grainflow cannot run this: of the internal surfaces only STL ones (IS_TYPE = 'STL', with CARTESIAN_GRID and USE_STL) are read; give others as [[walls]] or [[meshes]] in a TOML case",
+                ));
+            }
+        }
+        if !stl_is.is_empty() {
+            match geometry::is_walls(&self.lexed.gui, &stl_is, exists) {
+                Ok(walls) => self.push_walls(walls, true, &mut eq)?,
+                Err(message) => self.block(CaseError::Geometry(format!("{}: {message}", self.origin))),
+            }
+        }
         if !stl_bcs.is_empty() {
             self.stl_walls(&stl_bcs, exists, &mut eq)?;
         } else if stl {
@@ -390,6 +413,16 @@ impl Translator<'_> {
                 return Ok(());
             }
         };
+        self.push_walls(walls, false, eq)
+    }
+
+    /// STL walls as `[[meshes]]`: boundary conditions' or (`internal`) internal surfaces'.
+    fn push_walls(
+        &mut self,
+        walls: Vec<geometry::StlWall>,
+        internal: bool,
+        eq: &mut Equipment,
+    ) -> Result<(), CaseError> {
         // MFIX's own transform of geometry.stl (SCALE_STL, then TX/TY/TZ_STL).
         let scale = self.real("SCALE_STL", &[])?.map_or(1.0, |g| g.v);
         let shift = [
@@ -417,7 +450,7 @@ impl Translator<'_> {
                 surface: None,
                 torque_about: None,
             });
-            self.mesh_bcs.push(w.bc);
+            self.mesh_bcs.push(if internal { -w.bc } else { w.bc });
         }
         Ok(())
     }
@@ -832,7 +865,7 @@ impl Translator<'_> {
 
 impl Translator<'_> {
     /// The STL walls as meshes, loaded as the case will load them, for seeding.
-    fn load_walls(
+    pub(super) fn load_walls(
         &mut self,
         meshes: &[RawMesh],
         read_file: &input::Opener<'_>,

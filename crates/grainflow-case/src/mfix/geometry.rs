@@ -145,6 +145,39 @@ pub fn stl_walls(
     from_gui(gui, bcs, exists)
 }
 
+/// The STL facets of the internal surfaces `ids` (`IS_TYPE = 'STL'`): `is_NNNN.stl` beside
+/// the deck, as MFIX's solver reads them, else the files the GUI's `is_regions` name. Each
+/// wall's `bc` is the internal surface's id.
+pub fn is_walls(
+    gui: &[(String, String, Loc)],
+    ids: &[i64],
+    exists: &dyn Fn(&str) -> bool,
+) -> Result<Vec<StlWall>, String> {
+    let mut walls = Vec::new();
+    let mut from_gui_ids = Vec::new();
+    for &id in ids {
+        let file = format!("is_{id:04}.stl");
+        if exists(&file) {
+            walls.push(StlWall {
+                bc: id,
+                name: format!("IS {id}"),
+                file,
+                scale: 1.0,
+                rotate: [0.0; 3],
+                translate: [0.0; 3],
+                flip_normals: false,
+                from_solver_file: true,
+            });
+        } else {
+            from_gui_ids.push(id);
+        }
+    }
+    if !from_gui_ids.is_empty() {
+        walls.extend(from_gui_regions(gui, &from_gui_ids, exists, "is_regions", "IS")?);
+    }
+    Ok(walls)
+}
+
 /// A GUI comment that must be there, as JSON.
 fn need_json(gui: &[(String, String, Loc)], key: &str) -> Result<Value, String> {
     gui_json(gui, key).unwrap_or_else(|| {
@@ -158,9 +191,21 @@ fn from_gui(
     bcs: &[i64],
     exists: &dyn Fn(&str) -> bool,
 ) -> Result<Vec<StlWall>, String> {
+    from_gui_regions(gui, bcs, exists, "bc_regions", "BC")
+}
+
+/// [`from_gui`] for the regions of `key` (`bc_regions`, `is_regions`), whose ids are named
+/// `label` in messages.
+fn from_gui_regions(
+    gui: &[(String, String, Loc)],
+    bcs: &[i64],
+    exists: &dyn Fn(&str) -> bool,
+    key: &str,
+    label: &str,
+) -> Result<Vec<StlWall>, String> {
     let geometry = need_json(gui, "geometry")?;
     let regions = need_json(gui, "regions_dict")?;
-    let bc_regions = need_json(gui, "bc_regions")?;
+    let bc_regions = need_json(gui, key)?;
     let params = match gui_json(gui, "parameters") {
         Some(p) => p?,
         None => Value::Null,
@@ -174,7 +219,7 @@ fn from_gui(
         let (Some(ids), Some(names)) =
             (row.get(0).and_then(Value::as_array), row.get(1).and_then(Value::as_array))
         else {
-            return Err(format!("the GUI's `bc_regions` entry {row} is not [[ids], [regions]]"));
+            return Err(format!("the GUI's `{key}` entry {row} is not [[ids], [regions]]"));
         };
         for (id, name) in ids.iter().zip(names) {
             if let (Some(id), Some(name)) = (id.as_i64(), name.as_str()) {
@@ -187,27 +232,29 @@ fn from_gui(
     for &bc in bcs {
         let Some((_, region)) = region_of.iter().find(|(id, _)| *id == bc) else {
             return Err(format!(
-                "BC {bc} (a CG_ boundary) has no region in the GUI's `bc_regions`, and geometry_{bc:04}.stl is not beside the deck"
+                "{label} {bc} has no region in the GUI's `{key}`, and its STL file is not beside the deck"
             ));
         };
         let Some(data) = regions.get("regions").and_then(|r| r.get(region)) else {
-            return Err(format!("the region \"{region}\" of BC {bc} is not in the GUI's `regions_dict`"));
+            return Err(format!(
+                "the region \"{region}\" of {label} {bc} is not in the GUI's `regions_dict`"
+            ));
         };
         let kind = data.get("type").and_then(Value::as_str).unwrap_or("box");
         if !kind.eq_ignore_ascii_case("stl") {
             return Err(format!(
-                "BC {bc} is a CG_ boundary but its region \"{region}\" is of type \"{kind}\", not \"STL\""
+                "{label} {bc} needs STL geometry, but its region \"{region}\" is of type \"{kind}\", not \"STL\""
             ));
         }
         let shape = data.get("stl_shape").and_then(Value::as_str).unwrap_or("all");
         if !shape.eq_ignore_ascii_case("all") {
             return Err(format!(
-                "the region \"{region}\" of BC {bc} keeps only the facets inside its {shape} (stl_shape), which grainflow cannot cut; save the project in the MFIX GUI so that it writes geometry_{bc:04}.stl, which is read instead"
+                "the region \"{region}\" of {label} {bc} keeps only the facets inside its {shape} (stl_shape), which grainflow cannot cut; save the project in the MFIX GUI so that it writes geometry_{bc:04}.stl, which is read instead"
             ));
         }
         if data.get("filter_facets").and_then(Value::as_bool).unwrap_or(false) {
             return Err(format!(
-                "the region \"{region}\" of BC {bc} filters its facets by their normals (filter_facets), which grainflow cannot do; save the project in the MFIX GUI so that it writes geometry_{bc:04}.stl, which is read instead"
+                "the region \"{region}\" of {label} {bc} filters its facets by their normals (filter_facets), which grainflow cannot do; save the project in the MFIX GUI so that it writes geometry_{bc:04}.stl, which is read instead"
             ));
         }
         let pool: Vec<&str> = data
@@ -217,20 +264,20 @@ fn from_gui(
             .unwrap_or_default();
         if pool.is_empty() {
             return Err(format!(
-                "the STL region \"{region}\" of BC {bc} names no geometry (its geometry_pool is empty)"
+                "the STL region \"{region}\" of {label} {bc} names no geometry (its geometry_pool is empty)"
             ));
         }
         for &node in &pool {
             let Some(geo) = dict.and_then(|d| d.get(node)) else {
                 return Err(format!(
-                    "{geo_loc}: the geometry \"{node}\" of region \"{region}\" (BC {bc}) is not in the GUI's `geometry`"
+                    "{geo_loc}: the geometry \"{node}\" of region \"{region}\" ({label} {bc}) is not in the GUI's `geometry`"
                 ));
             };
             let name = if pool.len() == 1 { region.clone() } else { format!("{region}: {node}") };
             let mut wall = stl_node(node, geo, &eval).map_err(|e| format!("{geo_loc}: {e}"))?;
             if !exists(&wall.file) {
                 return Err(format!(
-                    "{geo_loc}: the STL file {} of geometry \"{node}\" (region \"{region}\", BC {bc}) is not beside the deck (names are case-sensitive, as for the GUI)",
+                    "{geo_loc}: the STL file {} of geometry \"{node}\" (region \"{region}\", {label} {bc}) is not beside the deck (names are case-sensitive, as for the GUI)",
                     wall.file
                 ));
             }

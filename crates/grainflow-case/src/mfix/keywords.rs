@@ -439,10 +439,17 @@ pub const KEYWORDS: &[Keyword] = &[
         Allow::Never,
         "point sources add mass and momentum; grainflow has none: remove the PS_ keywords",
     ),
+    checked("IS_TYPE", T::Str, 1, U::None, Undefined),
+    checked("IS_X_W", T::Real, 1, U::Length, Undefined),
+    checked("IS_X_E", T::Real, 1, U::Length, Undefined),
+    checked("IS_Y_S", T::Real, 1, U::Length, Undefined),
+    checked("IS_Y_N", T::Real, 1, U::Length, Undefined),
+    checked("IS_Z_B", T::Real, 1, U::Length, Undefined),
+    checked("IS_Z_T", T::Real, 1, U::Length, Undefined),
     refused(
         "IS_*",
         Allow::Never,
-        "internal surfaces (obstacles inside the box, among them STL ones, IS_TYPE = 'STL' with is_NNNN.stl) are not read from decks; give them as [[meshes]] in a TOML case (grainflow convert writes the rest of the deck)",
+        "internal surfaces' other settings (permeability, gas-side conditions) are not read; STL internal surfaces (IS_TYPE = 'STL') are read from their region alone",
     ),
     // Fluid solver.
     ignored("MAX_NIT", Why::FluidSolver),
@@ -652,7 +659,7 @@ mod tests {
             assert_eq!(k.name, k.name.to_ascii_uppercase());
         }
         assert_eq!(lookup("IS_SERIAL").map(|k| k.name), Some("IS_SERIAL"));
-        assert_eq!(lookup("IS_X_W").map(|k| k.name), Some("IS_*"));
+        assert_eq!(lookup("IS_GAMMA").map(|k| k.name), Some("IS_*"));
         assert_eq!(lookup("BC_TYPE").map(|k| k.name), Some("BC_TYPE"));
         assert_eq!(lookup("BC_EP_G").map(|k| k.name), Some("BC_*"));
         assert_eq!(lookup("VTK_DT").map(|k| k.name), Some("VTK_DT"));

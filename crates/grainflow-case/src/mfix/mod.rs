@@ -193,8 +193,10 @@ struct MotionFile {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct WallRule {
-    /// The deck's boundary condition (a `CG_NSW`, `CG_FSW` or `CG_PSW` wall).
-    bc: i64,
+    /// The deck's boundary condition (a `CG_NSW`, `CG_FSW` or `CG_PSW` wall), or
+    bc: Option<i64>,
+    /// its internal surface (`IS_TYPE = 'STL'`).
+    is: Option<i64>,
     /// The mesh moving as a rigid body (`[meshes.motion]`).
     motion: Option<RawMeshMotion>,
     /// A velocity of its surface, the mesh staying in place (`[meshes.surface]`).
@@ -215,6 +217,13 @@ fn parse_motion(text: &str, origin: &str) -> Result<MotionFile, CaseError> {
         ));
     }
     for (k, w) in m.walls.iter().enumerate() {
+        if w.bc.is_some() == w.is.is_some() {
+            return Err(CaseError::missing(
+                format!("{origin}: [[walls]] #{}", k + 1),
+                "bc or is",
+                "the wall: its boundary condition `bc = N` or its internal surface `is = N`, one of them",
+            ));
+        }
         if w.motion.is_none() && w.surface.is_none() {
             return Err(CaseError::missing(
                 format!("{origin}: [[walls]] #{}", k + 1),
@@ -280,7 +289,8 @@ struct Translator<'a> {
     notes: Vec<String>,
     /// What stops the deck from running, collected so that a user sees the whole list.
     blockers: Vec<CaseError>,
-    /// The boundary condition of each mesh wall, in the order of the case's meshes.
+    /// The boundary condition of each mesh wall, in the order of the case's meshes; an
+    /// internal surface's id negated.
     mesh_bcs: Vec<i64>,
 }
 
@@ -466,27 +476,35 @@ impl Translator<'_> {
                 String::new(),
             )
         } else {
-            self.particles(&phases, lo, hi, read_file)?
+            let walls = self.load_walls(&equipment.meshes, read_file)?;
+            self.particles(&phases, lo, hi, &walls, read_file)?
         };
         let MotionFile { motion, walls: wall_rules } = motion.unwrap_or_default();
         let mut meshes = equipment.meshes;
         for (k, rule) in wall_rules.iter().enumerate() {
+            let (key, id, owner) = match (rule.bc, rule.is) {
+                (Some(b), _) => ("bc", b, b),
+                (None, Some(i)) => ("is", i, -i),
+                (None, None) => unreachable!("checked when the motion file is read"),
+            };
             let mine: Vec<usize> =
-                (0..meshes.len()).filter(|&j| self.mesh_bcs.get(j) == Some(&rule.bc)).collect();
+                (0..meshes.len()).filter(|&j| self.mesh_bcs.get(j) == Some(&owner)).collect();
             if mine.is_empty() {
-                let mut bcs = self.mesh_bcs.clone();
+                let mut bcs: Vec<String> = self
+                    .mesh_bcs
+                    .iter()
+                    .map(|&b| if b > 0 { format!("bc = {b}") } else { format!("is = {}", -b) })
+                    .collect();
                 bcs.dedup();
                 self.block(CaseError::invalid(
                     format!("the --motion file's [[walls]] #{}", k + 1),
-                    "bc",
-                    rule.bc,
+                    key,
+                    id,
                     if bcs.is_empty() {
-                        "the deck has no STL walls (cut-cell walls CG_NSW, CG_FSW, CG_PSW with USE_STL)"
+                        "the deck has no STL walls (cut-cell walls CG_NSW, CG_FSW, CG_PSW or internal surfaces IS_TYPE = 'STL', with USE_STL)"
                             .to_string()
                     } else {
-                        format!(
-                            "not an STL wall of the deck; its STL walls are the boundary conditions {bcs:?}"
-                        )
+                        format!("not an STL wall of the deck; its STL walls are {}", bcs.join(", "))
                     },
                 ));
             }
@@ -1206,6 +1224,7 @@ impl Translator<'_> {
         phases: &[Phase],
         lo: Vec3,
         hi: Vec3,
+        walls: &[grainflow::mesh::Mesh],
         read_file: &input::Opener<'_>,
     ) -> Result<(RawParticles, String), CaseError> {
         let count = self.deck.int("PARTICLES", &[])?;
@@ -1418,7 +1437,11 @@ impl Translator<'_> {
         };
         // MFIX does not check initial overlaps; grainflow's cases refuse more than
         // DEFAULT_MAX_INITIAL_OVERLAP unless told. Say what this deck needs.
-        if let Some((ratio, what)) = largest_overlap(&init, lo, hi)
+        let overlap = [largest_overlap(&init, lo, hi), largest_mesh_overlap(&init, walls)]
+            .into_iter()
+            .flatten()
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((ratio, what)) = overlap
             && ratio > DEFAULT_MAX_INITIAL_OVERLAP
         {
             let limit = ((ratio * 100.0).ceil() + 1.0) / 100.0;
@@ -1744,6 +1767,29 @@ impl V2Layout {
         let density = one(&self.density)?;
         Ok(([x[0], x[1], x[2], diameter / 2.0, density, v[0], v[1], v[2]], m as usize - 1))
     }
+}
+
+/// The largest overlap of a particle with an STL wall, as a fraction of its radius, and which.
+fn largest_mesh_overlap(p: &[(Vec3, f64)], walls: &[grainflow::mesh::Mesh]) -> Option<(f64, String)> {
+    let mut best: Option<(f64, String)> = None;
+    for (i, &(x, r)) in p.iter().enumerate() {
+        for mesh in walls {
+            for t in 0..mesh.triangle_count() as u32 {
+                let c = mesh.corners(t);
+                let lo = c[0].min(c[1]).min(c[2]) - Vec3::splat(r);
+                let hi = c[0].max(c[1]).max(c[2]) + Vec3::splat(r);
+                if x.cmplt(lo).any() || x.cmpgt(hi).any() {
+                    continue;
+                }
+                let d = (x - grainflow::mesh::closest_point_on_triangle(x, c).point).length();
+                let ratio = (r - d) / r;
+                if ratio > 0.0 && best.as_ref().is_none_or(|b| ratio > b.0) {
+                    best = Some((ratio, format!("particle {} and the STL wall {}", i + 1, mesh.name())));
+                }
+            }
+        }
+    }
+    best
 }
 
 /// A reader that keeps a copy of the bytes it passes.
