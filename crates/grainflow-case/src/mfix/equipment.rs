@@ -587,7 +587,7 @@ impl Translator<'_> {
                 let theta = self.real("IC_THETA_M", &[ic, m])?.map_or(0.0, |g| g.v.max(0.0))
                     / if self.cgs { 1e4 } else { 1.0 };
                 let part = self.psd("IC", ic, m, phase, read_file)?;
-                let sizes = seed::sizes_of(&part, phase, &show("IC_PSD_TYPE", &[ic, m]))?;
+                let sizes = crate::flow::sizes(&part, &show("IC_PSD_TYPE", &[ic, m]), phase)?;
                 parts.push(seed::SeedPhase { ic, m, phase, ep: ep.v, sizes, velocity, theta });
             }
             if !parts.is_empty() {

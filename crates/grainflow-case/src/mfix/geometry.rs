@@ -103,16 +103,6 @@ pub fn stl_walls(
     if bcs.is_empty() {
         return Ok(Vec::new());
     }
-    let solver_wall = |bc: i64, name: String, file: String| StlWall {
-        bc,
-        name,
-        file,
-        scale: 1.0,
-        rotate: [0.0; 3],
-        translate: [0.0; 3],
-        flip_normals: false,
-        from_solver_file: true,
-    };
     let files: Vec<String> = bcs.iter().map(|b| format!("geometry_{b:04}.stl")).collect();
     if let Some(found) = files.iter().find(|f| exists(f)) {
         let mut walls = Vec::new();
@@ -158,16 +148,7 @@ pub fn is_walls(
     for &id in ids {
         let file = format!("is_{id:04}.stl");
         if exists(&file) {
-            walls.push(StlWall {
-                bc: id,
-                name: format!("IS {id}"),
-                file,
-                scale: 1.0,
-                rotate: [0.0; 3],
-                translate: [0.0; 3],
-                flip_normals: false,
-                from_solver_file: true,
-            });
+            walls.push(solver_wall(id, format!("IS {id}"), file));
         } else {
             from_gui_ids.push(id);
         }
@@ -176,6 +157,21 @@ pub fn is_walls(
         walls.extend(from_gui_regions(gui, &from_gui_ids, exists, "is_regions", "IS")?);
     }
     Ok(walls)
+}
+
+/// A wall of one of the solver's own files, placed as it is (MFIX's SCALE_STL and TX_STL …
+/// apply to it).
+fn solver_wall(bc: i64, name: String, file: String) -> StlWall {
+    StlWall {
+        bc,
+        name,
+        file,
+        scale: 1.0,
+        rotate: [0.0; 3],
+        translate: [0.0; 3],
+        flip_normals: false,
+        from_solver_file: true,
+    }
 }
 
 /// A GUI comment that must be there, as JSON.

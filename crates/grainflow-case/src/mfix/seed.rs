@@ -22,7 +22,7 @@
 use super::Translator;
 use super::deck::show;
 use crate::error::CaseError;
-use crate::raw::{RawInsertPhase, RawParticle};
+use crate::raw::RawParticle;
 use grainflow::insertion::InsertRng;
 use grainflow::mesh::Mesh;
 use grainflow::{Phase, Vec3};
@@ -303,15 +303,6 @@ fn clear_of(p: Vec3, walls: &[Mesh], gap: f64) -> bool {
         }
     }
     front && best > gap
-}
-
-/// A phase's size distribution from its insertion table.
-pub(super) fn sizes_of(
-    p: &RawInsertPhase,
-    phase: &Phase,
-    table: &str,
-) -> Result<grainflow::insertion::psd::SizeDistribution, CaseError> {
-    crate::flow::sizes(p, table, phase)
 }
 
 /// The stream that draws the seeded particles' sizes and velocities: one per deck, fixed.
