@@ -584,11 +584,9 @@ fn step_of(name: &str) -> Option<u64> {
     name.rsplit('_').next()?.split('.').next()?.parse().ok()
 }
 
-/// Removes the snapshots and VTK frames (particles, contacts, moving meshes) of `step` and
-/// after that an earlier attempt of the run being continued left: the continued run writes
-/// its own (those of `step` again if they are due then; an interrupted run's snapshot of the
-/// step it stopped at is not). Only files the manifest lists are removed, and none reached
-/// through a symbolic link.
+/// Removes the snapshots and VTK frames (particles, contacts, moving meshes) after `step`
+/// that an earlier attempt of the run being continued left: the continued run writes its own.
+/// Only files the manifest lists are removed, and none reached through a symbolic link.
 fn drop_later_frames(folder: &OutputFolder, step: u64) -> Result<(), OutputError> {
     for sub in ["snapshots", "vtk"] {
         let dir = folder.dir().join(sub);
@@ -600,7 +598,7 @@ fn drop_later_frames(folder: &OutputFolder, step: u64) -> Result<(), OutputError
             let name = entry.file_name().to_string_lossy().into_owned();
             let listed = folder.lists(&Path::new(sub).join(&name));
             if listed
-                && step_of(&name).is_some_and(|s| s >= step)
+                && step_of(&name).is_some_and(|s| s > step)
                 && entry.file_type().is_ok_and(|t| t.is_file())
             {
                 let path = entry.path();
@@ -810,8 +808,9 @@ fn run_simulation(
     // checkpoint's step (written before the checkpoint, from the same state) instead of
     // writing it again without them.
     let every = output_every(interval, sim.dt(), sim.total_steps());
-    let keep_row =
-        !options.accept_changed_case && !mesh_loads.columns.is_empty() && start_step.is_multiple_of(every);
+    // The output steps: the first, every `every`-th and the last.
+    let on_schedule = start_step == 0 || start_step.is_multiple_of(every) || sim.finished();
+    let keep_row = !options.accept_changed_case && !mesh_loads.columns.is_empty() && on_schedule;
     // What the checkpoint recorded of the outputs (none for a fresh run, or a checkpoint
     // written before such records).
     let note = options.restart.as_ref().and_then(|_| RunNote::decode(sim.checkpoint_note()));
@@ -858,8 +857,9 @@ fn run_simulation(
     };
     let vtk_every = vtk.as_ref().map(|(_, k)| *k);
     let checkpoint_path = out.join(CHECKPOINT_FILE);
-    // The row and snapshot of an output (`scheduled`: on the output schedule, not the extra
-    // one of an interrupted run).
+    // The row and snapshot of an output (`scheduled`: on the output schedule; the extra row
+    // of an interrupted run comes without a snapshot, which the uninterrupted run has not:
+    // the checkpoint holds that state).
     let emit = |sim: &Simulation,
                 ts: &mut TimeSeriesWriter,
                 folder: &mut OutputFolder,
@@ -871,7 +871,7 @@ fn run_simulation(
         if row {
             ts.write(&d, &mesh_loads.values(sim, scheduled)).map_err(io_err(&ts_path))?;
         }
-        if snapshots {
+        if snapshots && scheduled {
             let name = format!("particles_{:09}.csv", sim.step_index());
             folder.record(&Path::new("snapshots").join(&name))?;
             let path = snap_dir.join(name);
@@ -921,14 +921,14 @@ fn run_simulation(
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
-    let (first, mut outputs) = if start_step == 0 || start_step.is_multiple_of(every) {
+    let (first, mut outputs) = if on_schedule {
         (emit(sim, &mut ts, folder, &mut files, !row_kept, true)?, usize::from(!row_kept))
     } else {
         (sim.diagnostics(), 0)
     };
-    // A restart writes the frame of its step only if it is due (the earlier attempt's was
-    // removed), as the uninterrupted run did.
-    write_vtk(sim, &mut vtk, folder, start_step == 0)?;
+    // A restart writes the frame of its step only if it is due (the first and last steps
+    // always are), as the uninterrupted run did.
+    write_vtk(sim, &mut vtk, folder, start_step == 0 || sim.finished())?;
     on_progress(sim);
     let builds_before = sim.neighbors().stats().builds;
     let start = Instant::now();

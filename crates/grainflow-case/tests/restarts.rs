@@ -118,17 +118,26 @@ fn stopped_and_continued(case: &Path, dir: &Path, stops: &[(u64, Stop)]) {
         let reached = attempt(case, &part, k > 0, Some((at, how)));
         assert!(reached >= at, "stopped at {reached}, before {at}");
     }
-    attempt(case, &part, true, None);
-    let resumed = outputs(&part);
-    assert_eq!(reference.keys().collect::<Vec<_>>(), resumed.keys().collect::<Vec<_>>(), "other files");
-    for (name, bytes) in &reference {
-        assert!(
-            bytes == &resumed[name],
-            "{} differs from the uninterrupted run's after stops at {stops:?}:\n{}\n---\n{}",
-            name.display(),
-            String::from_utf8_lossy(bytes),
-            String::from_utf8_lossy(&resumed[name])
+    // To the end, and once more from the checkpoint of the last step (a chained restart
+    // that has nothing left to do).
+    let mut resumed = BTreeMap::new();
+    for round in ["to the end", "from the end"] {
+        attempt(case, &part, true, None);
+        resumed = outputs(&part);
+        assert_eq!(
+            reference.keys().collect::<Vec<_>>(),
+            resumed.keys().collect::<Vec<_>>(),
+            "{round}: other files"
         );
+        for (name, bytes) in &reference {
+            assert!(
+                bytes == &resumed[name],
+                "{round}: {} differs from the uninterrupted run's after stops at {stops:?}:\n{}\n---\n{}",
+                name.display(),
+                String::from_utf8_lossy(bytes),
+                String::from_utf8_lossy(&resumed[name])
+            );
+        }
     }
     let series = String::from_utf8(resumed[Path::new("timeseries.csv")].clone()).expect("utf-8");
     let total = |name: &str| -> i64 {
