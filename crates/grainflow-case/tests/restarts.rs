@@ -145,8 +145,7 @@ fn stopped_and_continued(case: &Path, dir: &Path, stops: &[(u64, Stop)]) {
     };
     let last_snapshot = resumed
         .iter()
-        .filter(|(p, _)| p.starts_with("snapshots"))
-        .last()
+        .rfind(|(p, _)| p.starts_with("snapshots"))
         .map(|(_, b)| String::from_utf8_lossy(b).lines().count() as i64 - 1)
         .expect("a snapshot");
     assert_eq!(total("inserted") - total("removed"), last_snapshot, "the books do not close:\n{series}");
@@ -185,7 +184,7 @@ fn the_last_step_has_a_checkpoint() {
     let config = grainflow_case::load(&case).unwrap().config;
     let sim = grainflow::Simulation::restore(config, &bytes, None).expect("restores");
     assert_eq!((sim.step_index(), s.start_step + s.steps), (sim.total_steps(), sim.total_steps()));
-    assert!(sim.total_steps() % 700 != 0, "the case should end between periodic checkpoints");
+    assert!(!sim.total_steps().is_multiple_of(700), "the case should end between periodic checkpoints");
 }
 
 /// A restart checks the time series against what its checkpoint recorded: an edited row, rows
@@ -297,7 +296,7 @@ fn a_changed_case_with_other_columns_is_refused() {
         &options(&out, Some("checkpoint.gfc"), true),
         |_| {},
     );
-    let msg = r.err().expect("refused").to_string();
+    let msg = r.expect_err("refused").to_string();
     assert!(
         msg.contains(&ts.display().to_string())
             && msg.contains("mesh_gate_fx")

@@ -372,7 +372,7 @@ fn runs_killed_during_insertion_and_discharge_restart_to_the_same_bytes() {
         inserted += v[ins].parse::<i64>().expect("an integer count");
         removed += v[rem].parse::<i64>().expect("an integer count");
     }
-    let snapshot = resumed.iter().filter(|(p, _)| p.starts_with("snapshots")).last().expect("a snapshot").1;
+    let snapshot = resumed.iter().rfind(|(p, _)| p.starts_with("snapshots")).expect("a snapshot").1;
     let present = String::from_utf8_lossy(snapshot).lines().count() as i64 - 1;
     assert!(removed > 0 && inserted == 600, "inserted {inserted}, removed {removed}");
     assert_eq!(inserted - removed, present, "the books do not close");
