@@ -9,9 +9,13 @@
 //!   record it, so a restart can tell its own run's outputs from another's.
 //! - **A manifest.** `manifest.toml` lists every file the run writes, each entry appended before
 //!   the file is created: after a crash it names every file of the run.
-//! - **No silent reuse.** A fresh run into a folder that holds an earlier run's results is
-//!   refused unless the caller asks to overwrite them; overwriting removes only the files
-//!   grainflow writes (those its manifest lists and those with its names), never others.
+//! - **No silent reuse.** A fresh run into a folder that holds an earlier run's results (a
+//!   folder with grainflow's manifest or run record) is refused unless the caller asks to
+//!   overwrite them; overwriting removes only the files that run's manifest lists, never
+//!   others, and nothing through a symbolic link (a linked `snapshots/` or `vtk/` that holds
+//!   listed files is refused instead). A folder that holds only the user's own files is no
+//!   earlier run: a run writes beside them, unless one of them has a name grainflow would
+//!   write (`timeseries.csv`, `snapshots/particles_<step>.csv`, …), which is refused.
 
 use sha2::{Digest, Sha256};
 use std::fs::{File, OpenOptions};
@@ -27,11 +31,47 @@ pub const MANIFEST_FILE: &str = "manifest.toml";
 pub const RUN_INFO_FILE: &str = "run-info.toml";
 /// The time series.
 pub const TIMESERIES_FILE: &str = "timeseries.csv";
-/// Files and folders grainflow writes into an output folder besides those its manifest lists
-/// (an earlier version wrote no manifest). Folders hold only grainflow's files.
+/// Files grainflow writes at the top of an output folder: an earlier run's if that run left a
+/// run record but no manifest (an earlier version wrote none).
 const KNOWN_FILES: [&str; 5] =
     [TIMESERIES_FILE, RUN_INFO_FILE, MANIFEST_FILE, "checkpoint.gfc", "checkpoint-last-good.gfc"];
+/// The folders grainflow writes into (shared with the user's own files).
 const KNOWN_FOLDERS: [&str; 2] = ["snapshots", "vtk"];
+
+/// True for a path (relative to the folder) that grainflow's outputs may have: one of
+/// [`KNOWN_FILES`], a snapshot `snapshots/particles_<step>.csv`, or in `vtk/` a frame
+/// `<kind>_<step>.vtp`, a collection `<kind>.pvd`, `walls.vtp` or `meshes_fixed.vtp`.
+fn grainflow_named(rel: &Path) -> bool {
+    let parts: Vec<String> = rel.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+    let frame = |name: &str, kinds: &[&str], ext: &str| {
+        name.strip_suffix(ext).and_then(|stem| stem.rsplit_once('_')).is_some_and(|(kind, step)| {
+            kinds.contains(&kind) && step.len() == 9 && step.bytes().all(|b| b.is_ascii_digit())
+        })
+    };
+    match parts.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
+        [name] => KNOWN_FILES.contains(name),
+        ["snapshots", name] => frame(name, &["particles"], ".csv"),
+        ["vtk", name] => {
+            frame(name, &["particles", "contacts", "meshes"], ".vtp")
+                || ["particles.pvd", "contacts.pvd", "meshes.pvd", "walls.vtp", crate::vtk::FIXED_MESHES_FILE]
+                    .contains(name)
+        }
+        _ => false,
+    }
+}
+
+/// The first part of `rel` (relative to `dir`: a folder on the way or the file itself) that
+/// is a symbolic link, if any.
+fn link_on_the_way(dir: &Path, rel: &Path) -> Option<PathBuf> {
+    let mut p = PathBuf::new();
+    for c in rel.components() {
+        p.push(c);
+        if std::fs::symlink_metadata(dir.join(&p)).is_ok_and(|m| m.file_type().is_symlink()) {
+            return Some(p);
+        }
+    }
+    None
+}
 
 /// Why a folder cannot take a run's outputs.
 #[derive(Debug, thiserror::Error)]
@@ -55,6 +95,30 @@ pub enum FolderError {
         earlier: String,
         /// What the user can do.
         advice: String,
+    },
+    /// The folder holds files with the names grainflow writes that no manifest lists, which
+    /// the run would replace.
+    #[error(
+        "{dir} holds files with the names grainflow writes that no grainflow manifest lists ({files}): this run would replace them, and --overwrite removes only the files a manifest lists. Move them elsewhere, or choose another --out"
+    )]
+    Strangers {
+        /// The folder.
+        dir: PathBuf,
+        /// Those files, relative to it.
+        files: String,
+    },
+    /// An earlier run's files lie behind a symbolic link, through which `--overwrite` removes
+    /// nothing.
+    #[error(
+        "{dir}: {link} is a symbolic link, and {count} of the earlier run's files lie behind it; --overwrite removes nothing through a link (its target is not this folder's). Remove those files yourself, or choose another --out"
+    )]
+    Linked {
+        /// The folder.
+        dir: PathBuf,
+        /// The link, relative to the folder.
+        link: String,
+        /// The earlier run's files behind it.
+        count: usize,
     },
     /// The folder cannot be created, locked or written.
     #[error("cannot use {path} as the output folder: {source}")]
@@ -96,6 +160,9 @@ struct Earlier {
     case: Option<String>,
     /// Files of it that are there (relative paths).
     files: Vec<PathBuf>,
+    /// Files with the names grainflow writes that are there but not the earlier run's (no
+    /// manifest lists them).
+    strangers: Vec<PathBuf>,
 }
 
 impl Earlier {
@@ -137,36 +204,49 @@ fn toml_string(text: &str, key: &str) -> Option<String> {
     })
 }
 
-/// The files an earlier run left in `dir`: those its manifest lists, those with grainflow's
-/// names, and everything in the folders only grainflow writes, that exist.
+/// The files an earlier run left in `dir`: those its manifest lists and its own records (or,
+/// for a run of a version that wrote no manifest, the files of [`KNOWN_FILES`]), that exist;
+/// and the files with grainflow's names that are not among them.
 fn earlier_run(dir: &Path) -> Earlier {
     let mut e = Earlier::default();
     let mut files: Vec<PathBuf> = Vec::new();
-    if let Some(info) = read_small(&dir.join(RUN_INFO_FILE)) {
-        e.run_id = toml_string(&info, "run_id");
-        e.status = toml_string(&info, "status");
-        e.case = toml_string(&info, "case_file");
+    let info = read_small(&dir.join(RUN_INFO_FILE));
+    if let Some(info) = &info {
+        e.run_id = toml_string(info, "run_id");
+        e.status = toml_string(info, "status");
+        e.case = toml_string(info, "case_file");
     }
-    if let Some(manifest) = read_small(&dir.join(MANIFEST_FILE)) {
-        if e.run_id.is_none() {
-            e.run_id = toml_string(&manifest, "run_id");
-        }
-        files.extend(manifest_paths(&manifest));
-    }
-    files.extend(KNOWN_FILES.iter().map(PathBuf::from));
-    for folder in KNOWN_FOLDERS {
-        if let Ok(entries) = std::fs::read_dir(dir.join(folder)) {
-            for entry in entries.flatten() {
-                if entry.file_type().is_ok_and(|t| t.is_file()) {
-                    files.push(Path::new(folder).join(entry.file_name()));
-                }
+    match read_small(&dir.join(MANIFEST_FILE)) {
+        Some(manifest) => {
+            if e.run_id.is_none() {
+                e.run_id = toml_string(&manifest, "run_id");
             }
+            files.extend(manifest_paths(&manifest));
+            files.extend([MANIFEST_FILE, RUN_INFO_FILE].map(PathBuf::from));
         }
+        None if info.is_some() => files.extend(KNOWN_FILES.iter().map(PathBuf::from)),
+        None => {}
     }
     files.sort();
     files.dedup();
     files.retain(|f| is_inside(f) && std::fs::symlink_metadata(dir.join(f)).is_ok());
+    let mut strangers: Vec<PathBuf> = KNOWN_FILES.iter().map(PathBuf::from).collect();
+    for folder in KNOWN_FOLDERS {
+        if link_on_the_way(dir, Path::new(folder)).is_some() {
+            continue;
+        }
+        if let Ok(entries) = std::fs::read_dir(dir.join(folder)) {
+            strangers.extend(entries.flatten().map(|entry| Path::new(folder).join(entry.file_name())));
+        }
+    }
+    strangers.retain(|f| {
+        grainflow_named(f)
+            && std::fs::symlink_metadata(dir.join(f)).is_ok()
+            && files.binary_search(f).is_err()
+    });
+    strangers.sort();
     e.files = files;
+    e.strangers = strangers;
     e
 }
 
@@ -314,6 +394,29 @@ impl OutputFolder {
             }
             remove_files(dir, &earlier.files, keep)?;
         }
+        if !continues {
+            // Files with grainflow's names that no manifest lists: another run's, copied here,
+            // or the user's. The run would replace them; --overwrite does not remove them.
+            let keep = keep.and_then(|k| k.canonicalize().ok());
+            let strangers: Vec<String> = earlier
+                .strangers
+                .iter()
+                .filter(|f| keep.is_none() || dir.join(f).canonicalize().ok() != keep)
+                .map(|f| f.display().to_string())
+                .collect();
+            if !strangers.is_empty() {
+                let shown = strangers.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
+                let more = if strangers.len() > 5 {
+                    format!(" and {} more", strangers.len() - 5)
+                } else {
+                    String::new()
+                };
+                return Err(FolderError::Strangers {
+                    dir: dir.to_path_buf(),
+                    files: format!("{shown}{more}"),
+                });
+            }
+        }
         let manifest_path = dir.join(MANIFEST_FILE);
         let mut listed = std::collections::HashSet::new();
         let manifest = if continues && manifest_path.exists() {
@@ -357,6 +460,12 @@ impl OutputFolder {
         self.continues
     }
 
+    /// True if the manifest lists `file` (relative to the folder): a file of this run (or of
+    /// the run it continues).
+    pub fn lists(&self, file: &Path) -> bool {
+        self.listed.contains(file)
+    }
+
     /// Lists `file` (relative to the folder) in the manifest, once; call before writing it.
     pub fn record(&mut self, file: &Path) -> Result<(), FolderError> {
         if self.listed.contains(file) {
@@ -386,6 +495,9 @@ fn is_temporary(name: &str) -> bool {
 /// living run is writing them).
 fn remove_temporaries(dir: &Path) -> Result<(), FolderError> {
     for sub in std::iter::once("").chain(KNOWN_FOLDERS) {
+        if !sub.is_empty() && link_on_the_way(dir, Path::new(sub)).is_some() {
+            continue;
+        }
         let Ok(entries) = std::fs::read_dir(dir.join(sub)) else { continue };
         for entry in entries.flatten() {
             if is_temporary(&entry.file_name().to_string_lossy())
@@ -408,9 +520,18 @@ fn same_folder(file: &Path, dir: &Path) -> bool {
     }
 }
 
-/// Removes an earlier run's files (all but `keep`), then the folders only grainflow writes if
-/// they are left empty.
+/// Removes an earlier run's files (all but `keep`), then the folders grainflow writes into if
+/// they are left empty. Nothing is removed through a symbolic link: if one of the files lies
+/// behind one (or is one), nothing is removed and the folder is refused.
 fn remove_files(dir: &Path, files: &[PathBuf], keep: Option<&Path>) -> Result<(), FolderError> {
+    let linked: Vec<PathBuf> = files.iter().filter_map(|f| link_on_the_way(dir, f)).collect();
+    if let Some(link) = linked.first() {
+        return Err(FolderError::Linked {
+            dir: dir.to_path_buf(),
+            link: link.display().to_string(),
+            count: linked.iter().filter(|l| *l == link).count(),
+        });
+    }
     let keep = keep.and_then(|k| k.canonicalize().ok());
     for f in files {
         let path = dir.join(f);
@@ -456,29 +577,100 @@ mod tests {
         let d = tempfile::tempdir().unwrap();
         let dir = d.path();
         let mut run = claim(dir, &Intent::Fresh, false).unwrap();
-        run.record(Path::new("timeseries.csv")).unwrap();
-        run.record(Path::new("snapshots/particles_000000000.csv")).unwrap();
+        for f in
+            ["timeseries.csv", "snapshots/particles_000000000.csv", "vtk/particles.pvd", "checkpoint.gfc"]
+        {
+            run.record(Path::new(f)).unwrap();
+        }
         drop(run);
         std::fs::create_dir(dir.join("snapshots")).unwrap();
-        for f in ["timeseries.csv", "snapshots/particles_000000000.csv", "notes.txt", "checkpoint.gfc"] {
+        std::fs::create_dir(dir.join("vtk")).unwrap();
+        let users =
+            ["notes.txt", "snapshots/my-plot-data.csv", "vtk/my-state.pvsm", "snapshots/particles_1.csv"];
+        for f in
+            ["timeseries.csv", "snapshots/particles_000000000.csv", "vtk/particles.pvd", "checkpoint.gfc"]
+                .iter()
+                .chain(&users)
+        {
             std::fs::write(dir.join(f), "x").unwrap();
         }
         let e = claim(dir, &Intent::Fresh, false).expect_err("earlier results");
         assert!(matches!(e, FolderError::Occupied { .. }), "{e}");
+        assert!(e.to_string().contains("5 files"), "the manifest's 4 and itself: {e}");
         assert!(dir.join("timeseries.csv").exists());
         let _new = claim(dir, &Intent::Fresh, true).expect("overwrite");
-        for gone in ["timeseries.csv", "snapshots", "checkpoint.gfc"] {
+        for gone in
+            ["timeseries.csv", "snapshots/particles_000000000.csv", "vtk/particles.pvd", "checkpoint.gfc"]
+        {
             assert!(!dir.join(gone).exists(), "{gone} left behind");
         }
-        assert_eq!(std::fs::read_to_string(dir.join("notes.txt")).unwrap(), "x", "a user's file removed");
+        for f in users {
+            assert_eq!(std::fs::read_to_string(dir.join(f)).unwrap(), "x", "the user's {f} removed");
+        }
+    }
+
+    /// `--overwrite` removes nothing through a symbolic link: an earlier run's snapshots behind
+    /// a linked `snapshots/` are kept, the run is refused naming the link, and nothing else in
+    /// the folder is removed either.
+    #[cfg(unix)]
+    #[test]
+    fn overwriting_never_follows_a_link() {
+        let d = tempfile::tempdir().unwrap();
+        let (dir, elsewhere) = (d.path().join("out"), d.path().join("elsewhere"));
+        std::fs::create_dir_all(&elsewhere).unwrap();
+        let mut run = claim(&dir, &Intent::Fresh, false).unwrap();
+        run.record(Path::new("timeseries.csv")).unwrap();
+        run.record(Path::new("snapshots/particles_000000000.csv")).unwrap();
+        drop(run);
+        std::os::unix::fs::symlink(&elsewhere, dir.join("snapshots")).unwrap();
+        std::fs::write(elsewhere.join("particles_000000000.csv"), "theirs").unwrap();
+        std::fs::write(dir.join("timeseries.csv"), "rows").unwrap();
+        let e = claim(&dir, &Intent::Fresh, true).expect_err("a linked folder");
+        assert!(matches!(e, FolderError::Linked { .. }), "{e}");
+        assert!(
+            e.to_string().contains("snapshots is a symbolic link, and 1 of the earlier run's files"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read_to_string(elsewhere.join("particles_000000000.csv")).unwrap(), "theirs");
+        assert!(dir.join("timeseries.csv").exists() && dir.join("manifest.toml").exists());
+    }
+
+    /// A folder holding only the user's own files is no earlier run: a run writes beside them.
+    /// One of them with a name grainflow writes is refused, with or without --overwrite, and
+    /// without recommending it.
+    #[test]
+    fn a_folder_of_the_users_own_files_is_no_earlier_run() {
+        let d = tempfile::tempdir().unwrap();
+        let dir = d.path();
+        std::fs::create_dir(dir.join("snapshots")).unwrap();
+        std::fs::write(dir.join("snapshots/my-plot-data.csv"), "mine").unwrap();
+        let run = claim(dir, &Intent::Fresh, false).expect("the user's files only");
+        drop(run);
+        assert_eq!(std::fs::read_to_string(dir.join("snapshots/my-plot-data.csv")).unwrap(), "mine");
+        let d = tempfile::tempdir().unwrap();
+        let dir = d.path();
+        std::fs::create_dir(dir.join("snapshots")).unwrap();
+        std::fs::write(dir.join("snapshots/particles_000001000.csv"), "copied").unwrap();
+        for overwrite in [false, true] {
+            let e = claim(dir, &Intent::Fresh, overwrite).expect_err("a file grainflow would replace");
+            let msg = e.to_string();
+            assert!(matches!(e, FolderError::Strangers { .. }), "{msg}");
+            assert!(
+                msg.contains("snapshots/particles_000001000.csv") && !msg.contains("add --overwrite"),
+                "{msg}"
+            );
+        }
+        assert_eq!(std::fs::read_to_string(dir.join("snapshots/particles_000001000.csv")).unwrap(), "copied");
     }
 
     #[test]
     fn a_restart_continues_only_its_own_run() {
         let d = tempfile::tempdir().unwrap();
         let dir = d.path();
-        let run = claim(dir, &Intent::Fresh, false).unwrap();
+        let mut run = claim(dir, &Intent::Fresh, false).unwrap();
         let id = run.run_id().to_string();
+        run.record(Path::new("timeseries.csv")).unwrap();
+        run.record(Path::new("checkpoint.gfc")).unwrap();
         drop(run);
         std::fs::write(dir.join("timeseries.csv"), "rows").unwrap();
         let ckpt = dir.join("checkpoint.gfc");

@@ -18,7 +18,8 @@
 use crate::case::{Case, OutputSettings};
 use crate::outdir::{FolderError, Intent, OutputFolder, RUN_INFO_FILE, TIMESERIES_FILE};
 use crate::output::{
-    TimeSeriesWriter, mesh_columns, rotation_axis, snapshot_csv, write_atomic, write_atomic_with,
+    ResumeError, SeriesRecord, TimeSeriesWriter, Value, mesh_columns, rotation_axis, snapshot_csv,
+    write_atomic, write_atomic_with,
 };
 use crate::vtk::{FIXED_MESHES_FILE, MeshShape, VtkSeries};
 use grainflow::{Diagnostics, Simulation, Vec3};
@@ -585,19 +586,86 @@ fn step_of(name: &str) -> Option<u64> {
 
 /// Removes the snapshots and VTK frames (particles, contacts, moving meshes) after `step`
 /// that an earlier attempt of the run being continued left: the continued run writes its own.
+/// Only files the manifest lists are removed, and none reached through a symbolic link.
 fn drop_later_frames(folder: &OutputFolder, step: u64) -> Result<(), OutputError> {
     for sub in ["snapshots", "vtk"] {
         let dir = folder.dir().join(sub);
+        if std::fs::symlink_metadata(&dir).is_ok_and(|m| m.file_type().is_symlink()) {
+            continue;
+        }
         let Ok(entries) = std::fs::read_dir(&dir) else { continue };
         for entry in entries.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
-            if step_of(&name).is_some_and(|s| s > step) && entry.file_type().is_ok_and(|t| t.is_file()) {
+            let listed = folder.lists(&Path::new(sub).join(&name));
+            if listed
+                && step_of(&name).is_some_and(|s| s > step)
+                && entry.file_type().is_ok_and(|t| t.is_file())
+            {
                 let path = entry.path();
                 std::fs::remove_file(&path).map_err(io_err(&path))?;
             }
         }
     }
     Ok(())
+}
+
+/// What a checkpoint records of the outputs beside the state ([`Simulation::checkpoint_note`]):
+/// what the time series held before the checkpoint's step, and the flow books at the last row
+/// before it (the flow columns of the next row count from there). Written as lines of
+/// `key value…`, so that further records are further keys; a reader ignores keys it does not
+/// know.
+#[derive(Debug, Clone, Default, PartialEq)]
+struct RunNote {
+    series: Option<SeriesRecord>,
+    /// Inserted and removed (count, mass units) at the last scheduled row before the step.
+    flow: Option<[grainflow::Tally; 2]>,
+}
+
+/// The first line of a [`RunNote`].
+const NOTE_SIGNATURE: &str = "grainflow run note 1";
+
+impl RunNote {
+    fn encode(&self) -> Vec<u8> {
+        let mut s = format!("{NOTE_SIGNATURE}\n");
+        if let Some(r) = &self.series {
+            s.push_str(&format!("series {} {} {} {}\n", r.rows, r.bytes, r.sha256, u8::from(r.row_at_step)));
+        }
+        if let Some([i, r]) = &self.flow {
+            s.push_str(&format!("flow {} {} {} {}\n", i.count, i.units, r.count, r.units));
+        }
+        s.into_bytes()
+    }
+
+    /// The note in `bytes` (none: a checkpoint written by another program, or before notes).
+    fn decode(bytes: &[u8]) -> Option<RunNote> {
+        let text = std::str::from_utf8(bytes).ok()?;
+        let mut lines = text.lines();
+        if lines.next()? != NOTE_SIGNATURE {
+            return None;
+        }
+        let mut note = RunNote::default();
+        for line in lines {
+            let f: Vec<&str> = line.split_whitespace().collect();
+            match f.as_slice() {
+                ["series", rows, bytes, hash, at] => {
+                    note.series = Some(SeriesRecord {
+                        rows: rows.parse().ok()?,
+                        bytes: bytes.parse().ok()?,
+                        sha256: hash.to_string(),
+                        row_at_step: *at == "1",
+                    });
+                }
+                ["flow", ic, iu, rc, ru] => {
+                    let t = |c: &str, u: &str| -> Option<grainflow::Tally> {
+                        Some(grainflow::Tally { count: c.parse().ok()?, units: u.parse().ok()? })
+                    };
+                    note.flow = Some([t(ic, iu)?, t(rc, ru)?]);
+                }
+                _ => {}
+            }
+        }
+        Some(note)
+    }
 }
 
 /// The time series' columns of the mesh walls' loads, and how each is measured.
@@ -608,9 +676,20 @@ struct MeshLoads {
     about: Vec<Vec3>,
     /// Each mesh's rotation axis (a point on it, unit direction), if it has one.
     axes: Vec<Option<(Vec3, Vec3)>>,
-    /// With insertions or outlets: the inserted and removed tallies at the last row (the
+    /// With insertions or outlets: the inserted and removed tallies at the last rows (the
     /// flow columns count what came and went since).
-    flow: Option<std::sync::Mutex<(grainflow::Tally, grainflow::Tally)>>,
+    flow: Option<std::sync::Mutex<FlowMarks>>,
+}
+
+/// The inserted and removed tallies at the last scheduled row of the time series (`last`,
+/// of step `last_step`) and at the one before it (`before`): a checkpoint of step s records
+/// those of the last row before s, from which the row of s (if rewritten) and the next rows
+/// count.
+#[derive(Debug, Clone, Copy, Default)]
+struct FlowMarks {
+    last: [grainflow::Tally; 2],
+    last_step: Option<u64>,
+    before: [grainflow::Tally; 2],
 }
 
 /// The time series' columns of the insertions and outlets: what came in and went out since
@@ -629,40 +708,57 @@ impl MeshLoads {
         MeshLoads { columns, about: case.mesh_torque_about.clone(), axes, flow: flow.then(Default::default) }
     }
 
-    /// The flow columns count from the books of `sim` (a restarted run's), or from nothing
-    /// (a fresh run, whose first row counts the insertions made at its start).
-    fn start_flow(&self, sim: &Simulation, fresh: bool) {
-        if let Some(last) = &self.flow {
+    /// The flow columns count from nothing (a fresh run, whose first row counts the insertions
+    /// made at its start), from `from` (a restart: the books at the last row kept before the
+    /// checkpoint's step, as the checkpoint recorded them), or from the books of `sim` (a
+    /// restart whose row of its step was kept, or that starts a series of its own).
+    fn start_flow(&self, sim: &Simulation, fresh: bool, from: Option<[grainflow::Tally; 2]>) {
+        if let Some(marks) = &self.flow {
             let b = sim.flow_books();
-            let now = if fresh { Default::default() } else { (b.inserted_total(), b.removed_total()) };
-            *last.lock().unwrap_or_else(|e| e.into_inner()) = now;
+            let now = [b.inserted_total(), b.removed_total()];
+            let last = if fresh { Default::default() } else { from.unwrap_or(now) };
+            let step = (!fresh && from.is_none()).then(|| sim.step_index());
+            *marks.lock().unwrap_or_else(|e| e.into_inner()) =
+                FlowMarks { last, last_step: step, before: last };
         }
+    }
+
+    /// The flow books at the last scheduled row before `step`, for a checkpoint of `step`.
+    fn flow_before(&self, step: u64) -> Option<[grainflow::Tally; 2]> {
+        let m = *self.flow.as_ref()?.lock().unwrap_or_else(|e| e.into_inner());
+        Some(if m.last_step == Some(step) { m.before } else { m.last })
     }
 
     /// The row's values, mesh after mesh: the force the particles exert on it at the last
     /// force evaluation, its torque about the mesh's point, and for a mesh with an axis that
     /// torque's component along the axis (about a point of the axis: τ_o = τ_a + (a − o) × F).
-    fn values(&self, sim: &Simulation) -> Vec<f64> {
-        let mut v = Vec::with_capacity(self.columns.len());
+    /// A row on the output schedule (`scheduled`) is the one the next counts from; the extra
+    /// row of an interrupted run is not (a restart drops it).
+    fn values(&self, sim: &Simulation, scheduled: bool) -> Vec<Value> {
+        let mut v: Vec<Value> = Vec::with_capacity(self.columns.len());
         for (m, (&about, axis)) in self.about.iter().zip(&self.axes).enumerate() {
             let load = sim.mesh_load(m, about);
-            v.extend(load.force.to_array());
-            v.extend(load.torque.to_array());
+            v.extend(load.force.to_array().map(Value::Real));
+            v.extend(load.torque.to_array().map(Value::Real));
             if let Some((origin, direction)) = axis {
-                v.push(direction.dot(load.torque + (about - *origin).cross(load.force)));
+                v.push(Value::Real(direction.dot(load.torque + (about - *origin).cross(load.force))));
             }
         }
-        if let Some(last) = &self.flow {
+        if let Some(marks) = &self.flow {
             let b = sim.flow_books();
-            let (i, r) = (b.inserted_total(), b.removed_total());
-            let (i0, r0) = std::mem::replace(&mut *last.lock().unwrap_or_else(|e| e.into_inner()), (i, r));
+            let now = [b.inserted_total(), b.removed_total()];
+            let mut m = marks.lock().unwrap_or_else(|e| e.into_inner());
+            let [i0, r0] = m.last;
+            if scheduled {
+                *m = FlowMarks { last: now, last_step: Some(sim.step_index()), before: m.last };
+            }
             let q = b.quantum;
             let since = |a: grainflow::Tally, b: grainflow::Tally| {
-                [(a.count - b.count) as f64, (a.units - b.units) as f64 * q]
+                [Value::Count(a.count - b.count), Value::Real((a.units - b.units) as f64 * q)]
             };
-            v.extend(since(i, i0));
-            v.extend(since(r, r0));
-            v.push(b.mass(b.present));
+            v.extend(since(now[0], i0));
+            v.extend(since(now[1], r0));
+            v.push(Value::Real(b.mass(b.present)));
         }
         v
     }
@@ -712,16 +808,31 @@ fn run_simulation(
     // checkpoint's step (written before the checkpoint, from the same state) instead of
     // writing it again without them.
     let every = output_every(interval, sim.dt(), sim.total_steps());
-    let keep_row =
-        !options.accept_changed_case && !mesh_loads.columns.is_empty() && start_step.is_multiple_of(every);
-    mesh_loads.start_flow(sim, options.restart.is_none());
+    // The output steps: the first, every `every`-th and the last.
+    let on_schedule = start_step == 0 || start_step.is_multiple_of(every) || sim.finished();
+    let keep_row = !options.accept_changed_case && !mesh_loads.columns.is_empty() && on_schedule;
+    // What the checkpoint recorded of the outputs (none for a fresh run, or a checkpoint
+    // written before such records).
+    let note = options.restart.as_ref().and_then(|_| RunNote::decode(sim.checkpoint_note()));
     let (mut ts, row_kept) = if folder.continues() {
+        // The time series is checked before anything in the folder is changed.
+        let expected = note.as_ref().and_then(|n| n.series.as_ref());
+        let resumed = TimeSeriesWriter::resume(&ts_path, start_step, &mesh_loads.columns, keep_row, expected)
+            .map_err(|e| match e {
+                ResumeError::Io(e) => RunError::Output(io_err(&ts_path)(e)),
+                ResumeError::Changed(message) => {
+                    RunError::Restart { path: options.restart.clone().unwrap_or_default(), message }
+                }
+            })?;
         drop_later_frames(folder, start_step)?;
-        TimeSeriesWriter::resume(&ts_path, start_step, &mesh_loads.columns, keep_row)
+        resumed
     } else {
-        TimeSeriesWriter::create(&ts_path, &mesh_loads.columns).map(|w| (w, false))
-    }
-    .map_err(io_err(&ts_path))?;
+        TimeSeriesWriter::create(&ts_path, &mesh_loads.columns)
+            .map(|w| (w, false))
+            .map_err(io_err(&ts_path))?
+    };
+    let flow_from = if folder.continues() && !row_kept { note.as_ref().and_then(|n| n.flow) } else { None };
+    mesh_loads.start_flow(sim, options.restart.is_none(), flow_from);
     let mut files = vec![ts_path.clone()];
     let vtk_dir = out.join("vtk");
     let mut vtk = match vtk_interval {
@@ -746,17 +857,21 @@ fn run_simulation(
     };
     let vtk_every = vtk.as_ref().map(|(_, k)| *k);
     let checkpoint_path = out.join(CHECKPOINT_FILE);
+    // The row and snapshot of an output (`scheduled`: on the output schedule; the extra row
+    // of an interrupted run comes without a snapshot, which the uninterrupted run has not:
+    // the checkpoint holds that state).
     let emit = |sim: &Simulation,
                 ts: &mut TimeSeriesWriter,
                 folder: &mut OutputFolder,
                 files: &mut Vec<PathBuf>,
-                row: bool|
+                row: bool,
+                scheduled: bool|
      -> Result<Diagnostics, RunError> {
         let d = sim.diagnostics();
         if row {
-            ts.write(&d, &mesh_loads.values(sim)).map_err(io_err(&ts_path))?;
+            ts.write(&d, &mesh_loads.values(sim, scheduled)).map_err(io_err(&ts_path))?;
         }
-        if snapshots {
+        if snapshots && scheduled {
             let name = format!("particles_{:09}.csv", sim.step_index());
             folder.record(&Path::new("snapshots").join(&name))?;
             let path = snap_dir.join(name);
@@ -796,17 +911,24 @@ fn run_simulation(
     if let Some(problem) = health_problem(sim, health) {
         return Err(RunError::Engine(grainflow::EngineError::BadReference(problem)));
     }
+    // What a checkpoint of the current step records of the outputs.
+    let note = |ts: &TimeSeriesWriter, step: u64| {
+        RunNote { series: Some(ts.record_before(step)), flow: mesh_loads.flow_before(step) }.encode()
+    };
+    sim.set_checkpoint_note(note(&ts, sim.step_index()));
     let mut last_good =
         LastGood::new(sim, hash, &out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
-    let (first, mut outputs) = if start_step == 0 || start_step.is_multiple_of(every) {
-        (emit(sim, &mut ts, folder, &mut files, !row_kept)?, usize::from(!row_kept))
+    let (first, mut outputs) = if on_schedule {
+        (emit(sim, &mut ts, folder, &mut files, !row_kept, true)?, usize::from(!row_kept))
     } else {
         (sim.diagnostics(), 0)
     };
-    write_vtk(sim, &mut vtk, folder, start_step == 0 || start_step.is_multiple_of(every))?;
+    // A restart writes the frame of its step only if it is due (the first and last steps
+    // always are), as the uninterrupted run did.
+    write_vtk(sim, &mut vtk, folder, start_step == 0 || sim.finished())?;
     on_progress(sim);
     let builds_before = sim.neighbors().stats().builds;
     let start = Instant::now();
@@ -842,12 +964,13 @@ fn run_simulation(
             // Keeping a copy of the state costs a pass over it: refresh it at outputs and
             // every tenth check, not at every check.
             if output_now || step.is_multiple_of(10 * HEALTH_EVERY) {
+                sim.set_checkpoint_note(note(&ts, step));
                 last_good.keep(sim)?;
             }
         }
         let t_out = Instant::now();
         if output_now {
-            last = emit(sim, &mut ts, folder, &mut files, true)?;
+            last = emit(sim, &mut ts, folder, &mut files, true, true)?;
             outputs += 1;
         }
         write_vtk(sim, &mut vtk, folder, end)?;
@@ -861,15 +984,19 @@ fn run_simulation(
         let stop = options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
         if stop && !end && !output_now {
             // The rows of an interrupted run end at the step it stopped at.
-            last = emit(sim, &mut ts, folder, &mut files, true)?;
+            last = emit(sim, &mut ts, folder, &mut files, true, false)?;
             outputs += 1;
         }
-        if (due || stop) && !end {
+        // With checkpoints on, the last step has one too: a chained restart (a longer t_stop,
+        // with --accept-changed-case) goes on from the end, not from an earlier checkpoint.
+        let last_checkpoint_due = end && options.checkpoint_every.is_some();
+        if ((due || stop) && !end) || last_checkpoint_due {
             // The rows and the list of files up to the checkpoint are on the disk before it is:
             // a restart from it finds them all.
             ts.sync().map_err(io_err(&ts_path))?;
             folder.record(Path::new(CHECKPOINT_FILE))?;
             folder.sync()?;
+            sim.set_checkpoint_note(note(&ts, step));
             write_atomic_with(&checkpoint_path, |w| sim.write_checkpoint(hash, w))
                 .map_err(io_err(&checkpoint_path))?;
             checkpoint = Some(checkpoint_path.clone());

@@ -150,8 +150,9 @@ fn a_run_with_insertions_restarts_with_a_changed_case() {
     };
     let r = run_case(grainflow_case::load(&path).expect("case"), &out, &again, |_| {})
         .expect("the changed case restarts");
-    // The checkpoint of step 1000 (t = 0.01 s) holds the present particle and the batches
-    // of 0 and 5 ms; the restart runs on to 0.03 s, past the first run's end.
-    assert_eq!(r.particles.0, 21, "the restart starts with the checkpoint's particles");
+    // The checkpoint of the last step (t = 0.02 s: with checkpoints on, the last step has
+    // one) holds the particles the first run ended with; the restart runs on to 0.03 s.
+    assert_eq!(r.particles.0, s.particles.1, "the restart starts with the checkpoint's particles");
+    assert_eq!(r.start_step, s.start_step + s.steps, "it starts where the first run ended");
     assert!(r.particles.1 > s.particles.1, "and goes on inserting: {:?} {:?}", r.particles, s.particles);
 }

@@ -163,20 +163,22 @@ pub struct RunArgs {
     /// another run is writing into is always refused.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Replace the results of an earlier run in the output folder (only the files grainflow
-    /// wrote; nothing else in the folder is touched).
+    /// Replace the results of an earlier run in the output folder (only the files its
+    /// manifest lists, and nothing through a symbolic link; nothing else in the folder is
+    /// touched).
     #[arg(long)]
     overwrite: bool,
     /// No progress bar or progress lines (the summary is still printed).
     #[arg(long, short)]
     quiet: bool,
     /// Write OUT/checkpoint.gfc every N steps ("5000") or every so much wall-clock time
-    /// ("90s", "15min", "2h"); written atomically, the previous one survives a crash.
+    /// ("90s", "15min", "2h"), and at the last step; written atomically, the previous one
+    /// survives a crash.
     #[arg(long, value_name = "STEPS|TIME", value_parser = parse_checkpoint_every)]
     checkpoint_every: Option<CheckpointEvery>,
     /// Continue from a checkpoint of this case (bit-identical to an uninterrupted run), in the
     /// checkpoint's folder unless --out says otherwise; the time series of the same run is
-    /// kept up to the checkpoint's step.
+    /// kept up to the checkpoint's step (refused if it changed since the checkpoint).
     #[arg(long, value_name = "FILE")]
     restart: Option<PathBuf>,
     /// With --restart: accept a checkpoint written before the case file was changed (e.g.

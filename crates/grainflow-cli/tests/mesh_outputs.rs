@@ -379,15 +379,35 @@ fn a_restart_continues_the_mesh_outputs_and_the_manifest_lists_them() {
     let full = dir.path().join("full");
     run(&[&case, &"--out", &full]);
     let part = dir.path().join("part");
-    // Checkpoints every 3000 steps: the last at step 9000, an output step (every 10 steps)
-    // and a VTK frame's (every 1000).
-    run(&[&case, &"--out", &part, &"--checkpoint-every", &"3000"]);
+    // Checkpoints every 3000 steps, the run stopped (as by SIGINT) at step 9000, an output
+    // step (every 10 steps) and a VTK frame's (every 1000), whose checkpoint it writes.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let options = grainflow_case::run::RunOptions {
+        checkpoint_every: Some(grainflow_case::run::CheckpointEvery::Steps(3000)),
+        stop: Some(stop.clone()),
+        ..Default::default()
+    };
+    let stopped =
+        grainflow_case::run::run_case(grainflow_case::load(&case).expect("case"), &part, &options, |sim| {
+            if sim.step_index() >= 9000 {
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            }
+        })
+        .expect("runs");
+    assert!(stopped.interrupted && stopped.start_step + stopped.steps == 9000, "{stopped:?}");
     let ckpt = part.join("checkpoint.gfc");
-    // The rows after the checkpoint spoilt, and a stray later frame: the restart rewrites them.
+    // Rows after the checkpoint, spoilt, and a stray later frame: the restart rewrites them.
+    let ts = std::fs::read_to_string(part.join("timeseries.csv")).expect("time series");
+    std::fs::write(part.join("timeseries.csv"), ts.clone() + "9010,0e0\n9500,garbage\n").expect("write");
     let ts = std::fs::read_to_string(part.join("timeseries.csv")).expect("time series");
     let keep: Vec<&str> = ts.lines().take_while(|l| !l.starts_with("9500,")).collect();
     std::fs::write(part.join("timeseries.csv"), keep.join("\n") + "\n9500,garbage\n").expect("write");
+    // The stray frame is listed, as the attempt that wrote it would have (a frame the
+    // manifest does not list is not the run's, and is left alone).
     std::fs::write(part.join("vtk/meshes_000009500.vtp"), "stray").expect("write");
+    let listed = std::fs::read_to_string(part.join("manifest.toml")).expect("manifest");
+    std::fs::write(part.join("manifest.toml"), listed + "[[file]]\npath = \"vtk/meshes_000009500.vtp\"\n")
+        .expect("write");
     run(&[&case, &"--restart", &ckpt]);
     let (a, b) = (outputs(&full), outputs(&part));
     assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>(), "different files");

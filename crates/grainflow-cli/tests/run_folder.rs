@@ -283,3 +283,141 @@ fn absurd_output_volumes_are_refused_before_the_run() {
     assert!(stderr(&r).contains("the run would write about"), "{}", stderr(&r));
     assert!(!out.exists(), "a refused run created its folder");
 }
+
+/// The hopper-fill-discharge example in `dir`, shortened (600 beads; the gate opens at 0.1 s;
+/// 0.5 s in all): beads are inserted up to step 816 and leave through the outlet from about
+/// step 4 000 to the end (10 214 steps).
+fn short_hopper(dir: &Path) -> PathBuf {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/hopper-fill-discharge");
+    let mut case = std::fs::read_to_string(format!("{root}/case.toml")).expect("example");
+    for (from, to) in [
+        ("t_stop = 3.5 ", "t_stop = 0.5 "),
+        ("count = 3000 ", "count = 600 "),
+        ("start = 0.6 ", "start = 0.1 "),
+        ("stop = 0.7 ", "stop = 0.2 "),
+        ("\"hopper.obj\"", &format!("\"{root}/hopper.obj\"")),
+        ("\"gate.obj\"", &format!("\"{root}/gate.obj\"")),
+    ] {
+        assert!(case.contains(from), "example changed: {from}");
+        case = case.replacen(from, to, 1);
+    }
+    let path = dir.join("hopper.toml");
+    std::fs::write(&path, case).expect("write case");
+    path
+}
+
+/// SIGTERM and SIGKILL at random moments while the hopper fills and while it discharges, each
+/// run continued from the last checkpoint: the final files equal the uninterrupted run's byte
+/// for byte, and the books close in the time series (Σ inserted − Σ removed = the beads of the
+/// last snapshot, an exact count; none at the start).
+#[test]
+fn runs_killed_during_insertion_and_discharge_restart_to_the_same_bytes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let case = short_hopper(dir.path());
+    let full = dir.path().join("full");
+    let r = run(&[&case, &"--out", &full, &"-j", &"1"]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let reference = outputs(&full);
+    let part = dir.path().join("part");
+    let ckpt = part.join("checkpoint.gfc");
+    let seed = 20_261_203;
+    let mut rng = Lcg(seed);
+    let mut stops = Vec::new();
+    for round in 0..6 {
+        let mut cmd = grainflow();
+        cmd.arg("run").arg(&case).args(["-q", "-j", "1", "--checkpoint-every", "500"]);
+        if round == 0 {
+            cmd.arg("--out").arg(&part);
+        } else {
+            cmd.arg("--restart").arg(&ckpt);
+        }
+        let mut child = cmd.stdout(Stdio::null()).stderr(Stdio::null()).spawn().expect("spawns");
+        let t0 = Instant::now();
+        while round == 0 && !ckpt.exists() && t0.elapsed() < Duration::from_secs(60) {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        std::thread::sleep(Duration::from_millis(rng.next(20, 150)));
+        let signal = if round % 2 == 0 { "-TERM" } else { "-KILL" };
+        let sent = Command::new("kill").arg(signal).arg(child.id().to_string()).status().expect("kill");
+        let status = child.wait().expect("waits");
+        if sent.success() && !status.success() {
+            stops.push(signal);
+        }
+    }
+    assert!(stops.len() >= 3, "only {stops:?} of 6 runs were stopped mid-way (seed {seed})");
+    let last = run(&[&case, &"--restart", &ckpt]);
+    assert!(last.status.success(), "{}", stderr(&last));
+    let resumed = outputs(&part);
+    let (a, b): (Vec<_>, Vec<_>) = (reference.keys().collect(), resumed.keys().collect());
+    let only = |x: &[&PathBuf], y: &[&PathBuf]| {
+        x.iter().filter(|f| !y.contains(f)).cloned().cloned().collect::<Vec<_>>()
+    };
+    assert!(
+        a == b,
+        "other files after {stops:?} (seed {seed}): only in the uninterrupted run's {:?}, only in the continued {:?}",
+        only(&a, &b),
+        only(&b, &a)
+    );
+    for (name, bytes) in &reference {
+        assert!(bytes == &resumed[name], "{} differs after {stops:?} (seed {seed})", name.display());
+    }
+    let series = String::from_utf8(resumed[Path::new("timeseries.csv")].clone()).expect("utf-8");
+    let mut lines = series.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|c| *c == name).expect("column");
+    let (ins, rem) = (col("inserted"), col("removed"));
+    let (mut inserted, mut removed) = (0i64, 0i64);
+    for l in lines {
+        let v: Vec<&str> = l.split(',').collect();
+        inserted += v[ins].parse::<i64>().expect("an integer count");
+        removed += v[rem].parse::<i64>().expect("an integer count");
+    }
+    let snapshot = resumed.iter().rfind(|(p, _)| p.starts_with("snapshots")).expect("a snapshot").1;
+    let present = String::from_utf8_lossy(snapshot).lines().count() as i64 - 1;
+    assert!(removed > 0 && inserted == 600, "inserted {inserted}, removed {removed}");
+    assert_eq!(inserted - removed, present, "the books do not close");
+}
+
+/// `--overwrite` removes the earlier run's files and nothing of the user's in `snapshots/` and
+/// `vtk/`; over a symlinked `snapshots/` holding the earlier run's snapshots it is refused
+/// (exit 2, naming the link) and the link's target keeps every file.
+#[test]
+fn overwrite_keeps_the_users_files_and_follows_no_link() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let case = settling_bed(dir.path(), "0.05");
+    let out = dir.path().join("out");
+    assert!(run(&[&case, &"--out", &out]).status.success());
+    std::fs::write(out.join("snapshots/my-plot-data.csv"), "t,h\n0,1\n").unwrap();
+    std::fs::write(out.join("vtk/my-state.pvsm"), "<ServerManagerState/>").unwrap();
+    let again = run(&[&case, &"--out", &out, &"--overwrite"]);
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert_eq!(std::fs::read_to_string(out.join("snapshots/my-plot-data.csv")).unwrap(), "t,h\n0,1\n");
+    assert_eq!(std::fs::read_to_string(out.join("vtk/my-state.pvsm")).unwrap(), "<ServerManagerState/>");
+    // The snapshots moved to another disk, linked back.
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::rename(out.join("snapshots"), &elsewhere).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, out.join("snapshots")).unwrap();
+    let there: Vec<_> = std::fs::read_dir(&elsewhere).unwrap().map(|e| e.unwrap().file_name()).collect();
+    let linked = run(&[&case, &"--out", &out, &"--overwrite"]);
+    assert_eq!(linked.status.code(), Some(2), "{}", stderr(&linked));
+    assert!(stderr(&linked).contains("snapshots is a symbolic link"), "{}", stderr(&linked));
+    let still: Vec<_> = std::fs::read_dir(&elsewhere).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(there, still, "files removed through the link");
+    assert!(out.join("timeseries.csv").exists(), "a refused run removed the earlier run's files");
+}
+
+/// A folder holding only the user's own `snapshots/` is no earlier run: the run writes beside
+/// the user's file (which the manifest does not list) and succeeds.
+#[test]
+fn a_folder_of_the_users_own_snapshots_is_no_earlier_run() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let case = settling_bed(dir.path(), "0.05");
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(out.join("snapshots")).unwrap();
+    std::fs::write(out.join("snapshots/my-plot-data.csv"), "mine").unwrap();
+    let r = run(&[&case, &"--out", &out]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert_eq!(std::fs::read_to_string(out.join("snapshots/my-plot-data.csv")).unwrap(), "mine");
+    assert!(!manifest(&out).contains(&PathBuf::from("snapshots/my-plot-data.csv")));
+    assert!(out.join("snapshots/particles_000000000.csv").exists());
+}

@@ -23,10 +23,11 @@ use thiserror::Error;
 /// order the particles are stored in; 4: the last force evaluation's load peaks, from which the
 /// next takes the quanta of its sums, and the count of evaluations with inexact sums, after
 /// the flags; 5: the mesh-wall contacts' histories, at the end; 6: each mesh wall's motion
-/// state — its anchor and its pose — after them). A checkpoint of format 2 or 3
+/// state — its anchor and its pose — after them; 7: the insertions' and outlets' state; 8: the
+/// caller's note ([`Simulation::checkpoint_note`]), last). A checkpoint of format 2 or 3
 /// continues with the quanta of its first evaluation taken afresh: not bit for bit as the run
 /// that wrote it would have gone on.
-pub const FORMAT_VERSION: u32 = 7;
+pub const FORMAT_VERSION: u32 = 8;
 /// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
@@ -279,6 +280,8 @@ struct Payload {
     mesh_motion: Option<Vec<(f64, Pose, Pose)>>,
     /// The insertions' and outlets' state (None before format 7).
     flow: Option<Vec<u64>>,
+    /// The caller's note (empty before format 8).
+    note: Vec<u8>,
 }
 
 /// f64s per mesh of the motion state: τ, then two poses of a quaternion and a translation.
@@ -375,6 +378,7 @@ impl Payload {
         } else {
             None
         };
+        let note = if version >= 8 { d.bytes("note")? } else { Vec::new() };
         let mut neighbors = neighbors;
         if version >= 3 {
             ids_to_slots(&p.id, &mut neighbors)?;
@@ -393,6 +397,7 @@ impl Payload {
             mesh_contacts,
             mesh_motion,
             flow,
+            note,
         })
     }
 }
@@ -442,6 +447,7 @@ impl Simulation {
             + (8 + 8 + 8 + 8 + (8 + 4 + 24 + 24) * self.mesh_histories().len())
             + (8 + 8 * MOTION_F64S * self.meshes().len())
             + (8 + 8 * self.flow_words().len())
+            + (8 + self.checkpoint_note().len())
     }
 
     /// Streams the checkpoint to `w` (no copy of the state in memory: a large state can go
@@ -500,6 +506,7 @@ impl Simulation {
             .collect();
         e.f64s(&motion)?;
         e.bytes(&self.flow_words().iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>())?;
+        e.bytes(self.checkpoint_note())?;
         // The header announced the payload's length before it was written.
         if e.written != payload {
             return Err(io::Error::other(format!(
@@ -602,10 +609,12 @@ impl Simulation {
             mesh_contacts,
             mesh_motion,
             flow,
+            note,
             ..
         } = payload;
         let mut sim = Simulation::unbuilt(config, particles)?;
         sim.set_run_id(run_id);
+        sim.set_checkpoint_note(note);
         sim.set_sums_state(sums.0, sums.1);
         sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
             .map_err(CheckpointError::Mismatch)?;

@@ -185,6 +185,9 @@ pub struct Simulation {
     forces_current: bool,
     /// The caller's name for the run this state belongs to, carried through checkpoints.
     run_id: String,
+    /// The caller's record kept with the state in checkpoints (see
+    /// [`checkpoint_note`](Simulation::checkpoint_note)).
+    note: Vec<u8>,
     /// Velocity Verlet between its drift and the end of the step: the positions are a step
     /// ahead of the clock.
     drifted: bool,
@@ -381,6 +384,7 @@ impl Simulation {
             kick_pending: false,
             drifted: false,
             run_id: String::new(),
+            note: Vec::new(),
             timing: None,
             pool: None,
             plan: ForcePlan::default(),
@@ -460,6 +464,20 @@ impl Simulation {
     /// Names the run (see [`run_id`](Self::run_id)).
     pub fn set_run_id(&mut self, id: impl Into<String>) {
         self.run_id = id.into();
+    }
+
+    /// The caller's record of what lies outside the state (empty unless set): bytes written
+    /// into checkpoints with the state and restored from them, untouched by the engine. The
+    /// run loop keeps in it what its output files held when the state was taken, so that a
+    /// restart can check them and continue their books.
+    pub fn checkpoint_note(&self) -> &[u8] {
+        &self.note
+    }
+
+    /// Sets the record written with the next checkpoints (see
+    /// [`checkpoint_note`](Self::checkpoint_note)).
+    pub fn set_checkpoint_note(&mut self, note: Vec<u8>) {
+        self.note = note;
     }
 
     /// Steps of the whole run.
