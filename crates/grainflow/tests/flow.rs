@@ -61,6 +61,7 @@ fn pour_config(rate: f64, outlet: bool) -> SimulationConfig {
         velocity: Vec3::new(0.0, 0.0, -0.5),
         seed: 7,
         given: Vec::new(),
+        max_initial_overlap: grainflow::insertion::DEFAULT_MAX_INITIAL_OVERLAP,
     }];
     if outlet {
         c.outlets = vec![
