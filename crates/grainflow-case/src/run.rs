@@ -549,7 +549,9 @@ pub fn health_problem(sim: &Simulation, health: Health) -> Option<String> {
             ));
         }
         let (lo, hi) = health.domain;
-        if !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any()) {
+        // A particle that has left through an outlet is removed at the outlets' next drain.
+        if !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any()) && !sim.left_through_outlet(i)
+        {
             return Some(format!(
                 "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.",
                 p.id[i],
@@ -608,14 +610,16 @@ struct MeshLoads {
     about: Vec<Vec3>,
     /// Each mesh's rotation axis (a point on it, unit direction), if it has one.
     axes: Vec<Option<(Vec3, Vec3)>>,
-    /// With insertions or outlets: the inserted and removed tallies at the last row (the
-    /// flow columns count what came and went since).
-    flow: Option<std::sync::Mutex<(grainflow::Tally, grainflow::Tally)>>,
+    /// With insertions or outlets: the inserted and removed tallies and the missed count at
+    /// the last row (the flow columns count what came, went and was missed since).
+    flow: Option<std::sync::Mutex<(grainflow::Tally, grainflow::Tally, u64)>>,
 }
 
 /// The time series' columns of the insertions and outlets: what came in and went out since
-/// the row before (count and mass, kg), and the particles' mass now, kg.
-pub const FLOW_COLUMNS: [&str; 5] = ["inserted", "inserted_mass", "removed", "removed_mass", "mass"];
+/// the row before (count and mass, kg), the particles' mass now, kg, and the particles the
+/// insertions could not place since the row before.
+pub const FLOW_COLUMNS: [&str; 6] =
+    ["inserted", "inserted_mass", "removed", "removed_mass", "mass", "missed"];
 
 impl MeshLoads {
     fn new(case: &Case) -> MeshLoads {
@@ -634,7 +638,9 @@ impl MeshLoads {
     fn start_flow(&self, sim: &Simulation, fresh: bool) {
         if let Some(last) = &self.flow {
             let b = sim.flow_books();
-            let now = if fresh { Default::default() } else { (b.inserted_total(), b.removed_total()) };
+            let missed = b.missed.iter().sum();
+            let now =
+                if fresh { Default::default() } else { (b.inserted_total(), b.removed_total(), missed) };
             *last.lock().unwrap_or_else(|e| e.into_inner()) = now;
         }
     }
@@ -654,8 +660,9 @@ impl MeshLoads {
         }
         if let Some(last) = &self.flow {
             let b = sim.flow_books();
-            let (i, r) = (b.inserted_total(), b.removed_total());
-            let (i0, r0) = std::mem::replace(&mut *last.lock().unwrap_or_else(|e| e.into_inner()), (i, r));
+            let (i, r, missed) = (b.inserted_total(), b.removed_total(), b.missed.iter().sum::<u64>());
+            let (i0, r0, missed0) =
+                std::mem::replace(&mut *last.lock().unwrap_or_else(|e| e.into_inner()), (i, r, missed));
             let q = b.quantum;
             let since = |a: grainflow::Tally, b: grainflow::Tally| {
                 [(a.count - b.count) as f64, (a.units - b.units) as f64 * q]
@@ -663,6 +670,7 @@ impl MeshLoads {
             v.extend(since(i, i0));
             v.extend(since(r, r0));
             v.push(b.mass(b.present));
+            v.push((missed - missed0) as f64);
         }
         v
     }
