@@ -596,3 +596,35 @@ fn a_thin_outlet_catches_every_particle_that_crosses_it() {
     assert_eq!(b.removed[1].count, 0, "particles passed the slab between drains: {b:?}");
     assert!(b.close());
 }
+
+/// Issue 38, item 10: an MFIX mass inflow at BC_EP_S = 0.9 promises more than any packing of
+/// its layer holds (equal spheres fill at most π/√18 = 0.7405 of a region): the shortfall is
+/// counted (asked = inserted + missed), named in a notice with the mass placed of the mass
+/// asked, and the placed mass is at most 0.7405/0.9 of the asked (each batch draws at most
+/// one bead beyond its target, 1/124 of it).
+#[test]
+fn an_mfix_mass_inflow_beyond_any_packing_reports_its_shortfall() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let deck = "RUN_NAME = 'T'\nUNITS = 'SI'\nRUN_TYPE = 'NEW'\nTSTOP = 0.5\nDT = 1.0e-3\n\
+        COORDINATES = 'CARTESIAN'\nIMAX = 4  JMAX = 4  KMAX = 4\nRO_G0 = 0.0\n\
+        KN = 1.0e4\nKN_W = 1.0e4\nMEW = 0.3\nMEW_W = 0.3\n\
+        MMAX = 1\nSOLIDS_MODEL(1) = 'DEM'\nD_P0(1) = 0.1\nRO_S0(1) = 1000.0\n\
+        DES_EN_INPUT(1) = 0.9\nDES_EN_WALL_INPUT(1) = 0.9\n\
+        XLENGTH = 1.0  YLENGTH = 2.0  ZLENGTH = 1.0\nPARTICLES = 0\nGRAVITY = 9.81\n\
+        BC_TYPE(1) = 'MI'\nBC_X_W(1) = 0.2  BC_X_E(1) = 0.8  BC_Y_S(1) = 2.0  BC_Y_N(1) = 2.0  BC_Z_B(1) = 0.2  BC_Z_T(1) = 0.8\n\
+        BC_EP_S(1,1) = 0.9\nBC_V_S(1,1) = -1.0\n";
+    let path = dir.path().join("mfix.dat");
+    std::fs::write(&path, deck).expect("write deck");
+    let d = grainflow_case::mfix::load(&path, &[], None).expect("deck loads");
+    let mut sim = Simulation::new(d.case.config.clone(), d.case.particles.clone()).expect("set-up");
+    sim.advance(sim.total_steps());
+    let b = sim.flow_books();
+    assert!(b.asked[0] > 0);
+    assert_eq!(b.asked[0], b.inserted[0].count + b.missed[0], "{b:?}");
+    let (placed, asked) = (b.mass(b.inserted[0]), b.asked_mass[0]);
+    assert!(placed <= 0.7405 / 0.9 * asked * (1.0 + 1.0 / 124.0), "{placed} kg placed of {asked} kg");
+    assert!(b.missed[0] > 0);
+    let name = &sim.insertions()[0].name;
+    let n = sim.flow_notices().join("\n");
+    assert!(n.contains(&format!("insertion '{name}'")) && n.contains("kg placed"), "{n}");
+}
