@@ -470,12 +470,32 @@ impl Simulation {
 
     /// Catches the particles that are past an outlet now and were not caught before (the
     /// first outlet that has them counts them).
+    ///
+    /// Outlet after outlet, in their order (a particle past two is the first's), each over
+    /// all positions in one tight loop: this runs at every step.
     fn catch_leaving(&mut self) {
-        let (p, st) = (&self.particles, &mut self.flow);
-        for i in 0..p.len() {
-            let x = p.position[i];
-            if let Some(o) = st.outlets.iter().position(|o| o.shape.has_left(x)) {
-                st.pending.entry(p.id[i]).or_insert(o as u32);
+        let p = &self.particles;
+        let FlowStage { outlets, pending, .. } = &mut self.flow;
+        for (o, outlet) in outlets.iter().enumerate() {
+            let mut catch = |i: usize| {
+                pending.entry(p.id[i]).or_insert(o as u32);
+            };
+            match &outlet.shape {
+                // The test of `has_left`, written out so that the loop stays simple.
+                &OutletShape::Plane { point, normal } => {
+                    for (i, &x) in p.position.iter().enumerate() {
+                        if (x - point).dot(normal) > 0.0 {
+                            catch(i);
+                        }
+                    }
+                }
+                shape => {
+                    for (i, &x) in p.position.iter().enumerate() {
+                        if shape.has_left(x) {
+                            catch(i);
+                        }
+                    }
+                }
             }
         }
     }
