@@ -104,7 +104,7 @@ pub struct Obstacles<'a> {
     /// Closed surfaces whose inside is solid (obstacle meshes): no new centre may lie inside
     /// one. With their triangles among `triangles`, a centre outside and clear of them by its
     /// radius keeps the whole sphere outside.
-    pub solids: &'a [InsideMesh],
+    pub solids: &'a [&'a InsideMesh],
     /// The periodic axes, if any: overlaps with present particles count through the nearest
     /// image, and a region spanning a periodic axis repeats along it (see the
     /// [module doc](self)).
@@ -678,7 +678,7 @@ struct Scene<'a> {
     qlo: [f64; 3],
     qhi: [f64; 3],
     walls: &'a [Wall],
-    solids: &'a [InsideMesh],
+    solids: &'a [&'a InsideMesh],
     triangles: TriangleBins,
     present: Vec<StaticBins>,
     placed: DynamicBins,

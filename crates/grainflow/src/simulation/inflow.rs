@@ -152,6 +152,20 @@ pub(crate) struct FlowStage {
     pending: std::collections::BTreeMap<u32, u32>,
     /// What the run should tell its user (insertions' shortfalls, overlaps of given particles).
     notices: Vec<String>,
+    /// Each mesh wall as a solid, found at the first batch: its inside once for a fixed closed
+    /// mesh (built again at each batch where it is then for a moving one).
+    solids: Option<Vec<Solid>>,
+}
+
+/// A mesh wall as an obstacle of insertions.
+#[derive(Debug, Clone)]
+enum Solid {
+    /// Not closed: it has no inside.
+    Open,
+    /// Closed and fixed: its inside.
+    Fixed(std::sync::Arc<InsideMesh>),
+    /// Closed and moving.
+    Moving,
 }
 
 /// The books' quantum for particles up to `largest_mass`: a power of two 2⁻⁶⁰ of it or less.
@@ -211,6 +225,7 @@ impl FlowStage {
             error: None,
             pending: Default::default(),
             notices: Vec::new(),
+            solids: None,
         };
         stage.initial = stage.tally(p.mass.iter().copied());
         Ok(stage)
@@ -652,16 +667,48 @@ impl Simulation {
     /// those holding the region, a container: a mesh that holds the region's centre and is
     /// not itself within the region's bounds. Meshes whose bounds stay `margin` clear of the
     /// region's are left out (no centre can be inside them).
-    fn solids_for(&self, region: &Region, own: Option<usize>, margin: f64) -> Vec<InsideMesh> {
+    fn solids_for(
+        &mut self,
+        region: &Region,
+        own: Option<usize>,
+        margin: f64,
+    ) -> Vec<std::sync::Arc<InsideMesh>> {
+        if self.flow.solids.is_none() {
+            let solids = (0..self.meshes.len())
+                .map(|m| {
+                    let wall = &self.meshes[m];
+                    if !wall.mesh.edges().iter().all(|e| e.triangles().len() == 2) {
+                        Solid::Open
+                    } else if wall.motion.moves() {
+                        Solid::Moving
+                    } else {
+                        let corners = self.mesh_corners_now(m);
+                        Solid::Fixed(std::sync::Arc::new(InsideMesh::of_corners(
+                            wall.mesh.name(),
+                            corners,
+                            None,
+                        )))
+                    }
+                })
+                .collect();
+            self.flow.solids = Some(solids);
+        }
         let (rlo, rhi) = region.bounds();
         let centre = 0.5 * (rlo + rhi);
         let mut out = Vec::new();
-        for m in 0..self.meshes.len() {
-            let mesh = &self.meshes[m].mesh;
-            if Some(m) == own || !mesh.edges().iter().all(|e| e.triangles().len() == 2) {
+        for (m, solid) in self.flow.solids.iter().flatten().enumerate() {
+            if Some(m) == own {
                 continue;
             }
-            let inside = InsideMesh::of_corners(mesh.name(), self.mesh_corners_now(m), None);
+            let inside = match solid {
+                Solid::Open => continue,
+                Solid::Fixed(inside) => inside.clone(),
+                Solid::Moving => std::sync::Arc::new(InsideMesh::of_corners(
+                    self.meshes[m].mesh.name(),
+                    self.mesh_corners_now(m),
+                    None,
+                )),
+            };
             let (lo, hi) = inside.bounds();
             if lo.cmpgt(rhi + Vec3::splat(margin)).any() || hi.cmplt(rlo - Vec3::splat(margin)).any() {
                 continue;
@@ -731,6 +778,7 @@ impl Simulation {
         let margin = ins.mixture.max_diameter();
         let triangles = self.mesh_triangles_near(region, margin);
         let solids = self.solids_for(region, own, margin);
+        let solids: Vec<&InsideMesh> = solids.iter().map(|s| s.as_ref()).collect();
         let periodic = self.periodic.any().then_some(self.periodic);
         let p = &self.particles;
         let radii = &p.radius;
