@@ -869,8 +869,10 @@ fn validate<'h>(
     // Insertions and outlets.
     let mesh_set = crate::flow::Meshes { walls: &meshes, names: &mesh_names };
     let read_particles = |file: &str| particles::read_csv_from(&mut open(file)?, &phases);
-    let insertions = crate::flow::insertions(&raw.insertions, &phases, &mesh_set, t_start, &read_particles)?;
-    let outlets = crate::flow::outlets(&raw.outlets, &mesh_set, domain.leaving.as_deref(), (min, max), axes)?;
+    let flow_domain = crate::flow::Domain { lo: min, hi: max, periodic: axes };
+    let mut insertions =
+        crate::flow::insertions(&raw.insertions, &phases, &mesh_set, t_start, &flow_domain, &read_particles)?;
+    let outlets = crate::flow::outlets(&raw.outlets, &mesh_set, domain.leaving.as_deref(), &flow_domain)?;
 
     // Particles (none needed when an insertion brings them).
     let praw = match raw.particles {
@@ -1148,6 +1150,14 @@ fn validate<'h>(
     }
     grainflow::motion::check_rules(&motion).map_err(|e| CaseError::Geometry(format!("[[motion]]: {e}")))?;
     check_geometry(&particles, &walls, &meshes, &mesh_names, (min, max), max_overlap)?;
+    crate::flow::check_given(
+        &raw.insertions,
+        &mut insertions,
+        &particles,
+        max_overlap,
+        t_start,
+        &mut warnings,
+    )?;
     if let Some(per) = &periodic {
         let skin = skin.unwrap_or_else(|| grainflow::simulation::default_skin(particles.max_radius()));
         per.check(particles.max_radius(), skin, &walls)?;

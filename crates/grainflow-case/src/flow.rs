@@ -15,6 +15,109 @@ use grainflow::{Phase, Vec3};
 /// Default time between a rate insertion's batches, s.
 pub const DEFAULT_EVERY: f64 = 0.01;
 
+/// The shallowest column of a `face` region, in largest diameters.
+pub const FACE_MIN_DEPTH: f64 = 2.0;
+
+/// The domain box and its periodic axes, which regions are checked against.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Domain {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub periodic: [bool; 3],
+}
+
+impl Domain {
+    /// The bounds' slack: rounding of coordinates of the domain's size.
+    fn slack(&self) -> f64 {
+        1e-9 * (self.hi - self.lo)
+            .abs()
+            .max_element()
+            .max(self.lo.abs().max_element())
+            .max(self.hi.abs().max_element())
+    }
+
+    fn text(&self) -> String {
+        format!("[{:?}, {:?}]", self.lo.to_array(), self.hi.to_array())
+    }
+}
+
+/// The key, and its value, that place a region where it is (for messages).
+fn placing_key(r: &RawRegion) -> (&'static str, String) {
+    let v = |x: Option<[f64; 3]>| x.map_or_else(String::new, |x| format!("{x:?}"));
+    match r.kind.as_deref() {
+        Some("box") => ("max", v(r.max)),
+        Some("mesh") => ("mesh", format!("\"{}\"", r.mesh.as_deref().unwrap_or(""))),
+        Some("cylinder") => ("radius", format!("{}", r.radius.unwrap_or(0.0))),
+        _ => ("base", v(r.base)),
+    }
+}
+
+/// An insertion's region must lie inside the domain box (on a periodic axis: meet it), and its
+/// largest particle must fit in it: else particles placed there would leave the domain at
+/// once, or none of that size could ever be placed.
+fn check_insertion_region(
+    region: &Region,
+    raw: &RawRegion,
+    table: &str,
+    domain: &Domain,
+    max_diameter: f64,
+) -> Result<(), CaseError> {
+    let (lo, hi) = region.bounds();
+    let slack = domain.slack();
+    let (key, value) = placing_key(raw);
+    let kind = raw.kind.as_deref().unwrap_or("box");
+    let outside = (0..3).find(|&k| {
+        if domain.periodic[k] {
+            !(lo[k] < domain.hi[k] && hi[k] > domain.lo[k])
+        } else {
+            lo[k] < domain.lo[k] - slack || hi[k] > domain.hi[k] + slack
+        }
+    });
+    if let Some(k) = outside {
+        let axis = ["x", "y", "z"][k];
+        let what = if kind == "face" {
+            "the stream's column upstream of the face (|v|·every deep, at least two largest diameters)"
+        } else {
+            "the region"
+        };
+        return Err(CaseError::invalid(
+            table,
+            key,
+            value,
+            format!(
+                "{what} spans [{:?}, {:?}] m, which reaches outside the domain {} along {axis}: particles placed there would leave the domain at once; keep the region inside [domain]",
+                lo.to_array(),
+                hi.to_array(),
+                domain.text()
+            ),
+        ));
+    }
+    // The narrowest width a whole sphere must fit in (a periodic axis the region spans
+    // repeats it, so it does not bound the sphere).
+    let spans = |k: usize| domain.periodic[k] && lo[k] <= domain.lo[k] && hi[k] >= domain.hi[k];
+    let narrowest = match region {
+        Region::Box { lo, hi } => {
+            (0..3).filter(|&k| !spans(k)).map(|k| hi[k] - lo[k]).fold(f64::INFINITY, f64::min)
+        }
+        Region::Cylinder { length, radius, axis, .. } => {
+            let along = (0..3).find(|&k| axis[k].abs() == 1.0 && spans(k));
+            if along.is_some() { 2.0 * radius } else { (2.0 * radius).min(*length) }
+        }
+        Region::Mesh(_) => f64::INFINITY,
+    };
+    if max_diameter >= narrowest {
+        return Err(CaseError::invalid(
+            table,
+            key,
+            value,
+            format!(
+                "the region is {narrowest:e} m across at its narrowest, not more than the largest diameter {max_diameter:e} m: no particle of that size could ever be placed in it"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The meshes of the case, by name, for mesh regions.
 pub(crate) struct Meshes<'a> {
     pub walls: &'a [MeshWall],
@@ -133,7 +236,9 @@ pub(crate) fn region(
             };
             let centre = vec3(r.base.ok_or_else(|| need("base"))?, table, "base")?;
             let radius = positive(table, "radius", r.radius.ok_or_else(|| need("radius"))?)?;
-            let depth = (velocity.length() * every).max(max_d);
+            // At least two largest diameters, as an MFIX mass inflow's layer: a column one
+            // diameter deep holds no whole sphere with room to spare, so nothing could be placed.
+            let depth = (velocity.length() * every).max(FACE_MIN_DEPTH * max_d);
             let along = velocity.normalize();
             Region::cylinder(centre - depth * along, along, depth, radius)
         }
@@ -260,6 +365,7 @@ pub(crate) fn insertions(
     phases: &[Phase],
     meshes: &Meshes,
     t_start: f64,
+    domain: &Domain,
     read_particles: &dyn Fn(&str) -> Result<Vec<ParticleInit>, CaseError>,
 ) -> Result<Vec<Insertion>, CaseError> {
     let mut out: Vec<Insertion> = Vec::with_capacity(raw.len());
@@ -409,7 +515,9 @@ pub(crate) fn insertions(
             Schedule::Once { .. } => None,
         };
         let stream = Stream { velocity, every, max_diameter: mixture.max_diameter() };
-        let region = region(raw_region, &format!("{table} region"), meshes, Some(stream))?;
+        let rtable = format!("{table} region");
+        let region = region(raw_region, &rtable, meshes, Some(stream))?;
+        check_insertion_region(&region, raw_region, &rtable, domain, mixture.max_diameter())?;
         out.push(Insertion {
             name,
             region,
@@ -419,6 +527,7 @@ pub(crate) fn insertions(
             velocity,
             seed: ins.seed.unwrap_or(k as u64 + 1),
             given: Vec::new(),
+            max_initial_overlap: grainflow::insertion::DEFAULT_MAX_INITIAL_OVERLAP,
         });
     }
     Ok(out)
@@ -468,9 +577,9 @@ pub(crate) fn outlets(
     raw: &[RawOutlet],
     meshes: &Meshes,
     leaving: Option<&str>,
-    domain: (Vec3, Vec3),
-    periodic: [bool; 3],
+    domain: &Domain,
 ) -> Result<Vec<Outlet>, CaseError> {
+    let (periodic, slack) = (domain.periodic, domain.slack());
     let mut out: Vec<Outlet> = Vec::with_capacity(raw.len() + 1);
     for (k, o) in raw.iter().enumerate() {
         let table = format!("[[outlets]] #{}", k + 1);
@@ -489,14 +598,52 @@ pub(crate) fn outlets(
         let table = format!("[[outlets]] '{name}'");
         let shape = match (&o.region, o.point, o.normal) {
             (Some(r), None, None) => {
-                OutletShape::Region(region(r, &format!("{table} region"), meshes, None)?)
+                let rtable = format!("{table} region");
+                let shape = region(r, &rtable, meshes, None)?;
+                let (lo, hi) = shape.bounds();
+                if lo.cmpgt(domain.hi + Vec3::splat(slack)).any()
+                    || hi.cmplt(domain.lo - Vec3::splat(slack)).any()
+                {
+                    let (key, value) = placing_key(r);
+                    return Err(CaseError::invalid(
+                        &rtable,
+                        key,
+                        value,
+                        format!(
+                            "the outlet spans [{:?}, {:?}] m, wholly outside the domain {}: no particle can reach it, so it would never remove one",
+                            lo.to_array(),
+                            hi.to_array(),
+                            domain.text()
+                        ),
+                    ));
+                }
+                OutletShape::Region(shape)
             }
             (None, Some(p), Some(n)) => {
                 let normal = vec3(n, &table, "normal")?;
                 if normal.length_squared() == 0.0 {
                     return Err(CaseError::invalid(&table, "normal", "[0, 0, 0]", "must not be zero"));
                 }
-                OutletShape::Plane { point: vec3(p, &table, "point")?, normal }
+                let point = vec3(p, &table, "point")?;
+                // The domain's corner farthest along the normal: if even it is short of the
+                // plane, no particle inside the domain is ever beyond it.
+                let far = Vec3::from_array(std::array::from_fn(|k| {
+                    if normal[k] >= 0.0 { domain.hi[k] } else { domain.lo[k] }
+                }));
+                let u = normal.normalize();
+                if (far - point).dot(u) < -slack {
+                    return Err(CaseError::invalid(
+                        &table,
+                        "point",
+                        format!("{p:?}"),
+                        format!(
+                            "the plane lies {:e} m beyond the domain {} on its normal's side ({n:?}): no particle can reach it, so it would never remove one; put the plane on a face of the domain or inside it",
+                            -(far - point).dot(u),
+                            domain.text()
+                        ),
+                    ));
+                }
+                OutletShape::Plane { point, normal }
             }
             (None, _, _) if o.point.is_some() || o.normal.is_some() => {
                 return Err(CaseError::missing(
@@ -527,7 +674,7 @@ pub(crate) fn outlets(
         None | Some("stop") => {}
         Some("remove") => out.push(Outlet {
             name: "domain".into(),
-            shape: OutletShape::OutsideBox { lo: domain.0, hi: domain.1, axes: periodic.map(|p| !p) },
+            shape: OutletShape::OutsideBox { lo: domain.lo, hi: domain.hi, axes: periodic.map(|p| !p) },
         }),
         Some(other) => {
             return Err(CaseError::invalid(
@@ -539,4 +686,105 @@ pub(crate) fn outlets(
         }
     }
     Ok(out)
+}
+
+/// Pairs of spheres (centre, radius) that touch or overlap: (i, j) with i < j and
+/// |x_i − x_j| < r_i + r_j, found through a grid of cells of the largest diameter.
+fn touching_pairs(spheres: &[(Vec3, f64)]) -> Vec<(usize, usize)> {
+    let r_max = spheres.iter().map(|s| s.1).fold(0.0, f64::max);
+    if spheres.len() < 2 || !(r_max > 0.0 && r_max.is_finite()) {
+        return Vec::new();
+    }
+    let cell = 2.0 * r_max;
+    let key = |x: Vec3| {
+        let c = (x / cell).floor();
+        (c.x as i64, c.y as i64, c.z as i64)
+    };
+    let mut grid: std::collections::HashMap<(i64, i64, i64), Vec<usize>> = Default::default();
+    for (i, s) in spheres.iter().enumerate() {
+        grid.entry(key(s.0)).or_default().push(i);
+    }
+    let mut out = Vec::new();
+    for (i, &(x, r)) in spheres.iter().enumerate() {
+        let (cx, cy, cz) = key(x);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    for &j in grid.get(&(cx + dx, cy + dy, cz + dz)).map_or(&[][..], |v| v.as_slice()) {
+                        if j > i && (spheres[j].0 - x).length() < r + spheres[j].1 {
+                            out.push((i, j));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The particles of `file` insertions, as the particle file's are: two at one centre are
+/// refused (their contact has no normal), among themselves or with a particle present at the
+/// start when they come in at the start; the largest overlap above `max_overlap` of the
+/// smaller radius is a warning. Every insertion gets `max_overlap` as its limit for the
+/// particles present when it comes in later (the engine's notice).
+pub(crate) fn check_given(
+    raw: &[RawInsertion],
+    insertions: &mut [Insertion],
+    present: &grainflow::Particles,
+    max_overlap: f64,
+    t_start: f64,
+    warnings: &mut Vec<String>,
+) -> Result<(), CaseError> {
+    for (ins, r) in insertions.iter_mut().zip(raw) {
+        ins.max_initial_overlap = max_overlap;
+        let (Some(file), Schedule::Once { at }) = (&r.file, ins.schedule) else { continue };
+        let table = format!("[[insertions]] '{}'", ins.name);
+        let g = ins.given.len();
+        let mut spheres: Vec<(Vec3, f64)> = ins.given.iter().map(|p| (p.position, p.radius)).collect();
+        // At the start the particles present are those of the case, where they are now.
+        if at <= t_start {
+            spheres.extend(present.position.iter().zip(&present.radius).map(|(&x, &r)| (x, r)));
+        }
+        let name = |i: usize| {
+            if i < g {
+                format!("particle {} of the file", ins.given[i].id)
+            } else {
+                format!("particle {} present at the start", present.id[i - g])
+            }
+        };
+        let mut worst: Option<(f64, usize, usize)> = None;
+        for (i, j) in touching_pairs(&spheres) {
+            if i >= g && j >= g {
+                continue;
+            }
+            let ((xi, ri), (xj, rj)) = (spheres[i], spheres[j]);
+            if xi == xj {
+                return Err(CaseError::invalid(
+                    &table,
+                    "file",
+                    format!("\"{file}\""),
+                    format!(
+                        "{} and {} have the same centre ({:e}, {:e}, {:e}) m: their contact has no normal direction; move one of them",
+                        name(i),
+                        name(j),
+                        xi.x,
+                        xi.y,
+                        xi.z
+                    ),
+                ));
+            }
+            let ratio = (ri + rj - (xi - xj).length()) / ri.min(rj);
+            if ratio > max_overlap && worst.is_none_or(|w| ratio > w.0) {
+                worst = Some((ratio, i, j));
+            }
+        }
+        if let Some((ratio, i, j)) = worst {
+            warnings.push(format!(
+                "{table}: file = \"{file}\": {} and {} overlap by {ratio:.3} of the smaller radius (the largest overlap), above [particles] max_initial_overlap = {max_overlap}; the contact starts with a burst of elastic energy",
+                name(i),
+                name(j)
+            ));
+        }
+    }
+    Ok(())
 }

@@ -550,7 +550,9 @@ pub fn health_problem(sim: &Simulation, health: Health) -> Option<String> {
             ));
         }
         let (lo, hi) = health.domain;
-        if !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any()) {
+        // A particle that has left through an outlet is removed at the outlets' next drain.
+        if !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any()) && !sim.left_through_outlet(i)
+        {
             return Some(format!(
                 "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.",
                 p.id[i],
@@ -617,8 +619,8 @@ fn drop_later_frames(folder: &OutputFolder, step: u64) -> Result<(), OutputError
 #[derive(Debug, Clone, Default, PartialEq)]
 struct RunNote {
     series: Option<SeriesRecord>,
-    /// Inserted and removed (count, mass units) at the last scheduled row before the step.
-    flow: Option<[grainflow::Tally; 2]>,
+    /// The flow books at the last scheduled row before the step.
+    flow: Option<FlowCount>,
 }
 
 /// The first line of a [`RunNote`].
@@ -630,8 +632,9 @@ impl RunNote {
         if let Some(r) = &self.series {
             s.push_str(&format!("series {} {} {} {}\n", r.rows, r.bytes, r.sha256, u8::from(r.row_at_step)));
         }
-        if let Some([i, r]) = &self.flow {
-            s.push_str(&format!("flow {} {} {} {}\n", i.count, i.units, r.count, r.units));
+        if let Some(f) = &self.flow {
+            let (i, r) = (f.inserted, f.removed);
+            s.push_str(&format!("flow {} {} {} {} {}\n", i.count, i.units, r.count, r.units, f.missed));
         }
         s.into_bytes()
     }
@@ -655,11 +658,12 @@ impl RunNote {
                         row_at_step: *at == "1",
                     });
                 }
-                ["flow", ic, iu, rc, ru] => {
+                ["flow", ic, iu, rc, ru, missed] => {
                     let t = |c: &str, u: &str| -> Option<grainflow::Tally> {
                         Some(grainflow::Tally { count: c.parse().ok()?, units: u.parse().ok()? })
                     };
-                    note.flow = Some([t(ic, iu)?, t(rc, ru)?]);
+                    note.flow =
+                        Some(FlowCount { inserted: t(ic, iu)?, removed: t(rc, ru)?, missed: missed.parse().ok()? });
                 }
                 _ => {}
             }
@@ -676,25 +680,41 @@ struct MeshLoads {
     about: Vec<Vec3>,
     /// Each mesh's rotation axis (a point on it, unit direction), if it has one.
     axes: Vec<Option<(Vec3, Vec3)>>,
-    /// With insertions or outlets: the inserted and removed tallies at the last rows (the
-    /// flow columns count what came and went since).
+    /// With insertions or outlets: the flow books at the last rows (the flow columns count
+    /// what came, went and was missed since).
     flow: Option<std::sync::Mutex<FlowMarks>>,
 }
 
-/// The inserted and removed tallies at the last scheduled row of the time series (`last`,
-/// of step `last_step`) and at the one before it (`before`): a checkpoint of step s records
-/// those of the last row before s, from which the row of s (if rewritten) and the next rows
-/// count.
+/// The flow books the flow columns count from: inserted and removed (count, mass units) and
+/// the particles the insertions could not place.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct FlowCount {
+    inserted: grainflow::Tally,
+    removed: grainflow::Tally,
+    missed: u64,
+}
+
+impl FlowCount {
+    fn of(b: &grainflow::FlowBooks) -> FlowCount {
+        FlowCount { inserted: b.inserted_total(), removed: b.removed_total(), missed: b.missed.iter().sum() }
+    }
+}
+
+/// The flow books at the last scheduled row of the time series (`last`, of step `last_step`)
+/// and at the one before it (`before`): a checkpoint of step s records those of the last row
+/// before s, from which the row of s (if rewritten) and the next rows count.
 #[derive(Debug, Clone, Copy, Default)]
 struct FlowMarks {
-    last: [grainflow::Tally; 2],
+    last: FlowCount,
     last_step: Option<u64>,
-    before: [grainflow::Tally; 2],
+    before: FlowCount,
 }
 
 /// The time series' columns of the insertions and outlets: what came in and went out since
-/// the row before (count and mass, kg), and the particles' mass now, kg.
-pub const FLOW_COLUMNS: [&str; 5] = ["inserted", "inserted_mass", "removed", "removed_mass", "mass"];
+/// the row before (count and mass, kg), the particles' mass now, kg, and the particles the
+/// insertions could not place since the row before.
+pub const FLOW_COLUMNS: [&str; 6] =
+    ["inserted", "inserted_mass", "removed", "removed_mass", "mass", "missed"];
 
 impl MeshLoads {
     fn new(case: &Case) -> MeshLoads {
@@ -712,10 +732,10 @@ impl MeshLoads {
     /// made at its start), from `from` (a restart: the books at the last row kept before the
     /// checkpoint's step, as the checkpoint recorded them), or from the books of `sim` (a
     /// restart whose row of its step was kept, or that starts a series of its own).
-    fn start_flow(&self, sim: &Simulation, fresh: bool, from: Option<[grainflow::Tally; 2]>) {
+    fn start_flow(&self, sim: &Simulation, fresh: bool, from: Option<FlowCount>) {
         if let Some(marks) = &self.flow {
             let b = sim.flow_books();
-            let now = [b.inserted_total(), b.removed_total()];
+            let now = FlowCount::of(&b);
             let last = if fresh { Default::default() } else { from.unwrap_or(now) };
             let step = (!fresh && from.is_none()).then(|| sim.step_index());
             *marks.lock().unwrap_or_else(|e| e.into_inner()) =
@@ -724,7 +744,7 @@ impl MeshLoads {
     }
 
     /// The flow books at the last scheduled row before `step`, for a checkpoint of `step`.
-    fn flow_before(&self, step: u64) -> Option<[grainflow::Tally; 2]> {
+    fn flow_before(&self, step: u64) -> Option<FlowCount> {
         let m = *self.flow.as_ref()?.lock().unwrap_or_else(|e| e.into_inner());
         Some(if m.last_step == Some(step) { m.before } else { m.last })
     }
@@ -746,9 +766,9 @@ impl MeshLoads {
         }
         if let Some(marks) = &self.flow {
             let b = sim.flow_books();
-            let now = [b.inserted_total(), b.removed_total()];
+            let now = FlowCount::of(&b);
             let mut m = marks.lock().unwrap_or_else(|e| e.into_inner());
-            let [i0, r0] = m.last;
+            let was = m.last;
             if scheduled {
                 *m = FlowMarks { last: now, last_step: Some(sim.step_index()), before: m.last };
             }
@@ -756,9 +776,10 @@ impl MeshLoads {
             let since = |a: grainflow::Tally, b: grainflow::Tally| {
                 [Value::Count(a.count - b.count), Value::Real((a.units - b.units) as f64 * q)]
             };
-            v.extend(since(now[0], i0));
-            v.extend(since(now[1], r0));
+            v.extend(since(now.inserted, was.inserted));
+            v.extend(since(now.removed, was.removed));
             v.push(Value::Real(b.mass(b.present)));
+            v.push(Value::Count(now.missed - was.missed));
         }
         v
     }

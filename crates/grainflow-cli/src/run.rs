@@ -127,6 +127,76 @@ impl Progress {
             bar.finish_and_clear();
         }
     }
+
+    /// A warning on standard error, above the bar if there is one (shown with `--quiet` too).
+    fn warn(&self, text: &str) {
+        match &self.kind {
+            Kind::Bar(bar) => bar.suspend(|| eprintln!("warning: {text}")),
+            _ => eprintln!("warning: {text}"),
+        }
+    }
+}
+
+/// The insertions' and outlets' side of a run: the engine's flow notices as warnings while it
+/// runs (the engine limits them: an insertion's shortfall when it starts and each time it has
+/// doubled), and the books at the last look, for the summary.
+#[derive(Default)]
+struct FlowReport {
+    shown: usize,
+    books: Option<grainflow::FlowBooks>,
+    insertions: Vec<String>,
+    outlets: Vec<String>,
+}
+
+impl FlowReport {
+    fn update(&mut self, sim: &Simulation, progress: &Progress) {
+        if sim.insertions().is_empty() && sim.outlets().is_empty() {
+            return;
+        }
+        for n in &sim.flow_notices()[self.shown.min(sim.flow_notices().len())..] {
+            progress.warn(n);
+        }
+        self.shown = sim.flow_notices().len();
+        if self.insertions.is_empty() && self.outlets.is_empty() {
+            self.insertions = sim.insertions().iter().map(|i| i.name.clone()).collect();
+            self.outlets = sim.outlets().iter().map(|o| o.name.clone()).collect();
+        }
+        self.books = Some(sim.flow_books());
+    }
+
+    /// The summary's lines: per insertion what was asked, inserted and missed; per outlet what
+    /// it removed; whether the books close.
+    fn lines(&self) -> Vec<String> {
+        let Some(b) = &self.books else { return Vec::new() };
+        let mut out = Vec::new();
+        for (k, name) in self.insertions.iter().enumerate() {
+            let (t, missed) = (b.inserted[k], b.missed[k]);
+            let mut line = format!(
+                "insertion '{name}': {} asked, {} inserted ({:.4e} kg of {:.4e} kg asked), {missed} not placed",
+                b.asked[k],
+                t.count,
+                b.mass(t),
+                b.asked_mass[k]
+            );
+            if missed > 0 {
+                line.push_str(" (no room in its region)");
+            }
+            out.push(line);
+        }
+        for (k, name) in self.outlets.iter().enumerate() {
+            let t = b.removed[k];
+            out.push(format!("outlet '{name}': {} removed ({:.4e} kg)", t.count, b.mass(t)));
+        }
+        out.push(format!(
+            "books: {} at the start + {} inserted = {} present + {} removed{}",
+            b.initial.count,
+            b.inserted_total().count,
+            b.present.count,
+            b.removed_total().count,
+            if b.close() { "" } else { " (NOT CLOSED)" }
+        ));
+        out
+    }
 }
 
 /// A duration in the largest units that keep it readable: "42 s", "3 min 20 s", "5 h 12 min",
@@ -300,8 +370,13 @@ pub fn main(args: RunArgs) -> ExitCode {
         last_good_in_memory: None,
     };
     let mut progress = Progress::new(args.quiet);
-    let result = run_case(case, &out, &options, |sim| progress.update(sim));
+    let mut flow = FlowReport::default();
+    let result = run_case(case, &out, &options, |sim| {
+        progress.update(sim);
+        flow.update(sim, &progress);
+    });
     progress.finish();
+    let missed: u64 = flow.books.as_ref().map_or(0, |b| b.missed.iter().sum());
     match result {
         Ok(s) => {
             println!("{}", s.time_step_explanation);
@@ -368,6 +443,14 @@ pub fn main(args: RunArgs) -> ExitCode {
                 s.output_seconds,
                 pct(s.output_seconds)
             );
+            for line in flow.lines() {
+                println!("{line}");
+            }
+            if missed > 0 {
+                eprintln!(
+                    "warning: {missed} particles asked of the insertions could not be placed (see the lines above and the time series' `missed` column)"
+                );
+            }
             if s.threads > 1 && st.threads_slowest > 0.0 {
                 let force = st.walls + st.pairs;
                 println!(

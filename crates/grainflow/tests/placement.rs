@@ -454,6 +454,7 @@ fn place_case(case: &Case, seed: u64) -> Vec<Option<Vec3>> {
         radii: &case.radii,
         walls: &case.walls,
         triangles: &case.triangles,
+        solids: &[],
         periodic: case.periodic.any().then_some(case.periodic),
     };
     place(&case.region, &case.diameters, &obstacles, &mut InsertRng::seed_from_u64(seed))

@@ -45,7 +45,15 @@ pub struct Insertion {
     /// following the largest there has been; `region` and `mixture` then describe them
     /// ([`Insertion::of_given`]). Empty for drawn particles.
     pub given: Vec<ParticleInit>,
+    /// Given particles that overlap a particle present when they come in by more than this
+    /// fraction of the smaller radius are reported in a notice ([`crate::Simulation::flow_notices`]);
+    /// one at the centre of a present particle stops the run (its contact has no normal).
+    pub max_initial_overlap: f64,
 }
+
+/// The default of [`Insertion::max_initial_overlap`] (the case file's
+/// `[particles] max_initial_overlap`).
+pub const DEFAULT_MAX_INITIAL_OVERLAP: f64 = 0.05;
 
 impl Insertion {
     /// The insertion of the `given` particles, as they are, at time `at`: its region their
@@ -60,16 +68,23 @@ impl Insertion {
             (lo, hi) = (lo.min(p.position - r), hi.max(p.position + r));
             let d = 2.0 * p.radius;
             match parts.iter_mut().find(|q| q.phase == p.phase && q.density == p.density) {
-                Some(q) => {
-                    if let psd::SizeDistribution::Uniform { min, max } = &mut q.sizes {
+                // One diameter is a constant size (a uniform range needs min < max); two or
+                // more span a uniform range.
+                Some(q) => match q.sizes {
+                    psd::SizeDistribution::Constant { diameter } if diameter != d => {
+                        q.sizes =
+                            psd::SizeDistribution::Uniform { min: diameter.min(d), max: diameter.max(d) };
+                    }
+                    psd::SizeDistribution::Uniform { ref mut min, ref mut max } => {
                         (*min, *max) = (min.min(d), max.max(d));
                     }
-                }
+                    _ => {}
+                },
                 None => parts.push(psd::MixturePart {
                     phase: p.phase,
                     density: p.density,
                     fraction: 0.0,
-                    sizes: psd::SizeDistribution::Uniform { min: d, max: d },
+                    sizes: psd::SizeDistribution::Constant { diameter: d },
                 }),
             }
         }
@@ -87,6 +102,7 @@ impl Insertion {
             velocity: Vec3::ZERO,
             seed: 0,
             given,
+            max_initial_overlap: DEFAULT_MAX_INITIAL_OVERLAP,
         })
     }
 }

@@ -1,6 +1,7 @@
 //! Centres for a list of diameters inside a region: no two new spheres overlapping, none
 //! overlapping a particle already present (through the nearest periodic image), a plane wall
-//! or a mesh triangle, each wholly inside the region.
+//! or a mesh triangle, none inside a solid (a closed obstacle mesh), each wholly inside the
+//! region.
 //!
 //! ## Two methods
 //! The requested solid fraction φ = Σ πd³/6 / V (V the region's volume) chooses:
@@ -100,6 +101,10 @@ pub struct Obstacles<'a> {
     /// Mesh walls' triangles in world coordinates (all of them; those far from the region
     /// are passed over). They must not be degenerate (as a loaded mesh's are not).
     pub triangles: &'a [[Vec3; 3]],
+    /// Closed surfaces whose inside is solid (obstacle meshes): no new centre may lie inside
+    /// one. With their triangles among `triangles`, a centre outside and clear of them by its
+    /// radius keeps the whole sphere outside.
+    pub solids: &'a [&'a InsideMesh],
     /// The periodic axes, if any: overlaps with present particles count through the nearest
     /// image, and a region spanning a periodic axis repeats along it (see the
     /// [module doc](self)).
@@ -109,7 +114,7 @@ pub struct Obstacles<'a> {
 impl Obstacles<'static> {
     /// Nothing in the way.
     pub const NONE: Obstacles<'static> =
-        Obstacles { positions: &[], radii: &[], walls: &[], triangles: &[], periodic: None };
+        Obstacles { positions: &[], radii: &[], walls: &[], triangles: &[], solids: &[], periodic: None };
 }
 
 /// A centre for each of `diameters` (m), in their order, inside `region` and clear of
@@ -673,6 +678,7 @@ struct Scene<'a> {
     qlo: [f64; 3],
     qhi: [f64; 3],
     walls: &'a [Wall],
+    solids: &'a [&'a InsideMesh],
     triangles: TriangleBins,
     present: Vec<StaticBins>,
     placed: DynamicBins,
@@ -796,6 +802,7 @@ impl<'a> Scene<'a> {
             qlo,
             qhi,
             walls: obstacles.walls,
+            solids: obstacles.solids,
             triangles,
             present,
             placed,
@@ -858,6 +865,9 @@ impl<'a> Scene<'a> {
         }
         if c < need {
             return c;
+        }
+        if self.solids.iter().any(|m| m.contains(x)) {
+            return f64::NEG_INFINITY;
         }
         c = self.triangles.clearance(x, c);
         if c < need {

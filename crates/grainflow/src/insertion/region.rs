@@ -283,7 +283,23 @@ impl InsideMesh {
     /// defined.
     pub fn new(mesh: &Mesh) -> InsideMesh {
         let corners: Vec<[Vec3; 3]> = (0..mesh.triangle_count() as u32).map(|t| mesh.corners(t)).collect();
-        let (lo, hi) = mesh.bounds();
+        let open_edge = mesh.edges().iter().find(|e| e.triangles().len() != 2).map(|e| {
+            let v = mesh.vertices();
+            (v[e.vertices[0] as usize], v[e.vertices[1] as usize])
+        });
+        InsideMesh::of_corners(mesh.name(), corners, open_edge)
+    }
+
+    /// The inside of the surface of `corners` (a mesh's triangles where it is now), named
+    /// `name`; `open_edge` an edge of one triangle only, if the surface has one (its inside is
+    /// then not defined, and [`Region::check`] refuses it).
+    pub fn of_corners(name: &str, corners: Vec<[Vec3; 3]>, open_edge: Option<(Vec3, Vec3)>) -> InsideMesh {
+        let (lo, hi) = corners
+            .iter()
+            .flatten()
+            .fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
         let boxes: Vec<(Vec3, Vec3)> =
             corners.iter().map(|&[a, b, c]| (a.min(b).min(c), a.max(b).max(c))).collect();
         let facing = corners.iter().map(|&[a, b, c]| orient2d([a.x, a.y], [b.x, b.y], [c.x, c.y])).collect();
@@ -291,22 +307,8 @@ impl InsideMesh {
         // half the mesh's size, whatever its position.
         let o = 0.5 * (lo + hi);
         let volume = corners.iter().map(|&[a, b, c]| (a - o).dot((b - o).cross(c - o))).sum::<f64>() / 6.0;
-        let open_edge = mesh.edges().iter().find(|e| e.triangles().len() != 2).map(|e| {
-            let v = mesh.vertices();
-            (v[e.vertices[0] as usize], v[e.vertices[1] as usize])
-        });
         let columns = Columns::new(lo, hi, &boxes);
-        InsideMesh {
-            name: mesh.name().to_string(),
-            corners,
-            boxes,
-            facing,
-            lo,
-            hi,
-            volume,
-            open_edge,
-            columns,
-        }
+        InsideMesh { name: name.to_string(), corners, boxes, facing, lo, hi, volume, open_edge, columns }
     }
 
     /// The mesh's name, for messages.
@@ -322,6 +324,16 @@ impl InsideMesh {
     /// The number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.corners.len()
+    }
+
+    /// The triangles' corners, m.
+    pub fn corners(&self) -> &[[Vec3; 3]] {
+        &self.corners
+    }
+
+    /// The bounding box (min, max), m.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        (self.lo, self.hi)
     }
 
     fn check(&self) -> Result<(), RegionError> {

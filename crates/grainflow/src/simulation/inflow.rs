@@ -2,14 +2,22 @@
 //! ([`crate::insertion`]), the outlets, and the books of both.
 //!
 //! Between steps, at the start of a step:
-//! 1. **Outlets** remove the particles whose centres have left through them (and, with
-//!    [`OutletShape::OutsideBox`], those outside the domain box) every [`DRAIN_EVERY`] steps:
-//!    removing rearranges the slots (`Simulation::rearrange`), so it is done in batches, and
-//!    a particle that has left goes on for at most that many steps more (falling freely
-//!    below an orifice, or outside the box, where nothing meets it).
+//! 1. **Outlets** catch, at every step, the particles whose centres have left through them
+//!    (and, with [`OutletShape::OutsideBox`], those outside the domain box): a particle is
+//!    counted by the first outlet it crosses, at the first step it is past it, however fast
+//!    it goes and however thin the outlet. The caught particles are removed every
+//!    [`DRAIN_EVERY`] steps: removing rearranges the slots (`Simulation::rearrange`), so it is
+//!    done in batches, and a caught particle goes on for at most that many steps more
+//!    (falling freely below an orifice, or outside the box, where nothing meets it);
+//!    [`Simulation::left_through_outlet`] tells the run's checks that it is on its way out.
 //! 2. **Insertions** whose batch is due draw their particles (phase and diameter from the
-//!    mixture), place them ([`crate::insertion::place::place`]) clear of everything present,
-//!    and append them with new ids (counting on from the largest id there has been).
+//!    mixture), place them ([`crate::insertion::place::place`]) clear of everything present
+//!    (and outside every closed mesh wall that does not hold the region: an obstacle), and
+//!    append them with new ids (counting on from the largest id there has been). A region
+//!    that is the inside of a moving mesh moves with it. What could not be placed is counted
+//!    ([`FlowBooks::missed`]: asked = inserted + missed) and reported in a notice
+//!    ([`Simulation::flow_notices`]) when an insertion first misses and each time its
+//!    shortfall has doubled since.
 //!
 //! Every insertion draws from its own stream, seeded by the case; its position in the stream
 //! is in the checkpoint, so a restart draws and places what the uninterrupted run would
@@ -23,6 +31,7 @@
 use super::Simulation;
 use crate::error::EngineError;
 use crate::insertion::place::{Obstacles, place};
+use crate::insertion::region::{InsideMesh, Region};
 use crate::insertion::{Amount, InsertRng, Insertion, Outlet, OutletShape, Rate, Schedule};
 use crate::math::Vec3;
 use crate::state::ParticleInit;
@@ -59,6 +68,10 @@ pub struct FlowBooks {
     pub present: Tally,
     /// Particles each insertion drew but could not place (no room left in its region).
     pub missed: Vec<u64>,
+    /// Particles each insertion has drawn so far, placed or not: `asked = inserted + missed`.
+    pub asked: Vec<u64>,
+    /// Their mass, kg (drawn masses summed in their order, not in quanta).
+    pub asked_mass: Vec<f64>,
 }
 
 impl FlowBooks {
@@ -135,6 +148,24 @@ pub(crate) struct FlowStage {
     initial: Tally,
     /// The first thing that went wrong in the stage (the run should stop on it).
     pub error: Option<String>,
+    /// Particles caught by an outlet (id → outlet), removed at the next drain.
+    pending: std::collections::BTreeMap<u32, u32>,
+    /// What the run should tell its user (insertions' shortfalls, overlaps of given particles).
+    notices: Vec<String>,
+    /// Each mesh wall as a solid, found at the first batch: its inside once for a fixed closed
+    /// mesh (built again at each batch where it is then for a moving one).
+    solids: Option<Vec<Solid>>,
+}
+
+/// A mesh wall as an obstacle of insertions.
+#[derive(Debug, Clone)]
+enum Solid {
+    /// Not closed: it has no inside.
+    Open,
+    /// Closed and fixed: its inside.
+    Fixed(std::sync::Arc<InsideMesh>),
+    /// Closed and moving.
+    Moving,
 }
 
 /// The books' quantum for particles up to `largest_mass`: a power of two 2⁻⁶⁰ of it or less.
@@ -192,6 +223,9 @@ impl FlowStage {
             quantum_exp,
             initial: Tally::default(),
             error: None,
+            pending: Default::default(),
+            notices: Vec::new(),
+            solids: None,
         };
         stage.initial = stage.tally(p.mass.iter().copied());
         Ok(stage)
@@ -239,6 +273,9 @@ impl FlowStage {
         for &t in &self.removed {
             tally(&mut w, t);
         }
+        // The particles caught and not yet removed (a checkpoint without them has none).
+        w.push(self.pending.len() as u64);
+        w.extend(self.pending.iter().flat_map(|(&id, &o)| [id as u64, o as u64]));
         w
     }
 
@@ -252,8 +289,19 @@ impl FlowStage {
                 w.get(1).unwrap_or(&0)
             ));
         }
-        if w.len() != 7 + 10 * f + 3 * o {
+        let base = 7 + 10 * f + 3 * o;
+        let caught = w.get(base).map_or(0, |&n| n as usize);
+        if !(w.len() == base
+            || (w.len() > base && (w.len() - base - 1) / 2 == caught && (w.len() - base) % 2 == 1))
+        {
             return Err("the checkpoint's insertion state has the wrong length".into());
+        }
+        self.pending.clear();
+        for c in w.get(base + 1..).unwrap_or(&[]).chunks_exact(2) {
+            if c[1] >= o as u64 || c[0] > u32::MAX as u64 {
+                return Err("the checkpoint's caught particles name no outlet of the case".into());
+            }
+            self.pending.insert(c[0] as u32, c[1] as u32);
         }
         let tally = |c: &[u64]| Tally { count: c[0], units: (c[1] as u128 | (c[2] as u128) << 64) as i128 };
         self.next_id = w[2];
@@ -346,7 +394,26 @@ impl Simulation {
             removed: st.removed.clone(),
             present: st.tally(self.particles.mass.iter().copied()),
             missed: st.feeds.iter().map(|f| f.missed).collect(),
+            asked: st.feeds.iter().map(|f| f.drawn.0).collect(),
+            asked_mass: st.feeds.iter().map(|f| f.drawn.2).collect(),
         }
+    }
+
+    /// What the flow stage has to tell the run's user so far, oldest first: each insertion's
+    /// shortfall when it first misses particles and whenever it has doubled since, and given
+    /// particles that come in overlapping present ones. A caller shows those after the ones
+    /// it has shown.
+    pub fn flow_notices(&self) -> &[String] {
+        &self.flow.notices
+    }
+
+    /// True if the particle in slot `i` has left through an outlet: caught by one (its
+    /// removal waits for the next drain) or past one now. Such a particle may be outside the
+    /// domain box.
+    pub fn left_through_outlet(&self, i: usize) -> bool {
+        let st = &self.flow;
+        st.pending.contains_key(&self.particles.id[i])
+            || st.outlets.iter().any(|o| o.shape.has_left(self.particles.position[i]))
     }
 
     /// The insertions of the run.
@@ -383,7 +450,10 @@ impl Simulation {
         let tolerance = 1e-6 * self.time_step.dt;
         let due: Vec<usize> =
             (0..self.flow.insertions.len()).filter(|&k| self.batch_due(k, t + tolerance)).collect();
-        let drain = !self.flow.outlets.is_empty() && self.step.is_multiple_of(DRAIN_EVERY) && self.any_left();
+        if !self.flow.outlets.is_empty() {
+            self.catch_leaving();
+        }
+        let drain = !self.flow.pending.is_empty() && self.step.is_multiple_of(DRAIN_EVERY);
         if due.is_empty() && !drain {
             return Ok(());
         }
@@ -413,22 +483,44 @@ impl Simulation {
         }
     }
 
-    /// True if a particle has left through an outlet.
-    fn any_left(&self) -> bool {
-        let outlets = &self.flow.outlets;
-        self.particles.position.iter().any(|&x| outlets.iter().any(|o| o.shape.has_left(x)))
-    }
-
-    /// Removes the particles that have left through an outlet (the first outlet that has them
-    /// counts them).
-    fn drain(&mut self) -> Result<(), EngineError> {
+    /// Catches the particles that are past an outlet now and were not caught before (the
+    /// first outlet that has them counts them).
+    ///
+    /// Outlet after outlet, in their order (a particle past two is the first's), each over
+    /// all positions in one tight loop: this runs at every step.
+    fn catch_leaving(&mut self) {
         let p = &self.particles;
-        let mut gone: Vec<(usize, usize)> = Vec::new();
-        for i in 0..p.len() {
-            if let Some(o) = self.flow.outlets.iter().position(|o| o.shape.has_left(p.position[i])) {
-                gone.push((i, o));
+        let FlowStage { outlets, pending, .. } = &mut self.flow;
+        for (o, outlet) in outlets.iter().enumerate() {
+            let mut catch = |i: usize| {
+                pending.entry(p.id[i]).or_insert(o as u32);
+            };
+            match &outlet.shape {
+                // The test of `has_left`, written out so that the loop stays simple.
+                &OutletShape::Plane { point, normal } => {
+                    for (i, &x) in p.position.iter().enumerate() {
+                        if (x - point).dot(normal) > 0.0 {
+                            catch(i);
+                        }
+                    }
+                }
+                shape => {
+                    for (i, &x) in p.position.iter().enumerate() {
+                        if shape.has_left(x) {
+                            catch(i);
+                        }
+                    }
+                }
             }
         }
+    }
+
+    /// Removes the particles caught by the outlets, each counted by the outlet that caught it.
+    fn drain(&mut self) -> Result<(), EngineError> {
+        let p = &self.particles;
+        let pending = std::mem::take(&mut self.flow.pending);
+        let gone: Vec<(usize, usize)> =
+            (0..p.len()).filter_map(|i| pending.get(&p.id[i]).map(|&o| (i, o as usize))).collect();
         if gone.is_empty() {
             return Ok(());
         }
@@ -447,9 +539,11 @@ impl Simulation {
     /// Draws, places and inserts the next batch of insertion `k`.
     fn insert_batch(&mut self, k: usize) -> Result<(), EngineError> {
         // Lent out rather than cloned: a mesh region holds every triangle of its mesh.
+        let before = self.flow.feeds[k].missed;
         let insertions = std::mem::take(&mut self.flow.insertions);
         let result = self.insert_batch_of(k, &insertions[k]);
         self.flow.insertions = insertions;
+        self.notice_missed(k, before);
         result
     }
 
@@ -472,6 +566,7 @@ impl Simulation {
             let v = std::f64::consts::FRAC_PI_6 * (2.0 * p.radius).powi(3);
             feed.drawn = (feed.drawn.0 + 1, feed.drawn.1 + v, feed.drawn.2 + p.density * v);
         }
+        self.check_given_against_present(ins, &new)?;
         let first = self.particles.len();
         self.insert(&new)?;
         let units: Vec<i128> = self.particles.mass[first..].iter().map(|&m| self.flow.units(m)).collect();
@@ -479,6 +574,169 @@ impl Simulation {
             self.flow.feeds[k].placed.add(u);
         }
         Ok(())
+    }
+
+    /// Given particles `new` of `ins` against the particles present: one at a present
+    /// particle's centre is an error (the contact has no normal), the largest overlap above
+    /// the insertion's limit a notice. Through the nearest periodic image.
+    fn check_given_against_present(
+        &mut self,
+        ins: &Insertion,
+        new: &[ParticleInit],
+    ) -> Result<(), EngineError> {
+        let p = &self.particles;
+        if p.is_empty() || new.is_empty() {
+            return Ok(());
+        }
+        let r_max = p.radius.iter().chain(new.iter().map(|q| &q.radius)).copied().fold(0.0, f64::max);
+        let cell = (2.0 * r_max).max(f64::MIN_POSITIVE);
+        let key = |x: Vec3| {
+            let c = (x / cell).floor();
+            (c.x as i64, c.y as i64, c.z as i64)
+        };
+        let mut grid: std::collections::HashMap<(i64, i64, i64), Vec<usize>> = Default::default();
+        for i in 0..p.len() {
+            grid.entry(key(self.periodic.wrap(p.position[i]))).or_default().push(i);
+        }
+        let images = self.periodic.any();
+        let mut worst: Option<(f64, u32, usize)> = None;
+        for (j, q) in new.iter().enumerate() {
+            let x = self.periodic.wrap(q.position);
+            let (cx, cy, cz) = key(x);
+            let near = |c: (i64, i64, i64)| grid.get(&c).map_or(&[][..], |v| v.as_slice());
+            // On a periodic axis, the cells across the face hold the images' neighbours: all
+            // cells are searched then (a given set is inserted once).
+            let candidates: Vec<usize> = if images {
+                (0..p.len()).collect()
+            } else {
+                let mut c = Vec::new();
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for dz in -1..=1 {
+                            c.extend_from_slice(near((cx + dx, cy + dy, cz + dz)));
+                        }
+                    }
+                }
+                c
+            };
+            for i in candidates {
+                let d = self.periodic.nearest(x - p.position[i]);
+                if d == Vec3::ZERO {
+                    return Err(EngineError::BadReference(format!(
+                        "insertion '{}': its particle {} (the file's particle {}) comes in at the centre ({:e}, {:e}, {:e}) m of particle {}: their contact has no normal direction; move one of them",
+                        ins.name, q.id, ins.given[j].id, q.position.x, q.position.y, q.position.z, p.id[i]
+                    )));
+                }
+                let overlap = q.radius + p.radius[i] - d.length();
+                let ratio = overlap / q.radius.min(p.radius[i]);
+                if ratio > ins.max_initial_overlap && worst.is_none_or(|w| ratio > w.0) {
+                    worst = Some((ratio, q.id, i));
+                }
+            }
+        }
+        if let Some((ratio, id, i)) = worst {
+            let t = self.time();
+            self.flow.notices.push(format!(
+                "insertion '{}' at t = {t:.6e} s: its particle {id} overlaps particle {} by {ratio:.3} of the smaller radius (the largest overlap of the file's particles with those present), above max_initial_overlap = {}; the contact starts with a burst of elastic energy",
+                ins.name, self.particles.id[i], ins.max_initial_overlap
+            ));
+        }
+        Ok(())
+    }
+
+    /// The mesh wall whose inside `region` is (the same triangles where the mesh was
+    /// loaded), if any.
+    fn region_mesh(&self, region: &Region) -> Option<usize> {
+        let Region::Mesh(inside) = region else { return None };
+        (0..self.meshes.len()).find(|&m| {
+            let mesh = &self.meshes[m].mesh;
+            mesh.name() == inside.name()
+                && mesh.triangle_count() == inside.triangle_count()
+                && inside.corners().iter().enumerate().all(|(t, c)| mesh.corners(t as u32) == *c)
+        })
+    }
+
+    /// The triangles of mesh wall `m` where it is now.
+    fn mesh_corners_now(&self, m: usize) -> Vec<[Vec3; 3]> {
+        let v = self.mesh_vertices(m);
+        self.meshes[m].mesh.triangles().iter().map(|t| t.map(|k| v[k as usize])).collect()
+    }
+
+    /// The insides of the closed mesh walls that are obstacles to `region` (where they are
+    /// now): every closed mesh wall except the one whose inside the region is (`own`) and
+    /// those holding the region, a container: a mesh that holds the region's centre and is
+    /// not itself within the region's bounds. Meshes whose bounds stay `margin` clear of the
+    /// region's are left out (no centre can be inside them).
+    fn solids_for(
+        &mut self,
+        region: &Region,
+        own: Option<usize>,
+        margin: f64,
+    ) -> Vec<std::sync::Arc<InsideMesh>> {
+        if self.flow.solids.is_none() {
+            let solids = (0..self.meshes.len())
+                .map(|m| {
+                    let wall = &self.meshes[m];
+                    if !wall.mesh.edges().iter().all(|e| e.triangles().len() == 2) {
+                        Solid::Open
+                    } else if wall.motion.moves() {
+                        Solid::Moving
+                    } else {
+                        let corners = self.mesh_corners_now(m);
+                        Solid::Fixed(std::sync::Arc::new(InsideMesh::of_corners(
+                            wall.mesh.name(),
+                            corners,
+                            None,
+                        )))
+                    }
+                })
+                .collect();
+            self.flow.solids = Some(solids);
+        }
+        let (rlo, rhi) = region.bounds();
+        let centre = 0.5 * (rlo + rhi);
+        let mut out = Vec::new();
+        for (m, solid) in self.flow.solids.iter().flatten().enumerate() {
+            if Some(m) == own {
+                continue;
+            }
+            let inside = match solid {
+                Solid::Open => continue,
+                Solid::Fixed(inside) => inside.clone(),
+                Solid::Moving => std::sync::Arc::new(InsideMesh::of_corners(
+                    self.meshes[m].mesh.name(),
+                    self.mesh_corners_now(m),
+                    None,
+                )),
+            };
+            let (lo, hi) = inside.bounds();
+            if lo.cmpgt(rhi + Vec3::splat(margin)).any() || hi.cmplt(rlo - Vec3::splat(margin)).any() {
+                continue;
+            }
+            let within_region = lo.cmpge(rlo).all() && hi.cmple(rhi).all();
+            if inside.contains(centre) && !within_region {
+                continue;
+            }
+            out.push(inside);
+        }
+        out
+    }
+
+    /// A notice if insertion `k` missed particles in its last batch (`before` missed before
+    /// it): the first time, and when the shortfall has doubled since the last notice.
+    fn notice_missed(&mut self, k: usize, before: u64) {
+        let feed = &self.flow.feeds[k];
+        let after = feed.missed;
+        if after == before || (before > 0 && after.ilog2() == before.ilog2()) {
+            return;
+        }
+        let ins = &self.flow.insertions[k];
+        let placed_mass = feed.placed.units as f64 * 2f64.powi(self.flow.quantum_exp);
+        let t = self.time();
+        self.flow.notices.push(format!(
+            "insertion '{}' at t = {t:.6e} s: {after} of the {} particles asked so far could not be placed ({:.4e} kg of {:.4e} kg placed): its region has no room for them (full, too small for the diameters, or blocked by walls, meshes or particles); the next notice when the shortfall has doubled",
+            ins.name, feed.drawn.0, placed_mass, feed.drawn.2
+        ));
     }
 
     /// [`insert_batch`](Self::insert_batch) with insertion `k`, `ins`, lent out.
@@ -510,13 +768,29 @@ impl Simulation {
             return Ok(());
         }
         let diameters: Vec<f64> = drawn.iter().map(|d| d.1).collect();
-        let triangles = self.mesh_triangles_near(&ins.region, ins.mixture.max_diameter());
+        // The inside of a moving mesh moves with it: the region where the mesh is now.
+        let own = self.region_mesh(&ins.region);
+        let moved = own.filter(|&m| self.meshes[m].motion.moves()).map(|m| {
+            let inside = InsideMesh::of_corners(self.meshes[m].mesh.name(), self.mesh_corners_now(m), None);
+            Region::Mesh(Box::new(inside))
+        });
+        let region = moved.as_ref().unwrap_or(&ins.region);
+        let margin = ins.mixture.max_diameter();
+        let triangles = self.mesh_triangles_near(region, margin);
+        let solids = self.solids_for(region, own, margin);
+        let solids: Vec<&InsideMesh> = solids.iter().map(|s| s.as_ref()).collect();
         let periodic = self.periodic.any().then_some(self.periodic);
         let p = &self.particles;
         let radii = &p.radius;
-        let obstacles =
-            Obstacles { positions: &p.position, radii, walls: &self.walls, triangles: &triangles, periodic };
-        let centres = place(&ins.region, &diameters, &obstacles, &mut self.flow.feeds[k].rng);
+        let obstacles = Obstacles {
+            positions: &p.position,
+            radii,
+            walls: &self.walls,
+            triangles: &triangles,
+            solids: &solids,
+            periodic,
+        };
+        let centres = place(region, &diameters, &obstacles, &mut self.flow.feeds[k].rng);
         let mut new = Vec::with_capacity(centres.len());
         for (&(phase, d, density), c) in drawn.iter().zip(centres) {
             let Some(position) = c else {
@@ -555,7 +829,7 @@ impl Simulation {
 
     /// The mesh walls' triangles, where they are now, whose bounding boxes come within
     /// `margin` of `region`'s.
-    fn mesh_triangles_near(&self, region: &crate::insertion::region::Region, margin: f64) -> Vec<[Vec3; 3]> {
+    fn mesh_triangles_near(&self, region: &Region, margin: f64) -> Vec<[Vec3; 3]> {
         let (lo, hi) = region.bounds();
         let (lo, hi) = (lo - Vec3::splat(margin), hi + Vec3::splat(margin));
         let mut out = Vec::new();
