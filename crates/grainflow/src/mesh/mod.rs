@@ -26,6 +26,7 @@ pub mod grid;
 pub mod keyframes;
 pub mod load;
 pub mod motion;
+pub mod polygon;
 
 pub use contact::{ClosestPoint, MeshContact, Primitive, Region, closest_point_on_triangle, sphere_contacts};
 pub use grid::TriangleGrid;
