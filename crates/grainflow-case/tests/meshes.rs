@@ -282,3 +282,22 @@ fn a_motions_start_and_stop_become_its_window() {
     assert_eq!(m[0].window, MotionWindow { start: 0.0004, stop: 0.0009 });
     assert_eq!(m[1].window, MotionWindow::ALWAYS);
 }
+
+/// docs/case-file.md: a byte-order mark before an ASCII STL is skipped (it was refused as "not
+/// an STL file").
+#[test]
+fn an_ascii_stl_with_a_byte_order_mark_is_read() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let stl = "solid s\nfacet normal 0 0 1\nouter loop\nvertex -0.05 -0.05 0\nvertex 0.05 -0.05 0\n\
+               vertex 0.05 0.05 0\nendloop\nendfacet\nendsolid s\n";
+    std::fs::write(dir.path().join("plain.stl"), stl).expect("write mesh");
+    std::fs::write(dir.path().join("marked.stl"), format!("\u{feff}{stl}")).expect("write mesh");
+    let load = |file: &str| {
+        let case = write_case(dir.path(), &format!("[[meshes]]\nname = \"plate\"\nfile = \"{file}\"\n"));
+        grainflow_case::load(&case).map(|c| c.config.meshes[0].mesh.clone())
+    };
+    let plain = load("plain.stl").expect("valid");
+    let marked = load("marked.stl").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(marked.vertices(), plain.vertices());
+    assert_eq!(marked.triangles(), plain.triangles());
+}
