@@ -301,3 +301,52 @@ fn an_ascii_stl_with_a_byte_order_mark_is_read() {
     assert_eq!(marked.vertices(), plain.vertices());
     assert_eq!(marked.triangles(), plain.triangles());
 }
+
+/// A mesh whose fastest point moves more than a tenth of the smallest radius a step is refused
+/// (issue 38); with `[time] force_dt = true` the case loads with the same text as a warning.
+/// Here the particles' diameter is 0.01 m and MFIX's rule gives dt = TCOLL/50.
+#[test]
+fn a_mesh_too_fast_for_the_step_is_refused_unless_forced() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let mesh = "[[meshes]]\nname = \"plate\"\nfile = \"square.obj\"\nscale = 1e-3\ntranslate = [-0.05, -0.05, -0.05]\n\
+                [meshes.motion]\nkind = \"translate\"\nvelocity = [0.0, 0.0, 500.0]\n";
+    let e = grainflow_case::load(&write_case(dir.path(), mesh)).expect_err("refused").to_string();
+    // TCOLL = π/√(k/m_eff − …) with m_eff = m/2; dt = TCOLL/50; the travel is 500·dt.
+    let c = grainflow_case::load(&write_case(dir.path(), "")).expect("valid without the mesh");
+    let dt = grainflow::timestep::choose(
+        c.config.time_step,
+        &c.config.law,
+        &c.config.phases,
+        &grainflow::contact::CoeffTable::build(
+            &c.config.law,
+            &c.config.phases,
+            &c.config.wall_materials,
+            &c.config.pair_params,
+            &c.config.wall_params,
+        )
+        .unwrap(),
+        0.001,
+    )
+    .unwrap()
+    .dt;
+    for part in [
+        "[[meshes]] 'plate': motion: mesh 'plate' is translating at 5.0000e2 m/s".to_string(),
+        format!("{:.4e} m in a step of dt = {dt:.4e} s", 500.0 * dt),
+        format!("{:.3} of the smallest particle radius 5.0000e-3 m", 500.0 * dt / 0.005),
+        format!("a safe time step is dt <= {:.4e} s", 0.1 * 0.005 / 500.0),
+    ] {
+        assert!(e.contains(&part), "'{part}' not in: {e}");
+    }
+    let forced = write_case(dir.path(), mesh);
+    let text = std::fs::read_to_string(&forced)
+        .unwrap()
+        .replace("t_stop = 0.001", "t_stop = 0.001\nforce_dt = true");
+    std::fs::write(&forced, text).unwrap();
+    let c = grainflow_case::load(&forced).expect("forced");
+    assert!(
+        c.warnings.iter().any(|w| w.contains("mesh 'plate' is translating") && w.contains("running anyway")),
+        "{:?}",
+        c.warnings
+    );
+}

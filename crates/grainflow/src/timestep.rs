@@ -109,6 +109,42 @@ pub fn hertz_default_dt(phases: &[Phase]) -> Option<f64> {
     (dt.is_finite() && dt > 0.0).then_some(dt)
 }
 
+/// The most a particle or a mesh's fastest point may move in one step, as a fraction of a
+/// particle radius: 0.1. A moving wall's overlap with a particle grows by its travel each step,
+/// and a sheet (a mesh touched from either side) is passed through once a step carries a
+/// particle's centre across it: a step carrying a point more than a radius cannot resolve a
+/// contact at all. A tenth keeps the first step of a contact within a tenth of the radius,
+/// far inside the health check's default overlap limit (0.5), as MFIX's TCOLL/50 keeps an
+/// ordinary impact in some 25 steps.
+pub const TRAVEL_FRACTION: f64 = 0.1;
+
+/// The first mesh of `meshes` whose fastest point ([`MeshWall::fastest_point_speed`]) moves
+/// more than [`TRAVEL_FRACTION`] of `smallest_radius` in a step of `dt`: its index and a
+/// sentence naming it (by `names`), its speed and the largest safe step.
+///
+/// [`MeshWall::fastest_point_speed`]: crate::mesh::MeshWall::fastest_point_speed
+pub fn mesh_travel_problem(
+    meshes: &[crate::mesh::MeshWall],
+    names: &[String],
+    smallest_radius: f64,
+    dt: f64,
+) -> Option<(usize, String)> {
+    meshes.iter().zip(names).enumerate().find_map(|(k, (m, name))| {
+        let (speed, how) = m.fastest_point_speed();
+        let travel = speed * dt;
+        (travel > TRAVEL_FRACTION * smallest_radius).then(|| {
+            (
+                k,
+                format!(
+                    "mesh '{name}' is {how}: its fastest point moves at {speed:.4e} m/s, {travel:.4e} m in a step of dt = {dt:.4e} s, {:.3} of the smallest particle radius {smallest_radius:.4e} m, above the limit of {TRAVEL_FRACTION} of it (a particle it meets would pass through it or be hit far harder than the contact can resolve); a safe time step is dt <= {:.4e} s",
+                    travel / smallest_radius,
+                    TRAVEL_FRACTION * smallest_radius / speed
+                ),
+            )
+        })
+    })
+}
+
 /// Refuses a run whose step count is absurd or cannot be formed (see [`MAX_STEPS`]).
 pub fn check_step_count(span: f64, dt: f64) -> Result<(), EngineError> {
     let q = span / dt;

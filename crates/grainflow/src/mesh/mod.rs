@@ -423,6 +423,39 @@ impl MeshWall {
         }
     }
 
+    /// The largest speed a point of the mesh reaches under its rigid motion, m/s, and how it
+    /// comes about: |v| of a translation; |ω| times the largest distance of a vertex from the
+    /// axis for a rotation (the ramp only rises to ω); 2π·f·|A| at the centre of an
+    /// oscillation. A surface velocity (`surface`) slides the surface in its own plane and
+    /// moves no point of it towards a particle, so it is not counted.
+    pub fn fastest_point_speed(&self) -> (f64, String) {
+        match self.motion {
+            MeshMotion::Fixed => (0.0, "fixed".into()),
+            MeshMotion::Translate { velocity } => {
+                (velocity.length(), format!("translating at {:.4e} m/s", velocity.length()))
+            }
+            MeshMotion::Rotate { origin, axis, omega, .. } => {
+                let reach = self
+                    .mesh
+                    .vertices()
+                    .iter()
+                    .map(|&x| {
+                        let d = x - origin;
+                        (d - axis * d.dot(axis)).length()
+                    })
+                    .fold(0.0, f64::max);
+                (
+                    omega.abs() * reach,
+                    format!("turning at {:.4e} rad/s with a vertex {reach:.4e} m from the axis", omega.abs()),
+                )
+            }
+            MeshMotion::Oscillate { amplitude, frequency } => {
+                let v = std::f64::consts::TAU * frequency * amplitude.length();
+                (v, format!("oscillating by {:.4e} m at {frequency:e} Hz", amplitude.length()))
+            }
+        }
+    }
+
     /// True if the contact velocity of its surface may be non-zero.
     pub fn moves(&self) -> bool {
         self.motion.moves() || self.surface != SurfaceMotion::None
