@@ -1151,6 +1151,19 @@ fn validate<'h>(
     if let Some(per) = &periodic {
         let skin = skin.unwrap_or_else(|| grainflow::simulation::default_skin(particles.max_radius()));
         per.check(particles.max_radius(), skin, &walls)?;
+        // The largest radius any particle has or is inserted with.
+        let r_max = insertions
+            .iter()
+            .flat_map(|ins| &ins.mixture.parts)
+            .map(|part| 0.5 * part.sizes.max_diameter())
+            .fold(particles.max_radius(), f64::max);
+        if let Some((m, axis, from, to)) =
+            grainflow::simulation::periodic_mesh_reach(&meshes, per, r_max, t_stop - t_start)
+        {
+            let text =
+                grainflow::simulation::periodic_mesh_message(&mesh_names[m], (axis, from, to), per, r_max);
+            return Err(CaseError::Geometry(format!("[[meshes]] '{}': {text}", mesh_names[m])));
+        }
     }
     let force_dt = time.force_dt.unwrap_or(false);
     // Contacts of their own sizes: the time step from the smallest particles (as the engine

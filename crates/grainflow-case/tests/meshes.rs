@@ -350,3 +350,40 @@ fn a_mesh_too_fast_for_the_step_is_refused_unless_forced() {
         c.warnings
     );
 }
+
+/// Meshes have no periodic images (issue 38): one that comes within the largest radius of a
+/// periodic face, where it is or where its motion takes it, is refused, naming it and the axis.
+/// The plate is 0.14 m square about the z axis: its sides at x = ±0.07 m are 0.025 m clear of
+/// the faces x = ±0.1 m, but turning about z its corners, 0.07·√2 = 0.099 m from the axis,
+/// sweep to within 0.001 m of them, less than the radius 0.005 m.
+#[test]
+fn a_mesh_reaching_a_periodic_face_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let plate = "[[meshes]]\nname = \"plate\"\nfile = \"square.obj\"\nscale = 1.4e-3\ntranslate = [-0.07, -0.07, 0.0]\n";
+    let periodic = |text: String| text.replace("walls = false", "walls = false\nperiodic = [\"x\"]");
+    let case = |extra: &str| {
+        let path = write_case(dir.path(), extra);
+        std::fs::write(&path, periodic(std::fs::read_to_string(&path).unwrap())).unwrap();
+        grainflow_case::load(&path)
+    };
+    case(plate).expect("a fixed plate clear of the faces");
+    let turning = format!("{plate}[meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\nomega = 1.0\n");
+    let e = case(&turning).expect_err("its corners sweep to the faces").to_string();
+    for part in [
+        "[[meshes]] 'plate': mesh 'plate' reaches across or within 5e-3 m",
+        "of the periodic faces x = -1e-1 and x = 1e-1 m",
+        "meshes have no periodic images",
+    ] {
+        assert!(e.contains(part), "'{part}' not in: {e}");
+    }
+    // Its swept extent: the corners' circle, radius 0.07·√2 (to rounding: 1e-12 m).
+    let from: f64 =
+        e.split("spans x from ").nth(1).and_then(|t| t.split(' ').next()).unwrap().parse().unwrap();
+    assert!((from + 0.07 * std::f64::consts::SQRT_2).abs() < 1e-12, "{from}");
+    // A plate across the whole period (a floor) is refused as it stands.
+    let floor =
+        "[[meshes]]\nname = \"floor\"\nfile = \"square.obj\"\nscale = 2e-3\ntranslate = [-0.1, -0.1, 0.0]\n";
+    let e = case(floor).expect_err("a floor to the faces").to_string();
+    assert!(e.contains("mesh 'floor' reaches across") && e.contains("[[walls]] plane"), "{e}");
+}

@@ -28,7 +28,7 @@ mod meshes;
 mod population;
 
 pub use inflow::{FlowBooks, Tally};
-pub use meshes::MeshLoad;
+pub use meshes::{MeshLoad, periodic_mesh_message, periodic_mesh_reach};
 pub use population::ResortRule;
 
 /// Standard gravity, m/s² (MFIX's default, along −y).
@@ -349,6 +349,18 @@ impl Simulation {
         let free = motion::free_runs(&motion, particles.len());
         let periodic = config.periodic.unwrap_or(Periodic::NONE);
         periodic.check(particles.max_radius().max(flow.max_radius()), skin, &config.walls)?;
+        let r_max = particles.max_radius().max(flow.max_radius());
+        if let Some((m, axis, from, to)) =
+            meshes::periodic_mesh_reach(&config.meshes, &periodic, r_max, config.t_stop - config.t_start)
+        {
+            let name = config.meshes[m].mesh.name();
+            return Err(EngineError::BadReference(meshes::periodic_mesh_message(
+                name,
+                (axis, from, to),
+                &periodic,
+                r_max,
+            )));
+        }
         let mut neighbors = NeighborList::with_periodic(skin, periodic);
         let held = motion::held(&motion, particles.len());
         neighbors.exclude_pairs_among(held.clone());

@@ -456,6 +456,38 @@ impl MeshWall {
         }
     }
 
+    /// A box holding every place the mesh's surface takes in the first `span` s of its motion
+    /// (from the pose as loaded), m: its bounds for a fixed mesh; moved by the displacement
+    /// for a translation (within its window) and by ± the amplitude for an oscillation; for a
+    /// rotation the boxes of its vertices' circles about the axis (a point of a triangle is a
+    /// mean of its corners, and its circle's extent along an axis is at most theirs).
+    pub fn swept_bounds(&self, span: f64) -> (Vec3, Vec3) {
+        let (lo, hi) = self.mesh.bounds();
+        match self.motion {
+            MeshMotion::Fixed => (lo, hi),
+            MeshMotion::Translate { velocity } => {
+                let moved = velocity * self.window.clock(span);
+                (lo + moved.min(Vec3::ZERO), hi + moved.max(Vec3::ZERO))
+            }
+            MeshMotion::Oscillate { amplitude, .. } => (lo - amplitude.abs(), hi + amplitude.abs()),
+            MeshMotion::Rotate { origin, axis, .. } => {
+                // A circle of radius ρ in the plane normal to `axis` spans ρ·√(1 − a_k²) about
+                // its centre along axis k.
+                let half = Vec3::ONE - axis * axis;
+                let spread =
+                    Vec3::new(half.x.max(0.0).sqrt(), half.y.max(0.0).sqrt(), half.z.max(0.0).sqrt());
+                let mut out = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+                for &x in self.mesh.vertices() {
+                    let d = x - origin;
+                    let centre = origin + axis * d.dot(axis);
+                    let rho = (x - centre).length();
+                    out = (out.0.min(centre - spread * rho), out.1.max(centre + spread * rho));
+                }
+                out
+            }
+        }
+    }
+
     /// True if the contact velocity of its surface may be non-zero.
     pub fn moves(&self) -> bool {
         self.motion.moves() || self.surface != SurfaceMotion::None
