@@ -1646,7 +1646,8 @@ fn check_stability(
     let table = grainflow::contact::CoeffTable::build(law, phases, wall_materials, pair_params, wall_params)?;
     let limit = grainflow::timestep::stability_limit(law, phases, wall_materials, &table);
     // The step and the step count, refused here as the engine would refuse them.
-    let chosen = grainflow::timestep::choose(rule, law, phases, &table, span)?;
+    // (Only the step matters here, not the Hertz collision time the explanation states.)
+    let chosen = grainflow::timestep::choose(rule, law, phases, &table, span, &(1.0, String::new()))?;
     match rule {
         TimeStepRule::Fixed(dt) if dt > limit.dt_max => {
             let text = format!(

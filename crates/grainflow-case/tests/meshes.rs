@@ -327,6 +327,7 @@ fn a_mesh_too_fast_for_the_step_is_refused_unless_forced() {
         )
         .unwrap(),
         0.001,
+        &(1.0, String::new()),
     )
     .unwrap()
     .dt;

@@ -292,6 +292,7 @@ impl Simulation {
             return Err(EngineError::BadReference("gravity must be a finite vector in m/s²".into()));
         }
         let sizes = RunSizes::of(&config.phases, &particles, &config.insertions);
+        let speed = timestep::characteristic_speed(&particles, &config.insertions, &config.meshes);
         let flow =
             inflow::FlowStage::new(config.insertions, config.outlets, &particles, config.phases.len())?;
         let table = |phases: &[Phase]| {
@@ -314,6 +315,7 @@ impl Simulation {
                 &sizes.smallest,
                 &table(&sizes.smallest)?,
                 config.t_stop - config.t_start,
+                &speed,
             )?
         } else {
             timestep::choose(
@@ -322,6 +324,7 @@ impl Simulation {
                 &config.phases,
                 &reference,
                 config.t_stop - config.t_start,
+                &speed,
             )?
         };
         let r_max = particles.max_radius().max(flow.max_radius());
