@@ -191,10 +191,10 @@ fn elastic_statement(dt: f64, phases: &[Phase], speed: &(f64, String)) -> Option
     let mut th: Option<(f64, usize, usize)> = None;
     for m in 0..phases.len() {
         for l in m..phases.len() {
-            if let Some(t) = hertz_collision_time(&phases[m], &phases[l], speed.0) {
-                if th.is_none_or(|b| t < b.0) {
-                    th = Some((t, m, l));
-                }
+            if let Some(t) = hertz_collision_time(&phases[m], &phases[l], speed.0)
+                && th.is_none_or(|b| t < b.0)
+            {
+                th = Some((t, m, l));
             }
         }
     }

@@ -744,15 +744,11 @@ fn an_obj_face_with_a_reflex_corner_covers_the_polygon_and_not_its_notch() {
         0.5 * (0..6).map(|i| l[i].0 * l[(i + 1) % 6].1 - l[(i + 1) % 6].0 * l[i].1).sum::<f64>();
     assert_eq!(shoelace, 3.0);
     let (c, s) = (0.6, 0.8);
-    let planes: [(&str, Box<dyn Fn(f64, f64) -> Vec3>, Box<dyn Fn(Vec3) -> (f64, f64)>); 2] = [
-        ("flat", Box::new(|u, w| v(u, w, 0.0)), Box::new(|p: Vec3| (p.x, p.y))),
-        (
-            "tilted",
-            Box::new(move |u, w| v(u, w * c, w * s)),
-            Box::new(move |p: Vec3| (p.x, p.y * c + p.z * s)),
-        ),
-    ];
-    for (name, to_3d, to_2d) in &planes {
+    // Each plane by its two in-plane unit axes: (u, w) sits at u·e_u + w·e_w.
+    let planes = [("flat", Vec3::X, Vec3::Y), ("tilted", Vec3::X, v(0.0, c, s))];
+    for &(name, e_u, e_w) in &planes {
+        let to_3d = |u: f64, w: f64| e_u * u + e_w * w;
+        let to_2d = |p: Vec3| (p.dot(e_u), p.dot(e_w));
         let mut text = String::new();
         for &(u, w) in &l {
             let p = to_3d(u, w);
@@ -777,7 +773,7 @@ fn an_obj_face_with_a_reflex_corner_covers_the_polygon_and_not_its_notch() {
         let covering = |u: f64, w: f64| {
             (0..4u32)
                 .filter(|&t| {
-                    let k = mesh.corners(t).map(|p| to_2d(p));
+                    let k = mesh.corners(t).map(to_2d);
                     let side =
                         |a: (f64, f64), b: (f64, f64)| (b.0 - a.0) * (w - a.1) - (b.1 - a.1) * (u - a.0);
                     side(k[0], k[1]) >= -1e-12 && side(k[1], k[2]) >= -1e-12 && side(k[2], k[0]) >= -1e-12
