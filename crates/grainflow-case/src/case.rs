@@ -1161,6 +1161,19 @@ fn validate<'h>(
     if let Some(per) = &periodic {
         let skin = skin.unwrap_or_else(|| grainflow::simulation::default_skin(particles.max_radius()));
         per.check(particles.max_radius(), skin, &walls)?;
+        // The largest radius any particle has or is inserted with.
+        let r_max = insertions
+            .iter()
+            .flat_map(|ins| &ins.mixture.parts)
+            .map(|part| 0.5 * part.sizes.max_diameter())
+            .fold(particles.max_radius(), f64::max);
+        if let Some((m, axis, from, to)) =
+            grainflow::simulation::periodic_mesh_reach(&meshes, per, r_max, t_stop - t_start)
+        {
+            let text =
+                grainflow::simulation::periodic_mesh_message(&mesh_names[m], (axis, from, to), per, r_max);
+            return Err(CaseError::Geometry(format!("[[meshes]] '{}': {text}", mesh_names[m])));
+        }
     }
     let force_dt = time.force_dt.unwrap_or(false);
     // Contacts of their own sizes: the time step from the smallest particles (as the engine
@@ -1168,12 +1181,13 @@ fn validate<'h>(
     // Each particle's own size is checked before the smallest one sets a step.
     grainflow::simulation::check_particles(&particles, phases.len())?;
     let sizes = grainflow::simulation::RunSizes::of(&phases, &particles, &insertions);
+    let smallest_radius = sizes.smallest.iter().map(Phase::radius).fold(f64::INFINITY, f64::min);
     let step_phases =
         if law.sizes == ContactSizes::Own && sizes.vary { sizes.smallest } else { phases.clone() };
     if let Some(dt) = grainflow::timestep::hertz_default_dt(&step_phases).filter(|_| hertz_default) {
         time_step = TimeStepRule::Fixed(dt);
     }
-    check_stability(
+    let dt = check_stability(
         time_step,
         t_stop - t_start,
         &law,
@@ -1184,6 +1198,18 @@ fn validate<'h>(
         force_dt,
         &mut warnings,
     )?;
+    if let Some((k, text)) =
+        grainflow::timestep::mesh_travel_problem(&meshes, &mesh_names, smallest_radius, dt)
+    {
+        let table = format!("[[meshes]] '{}'", mesh_names[k]);
+        if force_dt {
+            warnings.push(format!("{table}: motion: {text} (running anyway: [time] force_dt = true)"));
+        } else {
+            return Err(CaseError::Geometry(format!(
+                "{table}: motion: {text}; or lower the mesh's speed, or set [time] force_dt = true to run anyway"
+            )));
+        }
+    }
 
     let config = SimulationConfig {
         phases,
@@ -1615,6 +1641,7 @@ fn check_geometry(
 
 /// An explicit time step above the contact law's stability limit is refused unless forced;
 /// MFIX's rule above it (possible only through stiff walls, which MFIX leaves out) warns.
+/// The step in use.
 fn check_stability(
     rule: TimeStepRule,
     span: f64,
@@ -1625,11 +1652,12 @@ fn check_stability(
     wall_params: &[ContactParams],
     force: bool,
     warnings: &mut Vec<String>,
-) -> Result<(), CaseError> {
+) -> Result<f64, CaseError> {
     let table = grainflow::contact::CoeffTable::build(law, phases, wall_materials, pair_params, wall_params)?;
     let limit = grainflow::timestep::stability_limit(law, phases, wall_materials, &table);
     // The step and the step count, refused here as the engine would refuse them.
-    let chosen = grainflow::timestep::choose(rule, law, phases, &table, span)?;
+    // (Only the step matters here, not the Hertz collision time the explanation states.)
+    let chosen = grainflow::timestep::choose(rule, law, phases, &table, span, &(1.0, String::new()))?;
     match rule {
         TimeStepRule::Fixed(dt) if dt > limit.dt_max => {
             let text = format!(
@@ -1641,7 +1669,7 @@ fn check_stability(
             );
             if force {
                 warnings.push(format!("[time]: {text} (running anyway: force_dt = true)"));
-                Ok(())
+                Ok(dt)
             } else {
                 Err(CaseError::invalid(
                     "[time]",
@@ -1659,9 +1687,9 @@ fn check_stability(
                     limit.dt_max, limit.reason, limit.dt_safe
                 ));
             }
-            Ok(())
+            Ok(dt)
         }
-        TimeStepRule::Fixed(_) => Ok(()),
+        TimeStepRule::Fixed(dt) => Ok(dt),
     }
 }
 

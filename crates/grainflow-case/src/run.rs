@@ -8,8 +8,10 @@
 //!   `out/checkpoint.gfc` (the previous one survives a crash mid-write), from which
 //!   [`RunOptions::restart`] continues bit for bit;
 //! - **health checks** every [`HEALTH_EVERY`] steps and at every output: a non-finite value, a
-//!   particle outside the domain box or an overlap above `[particles] max_overlap` of the
-//!   smaller radius stops the run with a message naming the particle, the step, the likely cause and a fix,
+//!   particle outside the domain box, a particle moving more than its radius in a step or an
+//!   overlap above `[particles] max_overlap` of the smaller radius stops the run with a message
+//!   naming the particle, the step, the likely cause (from what happened: the start's state,
+//!   an insertion since the last check, a moving mesh, else the step) and a fix,
 //!   after writing the last good state (kept at every output and every 10·`HEALTH_EVERY`
 //!   steps) to `out/checkpoint-last-good.gfc`;
 //! - **interruption**: when the `stop` flag is raised (SIGINT/SIGTERM in the program) the step
@@ -532,21 +534,50 @@ pub struct Health {
     pub max_overlap: f64,
 }
 
+/// Which state a health check looks at: the run's first (before any step), or one reached by
+/// steps since the last check, in which the particles with ids from `fresh_from` on were
+/// inserted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Checked {
+    /// The state the run starts from (the particle file, seeded particles, batches due at the
+    /// start).
+    Start,
+    /// The steps since the last check.
+    Since {
+        /// Particles with this id or a higher one were inserted since the last check.
+        fresh_from: u32,
+    },
+}
+
+impl Checked {
+    /// For the check after this one: particles with ids above every present one are new.
+    pub fn after(sim: &Simulation) -> Checked {
+        let top = sim.particles().id.iter().copied().max().map_or(0, |i| i.saturating_add(1));
+        Checked::Since { fresh_from: top }
+    }
+}
+
 /// The first problem of the current state, if any: non-finite values, a particle outside
-/// the domain box, an overlap beyond `health.max_overlap`.
-pub fn health_problem(sim: &Simulation, health: Health) -> Option<String> {
+/// the domain box, a particle moving more than its radius in a step, an overlap beyond
+/// `health.max_overlap`. Each message names the likely cause from what happened (`checked`):
+/// the start's state, an insertion since the last check, a moving mesh the particle touches,
+/// or else the time step (or the stiffness) for the speeds.
+pub fn health_problem(sim: &Simulation, health: Health, checked: Checked) -> Option<String> {
     let p = sim.particles();
     let step = sim.step_index();
+    let dt = sim.dt();
     if let Some(e) = sim.flow_error() {
         return Some(format!("step {step}: {e}"));
     }
+    let cause = Cause::new(sim, checked);
     // In id order: the problem named is the same however the particles are stored.
     for i in p.id_order() {
         let (x, v, w) = (p.position[i], p.velocity[i], p.omega[i]);
         if !(x.is_finite() && v.is_finite() && w.is_finite()) {
             return Some(format!(
-                "step {step}: particle {} has a non-finite position, velocity or spin. Likely cause: the time step is too large for the contact stiffness (or a stiffness or density is extreme). Fix: reduce dt (leave it out for MFIX's rule) or lower k_n / E.",
-                p.id[i]
+                "step {step}: particle {} has a non-finite position, velocity or spin. {}",
+                p.id[i],
+                cause.of(i, None).unwrap_or_else(|| "Likely cause: the time step is too large for the contact stiffness (or a stiffness or density is extreme). Fix: reduce dt (leave it out for MFIX's rule) or lower k_n / E.".into())
             ));
         }
         let (lo, hi) = health.domain;
@@ -554,23 +585,128 @@ pub fn health_problem(sim: &Simulation, health: Health) -> Option<String> {
         if !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any()) && !sim.left_through_outlet(i)
         {
             return Some(format!(
-                "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.",
+                "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. {}",
                 p.id[i],
                 x.x,
                 x.y,
                 x.z,
-                v.length()
+                v.length(),
+                cause.of(i, None).unwrap_or_else(|| "Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.".into())
+            ));
+        }
+        let (speed, r) = (v.length(), p.radius[i]);
+        if speed * dt > r {
+            let safe = grainflow::timestep::TRAVEL_FRACTION * r / speed;
+            return Some(format!(
+                "step {step}: particle {} moves {:.4e} m in a step (speed {speed:.4e} m/s at dt = {dt:.4e} s), more than its radius {r:.4e} m: in one step it can pass through a mesh sheet, a wall or another particle. {} A safe time step for this speed is dt <= {safe:.4e} s ({} of its radius a step).",
+                p.id[i],
+                speed * dt,
+                cause.of(i, None).unwrap_or_else(|| "Likely cause: the time step is too large for the speeds of the case (an initial or inserted velocity, or a fall from a great height). Fix: reduce dt, or the speeds.".into()),
+                grainflow::timestep::TRAVEL_FRACTION
             ));
         }
     }
     let d = sim.diagnostics();
     if d.max_overlap_ratio > health.max_overlap {
+        // The contact with the largest overlap (as a fraction of the smaller radius), first
+        // in id order among equals.
+        let ratio = |c: &grainflow::ContactInfo| {
+            let r = match c.other {
+                grainflow::ContactPartner::Particle(j) => p.radius[c.particle].min(p.radius[j]),
+                _ => p.radius[c.particle],
+            };
+            c.overlap / r
+        };
+        let worst = sim
+            .contacts()
+            .into_iter()
+            .max_by(|a, b| ratio(a).total_cmp(&ratio(b)).then(p.id[b.particle].cmp(&p.id[a.particle])));
+        let (what, why) = match worst {
+            Some(c) => {
+                let other = match c.other {
+                    grainflow::ContactPartner::Particle(j) => format!("particle {}", p.id[j]),
+                    grainflow::ContactPartner::Wall(w) => format!("wall '{}'", sim.walls()[w].name),
+                    grainflow::ContactPartner::Mesh { mesh, triangle } => {
+                        format!("mesh '{}' (triangle {triangle})", sim.meshes()[mesh].mesh.name())
+                    }
+                };
+                (format!(" (particle {} and {other})", p.id[c.particle]), cause.of(c.particle, Some(c.other)))
+            }
+            None => (String::new(), None),
+        };
         return Some(format!(
-            "step {step}: an overlap reached {:.3} of the smaller radius, above the limit [particles] max_overlap = {}. Likely cause: the contact stiffness is too low for the loads and speeds (or dt too large). Fix: raise k_n (or E), or reduce the impact speeds; check that dt resolves the collision time (t_c/dt ≥ 20). If such overlaps are expected, raise [particles] max_overlap.",
-            d.max_overlap_ratio, health.max_overlap
+            "step {step}: an overlap reached {:.3} of the smaller radius{what}, above the limit [particles] max_overlap = {}. {}",
+            d.max_overlap_ratio,
+            health.max_overlap,
+            why.unwrap_or_else(|| "Likely cause: the contact stiffness is too low for the loads and speeds (or dt too large). Fix: raise k_n (or E), or reduce the impact speeds; check that dt resolves the collision time (t_c/dt ≥ 20). If such overlaps are expected, raise [particles] max_overlap.".into())
         ));
     }
     None
+}
+
+/// The likely cause of a particle's problem when it is not the time step: what happened to it.
+struct Cause<'a> {
+    sim: &'a Simulation,
+    checked: Checked,
+}
+
+impl<'a> Cause<'a> {
+    fn new(sim: &'a Simulation, checked: Checked) -> Self {
+        Cause { sim, checked }
+    }
+
+    /// The cause for the particle in slot `i` (and the partner of its contact, if the problem
+    /// is a contact), or `None` when nothing but the step and the stiffness is to blame.
+    fn of(&self, i: usize, partner: Option<grainflow::ContactPartner>) -> Option<String> {
+        let p = self.sim.particles();
+        let partner_slot = match partner {
+            Some(grainflow::ContactPartner::Particle(j)) => Some(j),
+            _ => None,
+        };
+        match self.checked {
+            Checked::Start => {
+                return Some(format!(
+                    "Likely cause: the state the run starts from (particle {}{}: from the particle file, the seeded particles or an insertion due at the start). Fix: separate the particles or slow them down in the input, or check the insertion's region and the particles already there.",
+                    p.id[i],
+                    partner_slot.map_or(String::new(), |j| format!(" and particle {}", p.id[j]))
+                ));
+            }
+            Checked::Since { fresh_from } => {
+                let fresh: Vec<u32> = [Some(i), partner_slot]
+                    .into_iter()
+                    .flatten()
+                    .map(|k| p.id[k])
+                    .filter(|&id| id >= fresh_from)
+                    .collect();
+                if let Some(id) = fresh.first() {
+                    return Some(format!(
+                        "Likely cause: particle {id} was inserted within the last {HEALTH_EVERY} steps (by an insertion or an inflow), placed on or against other particles or walls, or with this speed. Fix: check the insertion's region, diameters and velocity against the particles, walls and meshes already there; the time step is not to blame."
+                    ));
+                }
+            }
+        }
+        // A moving mesh: the contact's own, or any moving mesh the particle touches.
+        let meshes = self.sim.meshes();
+        let mesh = match partner {
+            Some(grainflow::ContactPartner::Mesh { mesh, .. }) => Some(mesh),
+            _ => self.sim.contacts().into_iter().find_map(|c| match c.other {
+                grainflow::ContactPartner::Mesh { mesh, .. } if c.particle == i => Some(mesh),
+                _ => None,
+            }),
+        }
+        .filter(|&m| meshes[m].motion.moves())?;
+        let (speed, how) = meshes[mesh].fastest_point_speed();
+        let dt = self.sim.dt();
+        Some(format!(
+            "Likely cause: mesh '{}' moved into particle {}: it is {how}, its fastest point {:.4e} m a step (dt = {dt:.4e} s), {:.3} of the particle's radius. Fix: lower the mesh's speed, or dt to {:.4e} s ({} of the radius a step).",
+            meshes[mesh].mesh.name(),
+            p.id[i],
+            speed * dt,
+            speed * dt / p.radius[i],
+            grainflow::timestep::TRAVEL_FRACTION * p.radius[i] / speed.max(f64::MIN_POSITIVE),
+            grainflow::timestep::TRAVEL_FRACTION
+        ))
+    }
 }
 
 /// The step interval of periodic checkpoints, if they are counted in steps.
@@ -929,7 +1065,10 @@ fn run_simulation(
         Ok(())
     };
 
-    if let Some(problem) = health_problem(sim, health) {
+    // A restart's first state was checked when it was written: only a fresh run's start is
+    // the input's.
+    let first_check = if start_step == 0 { Checked::Start } else { Checked::after(sim) };
+    if let Some(problem) = health_problem(sim, health, first_check) {
         return Err(RunError::Engine(grainflow::EngineError::BadReference(problem)));
     }
     // What a checkpoint of the current step records of the outputs.
@@ -937,6 +1076,7 @@ fn run_simulation(
         RunNote { series: Some(ts.record_before(step)), flow: mesh_loads.flow_before(step) }.encode()
     };
     sim.set_checkpoint_note(note(&ts, sim.step_index()));
+    let mut checked = Checked::after(sim);
     let mut last_good =
         LastGood::new(sim, hash, &out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
     // A fresh run writes its initial state; a restarted one continues the output schedule of
@@ -976,12 +1116,13 @@ fn run_simulation(
         let end = sim.finished();
         let output_now = step.is_multiple_of(every) || end;
         if step.is_multiple_of(HEALTH_EVERY) || output_now {
-            if let Some(message) = health_problem(sim, health) {
+            if let Some(message) = health_problem(sim, health, checked) {
                 folder.record(Path::new(LAST_GOOD_FILE))?;
                 let (good_step, saved) = last_good.save()?;
                 ts.finish().map_err(io_err(&ts_path))?;
                 return Err(RunError::Unhealthy { message, good_step, saved });
             }
+            checked = Checked::after(sim);
             // Keeping a copy of the state costs a pass over it: refresh it at outputs and
             // every tenth check, not at every check.
             if output_now || step.is_multiple_of(10 * HEALTH_EVERY) {

@@ -282,3 +282,166 @@ fn a_motions_start_and_stop_become_its_window() {
     assert_eq!(m[0].window, MotionWindow { start: 0.0004, stop: 0.0009 });
     assert_eq!(m[1].window, MotionWindow::ALWAYS);
 }
+
+/// docs/case-file.md: a byte-order mark before an ASCII STL is skipped (it was refused as "not
+/// an STL file").
+#[test]
+fn an_ascii_stl_with_a_byte_order_mark_is_read() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let stl = "solid s\nfacet normal 0 0 1\nouter loop\nvertex -0.05 -0.05 0\nvertex 0.05 -0.05 0\n\
+               vertex 0.05 0.05 0\nendloop\nendfacet\nendsolid s\n";
+    std::fs::write(dir.path().join("plain.stl"), stl).expect("write mesh");
+    std::fs::write(dir.path().join("marked.stl"), format!("\u{feff}{stl}")).expect("write mesh");
+    let load = |file: &str| {
+        let case = write_case(dir.path(), &format!("[[meshes]]\nname = \"plate\"\nfile = \"{file}\"\n"));
+        grainflow_case::load(&case).map(|c| c.config.meshes[0].mesh.clone())
+    };
+    let plain = load("plain.stl").expect("valid");
+    let marked = load("marked.stl").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(marked.vertices(), plain.vertices());
+    assert_eq!(marked.triangles(), plain.triangles());
+}
+
+/// A mesh whose fastest point moves more than a tenth of the smallest radius a step is refused
+/// (issue 38); with `[time] force_dt = true` the case loads with the same text as a warning.
+/// Here the particles' diameter is 0.01 m and MFIX's rule gives dt = TCOLL/50.
+#[test]
+fn a_mesh_too_fast_for_the_step_is_refused_unless_forced() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let mesh = "[[meshes]]\nname = \"plate\"\nfile = \"square.obj\"\nscale = 1e-3\ntranslate = [-0.05, -0.05, -0.05]\n\
+                [meshes.motion]\nkind = \"translate\"\nvelocity = [0.0, 0.0, 500.0]\n";
+    let e = grainflow_case::load(&write_case(dir.path(), mesh)).expect_err("refused").to_string();
+    // TCOLL = π/√(k/m_eff − …) with m_eff = m/2; dt = TCOLL/50; the travel is 500·dt.
+    let c = grainflow_case::load(&write_case(dir.path(), "")).expect("valid without the mesh");
+    let dt = grainflow::timestep::choose(
+        c.config.time_step,
+        &c.config.law,
+        &c.config.phases,
+        &grainflow::contact::CoeffTable::build(
+            &c.config.law,
+            &c.config.phases,
+            &c.config.wall_materials,
+            &c.config.pair_params,
+            &c.config.wall_params,
+        )
+        .unwrap(),
+        0.001,
+        &(1.0, String::new()),
+    )
+    .unwrap()
+    .dt;
+    for part in [
+        "[[meshes]] 'plate': motion: mesh 'plate' is translating at 5.0000e2 m/s".to_string(),
+        format!("{:.4e} m in a step of dt = {dt:.4e} s", 500.0 * dt),
+        format!("{:.3} of the smallest particle radius 5.0000e-3 m", 500.0 * dt / 0.005),
+        format!("a safe time step is dt <= {:.4e} s", 0.1 * 0.005 / 500.0),
+    ] {
+        assert!(e.contains(&part), "'{part}' not in: {e}");
+    }
+    let forced = write_case(dir.path(), mesh);
+    let text = std::fs::read_to_string(&forced)
+        .unwrap()
+        .replace("t_stop = 0.001", "t_stop = 0.001\nforce_dt = true");
+    std::fs::write(&forced, text).unwrap();
+    let c = grainflow_case::load(&forced).expect("forced");
+    assert!(
+        c.warnings.iter().any(|w| w.contains("mesh 'plate' is translating") && w.contains("running anyway")),
+        "{:?}",
+        c.warnings
+    );
+}
+
+/// Meshes have no periodic images (issue 38): one that comes within the largest radius of a
+/// periodic face, where it is or where its motion takes it, is refused, naming it and the axis.
+/// The plate is 0.14 m square about the z axis: its sides at x = ±0.07 m are 0.025 m clear of
+/// the faces x = ±0.1 m, but turning about z its corners, 0.07·√2 = 0.099 m from the axis,
+/// sweep to within 0.001 m of them, less than the radius 0.005 m.
+#[test]
+fn a_mesh_reaching_a_periodic_face_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let plate = "[[meshes]]\nname = \"plate\"\nfile = \"square.obj\"\nscale = 1.4e-3\ntranslate = [-0.07, -0.07, 0.0]\n";
+    let periodic = |text: String| text.replace("walls = false", "walls = false\nperiodic = [\"x\"]");
+    let case = |extra: &str| {
+        let path = write_case(dir.path(), extra);
+        std::fs::write(&path, periodic(std::fs::read_to_string(&path).unwrap())).unwrap();
+        grainflow_case::load(&path)
+    };
+    case(plate).expect("a fixed plate clear of the faces");
+    let turning = format!("{plate}[meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\nomega = 1.0\n");
+    let e = case(&turning).expect_err("its corners sweep to the faces").to_string();
+    for part in [
+        "[[meshes]] 'plate': mesh 'plate' reaches across or within 5e-3 m",
+        "of the periodic faces x = -1e-1 and x = 1e-1 m",
+        "meshes have no periodic images",
+    ] {
+        assert!(e.contains(part), "'{part}' not in: {e}");
+    }
+    // Its swept extent: the corners' circle, radius 0.07·√2 (to rounding: 1e-12 m).
+    let from: f64 =
+        e.split("spans x from ").nth(1).and_then(|t| t.split(' ').next()).unwrap().parse().unwrap();
+    assert!((from + 0.07 * std::f64::consts::SQRT_2).abs() < 1e-12, "{from}");
+    // A plate across the whole period (a floor) is refused as it stands.
+    let floor =
+        "[[meshes]]\nname = \"floor\"\nfile = \"square.obj\"\nscale = 2e-3\ntranslate = [-0.1, -0.1, 0.0]\n";
+    let e = case(floor).expect_err("a floor to the faces").to_string();
+    assert!(e.contains("mesh 'floor' reaches across") && e.contains("[[walls]] plane"), "{e}");
+}
+
+/// Issue 38: run-time stops blamed the time step when the input was at fault. The cause is
+/// now named from what happened; here the state's overlap (0.4 of the radius, allowed at the
+/// start by `max_initial_overlap = 0.5`) is checked against a limit of 0.3.
+#[test]
+fn health_stops_name_the_likely_cause() {
+    use grainflow_case::run::{Checked, Health, health_problem};
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("square.obj"), SQUARE_MM).expect("write mesh");
+    let load = |extra: &str| {
+        let path = write_case(
+            dir.path(),
+            &format!("[particles]\nmax_initial_overlap = 0.5\nmax_overlap = 0.5\n{extra}"),
+        );
+        let c = grainflow_case::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let domain = c.domain;
+        (grainflow::Simulation::new(c.config, c.particles).unwrap_or_else(|e| panic!("{e}")), domain)
+    };
+    // Particle 2 (radius 0.005 m) 0.008 m above particle 1: overlap 0.002 m = 0.4 r.
+    let (sim, domain) = load("[[particles.list]]\nphase = \"grain\"\nposition = [0.0, 0.0, 0.058]\n");
+    let health = Health { domain, leaving_removed: false, max_overlap: 0.3 };
+    let at = |checked| health_problem(&sim, health, checked).expect("the overlap is above 0.3");
+    // Overlap 2e-3 m of the smaller radius 5e-3 m: 0.400 (exact to rounding).
+    let m = at(Checked::Start);
+    assert!(m.contains("an overlap reached 0.400 of the smaller radius (particle 1 and particle 2)"), "{m}");
+    assert!(m.contains("Likely cause: the state the run starts from (particle 1 and particle 2"), "{m}");
+    let m = at(Checked::Since { fresh_from: 2 });
+    assert!(m.contains("Likely cause: particle 2 was inserted within the last 100 steps"), "{m}");
+    assert!(m.contains("the time step is not to blame"), "{m}");
+    // Neither inserted since nor at the start: the stiffness and the step.
+    let m = at(Checked::Since { fresh_from: 3 });
+    assert!(m.contains("Likely cause: the contact stiffness is too low"), "{m}");
+    // A plate moving at 0.5 m/s, 0.002 m under particle 1's centre: overlap 0.003 m = 0.6 r,
+    // allowed at the start by max_initial_overlap = 0.7, checked against 0.5.
+    let plate = "[[meshes]]\nname = \"plate\"\nfile = \"square.obj\"\nscale = 1e-3\ntranslate = [-0.05, -0.05, 0.048]\n\
+                 [meshes.motion]\nkind = \"translate\"\nvelocity = [0.0, 0.0, 0.5]\n";
+    let path = write_case(
+        dir.path(),
+        &format!("[particles]\nmax_initial_overlap = 0.7\nmax_overlap = 0.7\n{plate}"),
+    );
+    let c = grainflow_case::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let domain = c.domain;
+    let sim = grainflow::Simulation::new(c.config, c.particles).unwrap_or_else(|e| panic!("{e}"));
+    let health = Health { domain, leaving_removed: false, max_overlap: 0.5 };
+    let m = health_problem(&sim, health, Checked::Since { fresh_from: 2 }).expect("0.6 is above 0.5");
+    assert!(m.contains("(particle 1 and mesh 'square.obj'"), "{m}");
+    let travel = 0.5 * sim.dt();
+    for part in [
+        "Likely cause: mesh 'square.obj' moved into particle 1: it is translating at 5.0000e-1 m/s"
+            .to_string(),
+        format!("its fastest point {travel:.4e} m a step"),
+        format!("{:.3} of the particle's radius", travel / 0.005),
+        format!("or dt to {:.4e} s", 0.1 * 0.005 / 0.5),
+    ] {
+        assert!(m.contains(&part), "'{part}' not in: {m}");
+    }
+}

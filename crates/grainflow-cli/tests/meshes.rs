@@ -242,3 +242,85 @@ fn bad_mesh_input_exits_2_with_its_message() {
     // A key the table does not have.
     refused(d, &case(&format!("{MESH}colour = \"red\"\n"), 0.05), &["unknown field `colour`"]);
 }
+
+/// Issue 38: a mesh whose fastest point moves more than a tenth of the smallest radius in a
+/// step is refused at set-up, naming the mesh, its speed and the safe step 0.1·r/v. The sheet
+/// moving at 1 000 m/s and the fin turning at 3·10⁴ rad/s both ran and exited 0, the particle
+/// passed through.
+#[test]
+fn a_mesh_moving_too_far_in_a_step_is_refused_with_a_safe_step() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    std::fs::write(d.join("floor.stl"), ascii_stl(&floor())).expect("write mesh");
+    // The sheet at 1 000 m/s: 2 mm a step of 2e-6 s, 0.4 of the 5 mm radius.
+    let (v, dt) = (1000.0, 2.0e-6);
+    let safe = 0.1 * R / v;
+    refused(
+        d,
+        &case(&format!("{MESH}[meshes.motion]\nkind = \"translate\"\nvelocity = [0.0, 0.0, {v:e}]\n"), 0.05),
+        &[
+            "[[meshes]] 'floor': motion: mesh 'floor' is translating at 1.0000e3 m/s",
+            "its fastest point moves at 1.0000e3 m/s, 2.0000e-3 m in a step of dt = 2.0000e-6 s",
+            "0.400 of the smallest particle radius 5.0000e-3 m, above the limit of 0.1",
+            &format!("a safe time step is dt <= {safe:.4e} s"),
+            "force_dt = true",
+        ],
+    );
+    // The floor as a fin turning about z through its centre: its corners, HALF·√2 from the
+    // axis, are its fastest points, at ω·HALF·√2 (the closed form; the engine takes the
+    // largest vertex distance, so both agree to rounding, far inside the 5 digits printed).
+    let omega = 3.0e4;
+    let speed = omega * HALF * std::f64::consts::SQRT_2;
+    refused(
+        d,
+        &case(
+            &format!("{MESH}[meshes.motion]\nkind = \"rotate\"\naxis = [0.0, 0.0, 1.0]\nomega = {omega:e}\n"),
+            0.05,
+        ),
+        &[
+            &format!(
+                "turning at 3.0000e4 rad/s with a vertex {:.4e} m from the axis",
+                HALF * std::f64::consts::SQRT_2
+            ),
+            &format!("its fastest point moves at {speed:.4e} m/s, {:.4e} m in a step", speed * dt),
+            &format!("a safe time step is dt <= {:.4e} s", 0.1 * R / speed),
+        ],
+    );
+    // Within the limit the same mesh runs: 0.01 m/s moves it 2e-8 m a step, 4e-6 of the
+    // radius.
+    let c =
+        case(&format!("{MESH}[meshes.motion]\nkind = \"translate\"\nvelocity = [0.0, 0.0, -0.01]\n"), 0.05);
+    std::fs::write(d.join("slow.toml"), c.replace("t_stop = 0.15", "t_stop = 0.0001")).expect("write case");
+    let out = grainflow()
+        .arg("run")
+        .arg(d.join("slow.toml"))
+        .arg("--out")
+        .arg(d.join("slow"))
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// Issue 38: a bead at 1 000 m/s moves 1 cm in a step of 1e-5 s, twice its radius, through the
+/// fixed floor below it; the run exited 0. The health check now stops it, naming the particle,
+/// its travel and the safe step 0.1·r/v = 5e-7 s, and since the speed is in the input it says
+/// so.
+#[test]
+fn a_particle_moving_more_than_its_radius_in_a_step_stops_the_run() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let d = dir.path();
+    std::fs::write(d.join("floor.stl"), ascii_stl(&floor())).expect("write mesh");
+    let text = case(MESH, 0.05).replace("dt = 2.0e-6", "dt = 1.0e-5").replace(
+        "position = [0.0, 0.0, 0.05]",
+        "position = [0.0, 0.0, 0.05]\nvelocity = [0.0, 0.0, -1000.0]",
+    );
+    refused(
+        d,
+        &text,
+        &[
+            "particle 1 moves 1.0000e-2 m in a step (speed 1.0000e3 m/s at dt = 1.0000e-5 s), more than its radius 5.0000e-3 m",
+            "Likely cause: the state the run starts from (particle 1",
+            &format!("A safe time step for this speed is dt <= {:.4e} s", 0.1 * R / 1000.0),
+        ],
+    );
+}

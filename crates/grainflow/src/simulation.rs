@@ -28,7 +28,7 @@ mod meshes;
 mod population;
 
 pub use inflow::{FlowBooks, Tally};
-pub use meshes::MeshLoad;
+pub use meshes::{MeshLoad, periodic_mesh_message, periodic_mesh_reach};
 pub use population::ResortRule;
 
 /// Standard gravity, m/s² (MFIX's default, along −y).
@@ -295,6 +295,7 @@ impl Simulation {
             return Err(EngineError::BadReference("gravity must be a finite vector in m/s²".into()));
         }
         let sizes = RunSizes::of(&config.phases, &particles, &config.insertions);
+        let speed = timestep::characteristic_speed(&particles, &config.insertions, &config.meshes);
         let flow =
             inflow::FlowStage::new(config.insertions, config.outlets, &particles, config.phases.len())?;
         let table = |phases: &[Phase]| {
@@ -317,6 +318,7 @@ impl Simulation {
                 &sizes.smallest,
                 &table(&sizes.smallest)?,
                 config.t_stop - config.t_start,
+                &speed,
             )?
         } else {
             timestep::choose(
@@ -325,6 +327,7 @@ impl Simulation {
                 &config.phases,
                 &reference,
                 config.t_stop - config.t_start,
+                &speed,
             )?
         };
         let r_max = particles.max_radius().max(flow.max_radius());
@@ -352,6 +355,18 @@ impl Simulation {
         let free = motion::free_runs(&motion, particles.len());
         let periodic = config.periodic.unwrap_or(Periodic::NONE);
         periodic.check(particles.max_radius().max(flow.max_radius()), skin, &config.walls)?;
+        let r_max = particles.max_radius().max(flow.max_radius());
+        if let Some((m, axis, from, to)) =
+            meshes::periodic_mesh_reach(&config.meshes, &periodic, r_max, config.t_stop - config.t_start)
+        {
+            let name = config.meshes[m].mesh.name();
+            return Err(EngineError::BadReference(meshes::periodic_mesh_message(
+                name,
+                (axis, from, to),
+                &periodic,
+                r_max,
+            )));
+        }
         let mut neighbors = NeighborList::with_periodic(skin, periodic);
         let held = motion::held(&motion, particles.len());
         neighbors.exclude_pairs_among(held.clone());

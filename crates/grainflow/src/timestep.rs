@@ -109,6 +109,107 @@ pub fn hertz_default_dt(phases: &[Phase]) -> Option<f64> {
     (dt.is_finite() && dt > 0.0).then_some(dt)
 }
 
+/// The most a particle or a mesh's fastest point may move in one step, as a fraction of a
+/// particle radius: 0.1. A moving wall's overlap with a particle grows by its travel each step,
+/// and a sheet (a mesh touched from either side) is passed through once a step carries a
+/// particle's centre across it: a step carrying a point more than a radius cannot resolve a
+/// contact at all. A tenth keeps the first step of a contact within a tenth of the radius,
+/// far inside the health check's default overlap limit (0.5), as MFIX's TCOLL/50 keeps an
+/// ordinary impact in some 25 steps.
+pub const TRAVEL_FRACTION: f64 = 0.1;
+
+/// The first mesh of `meshes` whose fastest point ([`MeshWall::fastest_point_speed`]) moves
+/// more than [`TRAVEL_FRACTION`] of `smallest_radius` in a step of `dt`: its index and a
+/// sentence naming it (by `names`), its speed and the largest safe step.
+///
+/// [`MeshWall::fastest_point_speed`]: crate::mesh::MeshWall::fastest_point_speed
+pub fn mesh_travel_problem(
+    meshes: &[crate::mesh::MeshWall],
+    names: &[String],
+    smallest_radius: f64,
+    dt: f64,
+) -> Option<(usize, String)> {
+    meshes.iter().zip(names).enumerate().find_map(|(k, (m, name))| {
+        let (speed, how) = m.fastest_point_speed();
+        let travel = speed * dt;
+        (travel > TRAVEL_FRACTION * smallest_radius).then(|| {
+            (
+                k,
+                format!(
+                    "mesh '{name}' is {how}: its fastest point moves at {speed:.4e} m/s, {travel:.4e} m in a step of dt = {dt:.4e} s, {:.3} of the smallest particle radius {smallest_radius:.4e} m, above the limit of {TRAVEL_FRACTION} of it (a particle it meets would pass through it or be hit far harder than the contact can resolve); a safe time step is dt <= {:.4e} s",
+                    travel / smallest_radius,
+                    TRAVEL_FRACTION * smallest_radius / speed
+                ),
+            )
+        })
+    })
+}
+
+/// The speed a Hertz collision time is stated at, m/s, and what it is: the fastest of the
+/// particles at the start, the insertions' velocities and the meshes' fastest points
+/// ([`MeshWall::fastest_point_speed`](crate::mesh::MeshWall::fastest_point_speed)); 1 m/s,
+/// said so, when none of them moves.
+pub fn characteristic_speed(
+    particles: &crate::state::Particles,
+    insertions: &[crate::insertion::Insertion],
+    meshes: &[crate::mesh::MeshWall],
+) -> (f64, String) {
+    let start = particles.velocity.iter().map(|v| v.length()).fold(0.0, f64::max);
+    let inserted = insertions.iter().map(|i| i.velocity.length()).fold(0.0, f64::max);
+    let mesh = meshes.iter().map(|m| m.fastest_point_speed().0).fold(0.0, f64::max);
+    let v = start.max(inserted).max(mesh);
+    if !(v.is_finite() && v > 0.0) {
+        return (1.0, "1 m/s, as nothing moves at the start".into());
+    }
+    let what = if v == start {
+        "the fastest particle at the start"
+    } else if v == inserted {
+        "the fastest insertion velocity"
+    } else {
+        "the fastest point of a moving mesh"
+    };
+    (v, format!("{v:.4e} m/s, {what}"))
+}
+
+/// The Hertz collision time of two phases meeting at speed `v`, s:
+/// 2.87·(m*²/(R*·E*²·v))^(1/5), with m* = m₁m₂/(m₁ + m₂), R* = R₁R₂/(R₁ + R₂) and
+/// 1/E* = (1 − ν₁²)/E₁ + (1 − ν₂²)/E₂ (Johnson, Contact Mechanics §11.4); `None` without
+/// E and ν.
+pub fn hertz_collision_time(a: &Phase, b: &Phase, v: f64) -> Option<f64> {
+    let (ea, na, eb, nb) = (a.youngs_modulus?, a.poisson_ratio?, b.youngs_modulus?, b.poisson_ratio?);
+    let m = a.mass() * b.mass() / (a.mass() + b.mass());
+    let r = a.radius() * b.radius() / (a.radius() + b.radius());
+    let e = 1.0 / ((1.0 - na * na) / ea + (1.0 - nb * nb) / eb);
+    let t = 2.87 * (m * m / (r * e * e * v)).powf(0.2);
+    (t.is_finite() && t > 0.0).then_some(t)
+}
+
+/// For an elastic law (Hertz, JKR) with E and ν given: the step `dt` against the Rayleigh
+/// time and the shortest Hertz collision time over the phase pairs at `speed`, as a clause.
+fn elastic_statement(dt: f64, phases: &[Phase], speed: &(f64, String)) -> Option<String> {
+    let (tr, k) = rayleigh_time(phases)?;
+    let mut th: Option<(f64, usize, usize)> = None;
+    for m in 0..phases.len() {
+        for l in m..phases.len() {
+            if let Some(t) = hertz_collision_time(&phases[m], &phases[l], speed.0)
+                && th.is_none_or(|b| t < b.0)
+            {
+                th = Some((t, m, l));
+            }
+        }
+    }
+    let (th, m, l) = th?;
+    Some(format!(
+        "dt/T_R = {:.3} against the Rayleigh time T_R = {tr:.4e} s of phase '{}' (stable to about 0.3), and T_H/dt = {:.1} against the Hertz collision time T_H = 2.87 (m*^2/(R* E*^2 v))^(1/5) = {th:.4e} s of phase pair '{}'-'{}' at v = {}",
+        dt / tr,
+        phases[k].name,
+        th / dt,
+        phases[m].name,
+        phases[l].name,
+        speed.1
+    ))
+}
+
 /// Refuses a run whose step count is absurd or cannot be formed (see [`MAX_STEPS`]).
 pub fn check_step_count(span: f64, dt: f64) -> Result<(), EngineError> {
     let q = span / dt;
@@ -126,13 +227,16 @@ pub fn check_step_count(span: f64, dt: f64) -> Result<(), EngineError> {
     Ok(())
 }
 
-/// Applies the rule.
+/// Applies the rule. For an elastic law (Hertz, JKR) the explanation states the step against
+/// the Rayleigh time and the Hertz collision time at `speed` ([`characteristic_speed`]),
+/// not against MFIX's TCOLL, which takes K_n as a linear stiffness.
 pub fn choose(
     rule: TimeStepRule,
     law: &ContactLaw,
     phases: &[Phase],
     table: &CoeffTable,
     span: f64,
+    speed: &(f64, String),
 ) -> Result<TimeStepChoice, EngineError> {
     let model = match law.normal {
         NormalModel::LinearSpringDashpot => "linear spring-dashpot k_n",
@@ -176,10 +280,13 @@ pub fn choose(
                     absolute_eta(law, c)
                 )));
             }
-            let text = format!(
+            let mut text = format!(
                 "dt = {dt:.7e} s from MFIX's rule: TCOLL = {tcoll:.7e} s (phase pair '{}'-'{}', {model}) / DTSOLID_FACTOR {factor}",
                 phases[limiting.0].name, phases[limiting.1].name
             );
+            if let Some(e) = elastic_statement(dt, phases, speed).filter(|_| law.normal.elastic()) {
+                text = format!("{text}; {e}");
+            }
             (dt, Some(tcoll), text)
         }
         TimeStepRule::Fixed(dt) => {
@@ -199,10 +306,13 @@ pub fn choose(
                 } else {
                     String::new()
                 };
+                let hertz = elastic_statement(dt, phases, speed).map_or(String::new(), |e| format!("; {e}"));
                 format!(
-                    "dt = {dt:.7e} s = {HERTZ_DEFAULT_RAYLEIGH_FRACTION} x the Rayleigh time {tr:.7e} s of phase '{}', the default for Hertz contacts when dt is not given (stable to about 0.3 x T_R{mfix})",
+                    "dt = {dt:.7e} s = {HERTZ_DEFAULT_RAYLEIGH_FRACTION} x the Rayleigh time {tr:.7e} s of phase '{}', the default for Hertz contacts when dt is not given (stable to about 0.3 x T_R{mfix}){hertz}",
                     phases[k].name
                 )
+            } else if let Some(e) = elastic_statement(dt, phases, speed).filter(|_| law.normal.elastic()) {
+                format!("dt = {dt:.7e} s given explicitly: {e}")
             } else if tcoll.is_finite() {
                 let ratio = tcoll / dt;
                 // Plain in the usual range; with an exponent when a soft spring or a tiny step
@@ -316,6 +426,10 @@ mod tests {
         }
     }
 
+    fn at_1() -> (f64, String) {
+        (1.0, "1 m/s".into())
+    }
+
     fn table(law: &ContactLaw, phases: &[Phase], kn: f64) -> CoeffTable {
         let p = ContactParams { kn: Some(kn), en: 0.9, et: Some(0.9), ..Default::default() };
         CoeffTable::build(law, phases, &[], &[p], &[]).expect("valid")
@@ -335,18 +449,21 @@ mod tests {
         for (rule, span) in
             [(TimeStepRule::Fixed(1e-300), 0.01), (TimeStepRule::Mfix { factor: 50.0 }, 1e300)]
         {
-            let e = choose(rule, &law, &phases, &t, span).expect_err("refused").to_string();
+            let e = choose(rule, &law, &phases, &t, span, &at_1()).expect_err("refused").to_string();
             assert!(e.contains("more than the limit"), "{e}");
         }
         // The MFIX rule's single-precision count: k_n = 1e300 gives dt ~ 1e-156 s; a run of
         // 1e-150 s is some 10^5 steps in double precision, but both times are 0 in single.
         let stiff = table(&law, &phases, 1e300);
-        let e = choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &stiff, 1e-150)
+        let e = choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &stiff, 1e-150, &at_1())
             .expect_err("no count")
             .to_string();
         assert!(e.contains("single precision"), "{e}");
         // An ordinary run is unaffected: 0.01 s at MFIX's 1.2867e-5 s is 778 steps (cli.rs).
-        assert_eq!(choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &t, 0.01).unwrap().steps, 778);
+        assert_eq!(
+            choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &t, 0.01, &at_1()).unwrap().steps,
+            778
+        );
     }
 
     #[test]
@@ -358,15 +475,58 @@ mod tests {
         let dt = hertz_default_dt(&phases).expect("E and ν given");
         // 0.2·T_R against the 0.3·T_R limit: exactly two thirds of it (to rounding).
         assert!((dt / limit.dt_max - 2.0 / 3.0).abs() < 1e-12, "{dt} vs {}", limit.dt_max);
-        let c = choose(TimeStepRule::Fixed(dt), &law, &phases, &t, 0.01).unwrap();
+        let c = choose(TimeStepRule::Fixed(dt), &law, &phases, &t, 0.01, &at_1()).unwrap();
         assert!(c.explanation.contains("0.2 x the Rayleigh time"), "{}", c.explanation);
         assert!(c.explanation.contains("MFIX's rule"), "{}", c.explanation);
         // Any other explicit step is reported as given.
-        let c = choose(TimeStepRule::Fixed(0.5 * dt), &law, &phases, &t, 0.01).unwrap();
+        let c = choose(TimeStepRule::Fixed(0.5 * dt), &law, &phases, &t, 0.01, &at_1()).unwrap();
         assert!(c.explanation.contains("given explicitly"), "{}", c.explanation);
         // No elastic constants: no default.
         let lsd = Phase { youngs_modulus: None, ..glass() };
         assert_eq!(hertz_default_dt(&[lsd]), None);
+    }
+
+    /// Issue 38: a Hertz step was judged against MFIX's TCOLL ("TCOLL/dt = 4.3") although
+    /// it was 5 % of the Rayleigh time. It is stated against the Rayleigh time and the Hertz
+    /// collision time, both from their closed forms here.
+    #[test]
+    fn a_hertz_step_is_stated_against_the_rayleigh_and_hertz_times() {
+        let law = ContactLaw::mfix(NormalModel::Hertz);
+        let phases = [glass()];
+        let t = table(&law, &phases, 1.0);
+        let (r, rho, e, nu): (f64, f64, f64, f64) = (0.002, 2500.0, 6.0e10, 0.25);
+        let g = e / (2.0 * (1.0 + nu));
+        let tr = std::f64::consts::PI * r * (rho / g).sqrt() / (0.1631 * nu + 0.8766);
+        // Two equal spheres: m* = m/2, R* = R/2, E* = E/(2(1 − ν²)); at v = 2 m/s.
+        let m = rho * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+        let (ms, rs, es, v) = (m / 2.0, r / 2.0, e / (2.0 * (1.0 - nu * nu)), 2.0);
+        let th = 2.87 * (ms * ms / (rs * es * es * v)).powf(0.2);
+        let dt = 0.05 * tr;
+        let speed = (v, "2 m/s".to_string());
+        for rule in [TimeStepRule::Fixed(dt), TimeStepRule::Mfix { factor: 50.0 }] {
+            let c = choose(rule, &law, &phases, &t, 0.01, &speed).unwrap();
+            // The printed figures: 3 decimals of dt/T_R, 1 of T_H/dt, 5 digits of the times
+            // (the closed forms here and the engine's differ in rounding only, ~1e-16).
+            let why = &c.explanation;
+            for part in [
+                format!(
+                    "dt/T_R = {:.3} against the Rayleigh time T_R = {tr:.4e} s of phase 'glass'",
+                    c.dt / tr
+                ),
+                format!("T_H/dt = {:.1} against the Hertz collision time", th / c.dt),
+                format!("= {th:.4e} s of phase pair 'glass'-'glass' at v = 2 m/s"),
+            ] {
+                assert!(why.contains(&part), "'{part}' not in: {why}");
+            }
+            assert!(!why.contains("TCOLL/dt"), "{why}");
+        }
+        let c = choose(TimeStepRule::Fixed(dt), &law, &phases, &t, 0.01, &speed).unwrap();
+        assert!(c.explanation.contains("dt/T_R = 0.050"), "{}", c.explanation);
+        // The linear law keeps MFIX's ratio.
+        let lsd = ContactLaw::mfix(NormalModel::LinearSpringDashpot);
+        let tl = table(&lsd, &phases, 1000.0);
+        let c = choose(TimeStepRule::Fixed(1e-6), &lsd, &phases, &tl, 0.01, &speed).unwrap();
+        assert!(c.explanation.contains("TCOLL/dt"), "{}", c.explanation);
     }
 
     #[test]
@@ -375,7 +535,7 @@ mod tests {
         // k_n at the float maximum: TCOLL underflows far below a usable step.
         let phases = [glass()];
         let t = table(&law, &phases, f64::MAX);
-        let e = choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &t, 0.01)
+        let e = choose(TimeStepRule::Mfix { factor: 50.0 }, &law, &phases, &t, 0.01, &at_1())
             .expect_err("refused")
             .to_string();
         assert!(!e.contains("at least one phase"), "{e}");

@@ -733,6 +733,98 @@ fn obj_negative_indices_and_quads_are_the_positive_triangles() {
     assert_eq!(obj, indexed.unwrap());
 }
 
+/// An L-shaped face, [0, 2]² without its notch (1, 2]², written from the corner (2, 1) next
+/// to the reflex corner (1, 1): the fan from there covers the notch with a triangle wound the
+/// other way. In the plane z = 0 and in a tilted plane (v along (0, 0.6, 0.8)).
+#[test]
+fn an_obj_face_with_a_reflex_corner_covers_the_polygon_and_not_its_notch() {
+    let l = [(2.0, 1.0), (1.0, 1.0), (1.0, 2.0), (0.0, 2.0), (0.0, 0.0), (2.0, 0.0)];
+    // Shoelace: the polygon's area.
+    let shoelace: f64 =
+        0.5 * (0..6).map(|i| l[i].0 * l[(i + 1) % 6].1 - l[(i + 1) % 6].0 * l[i].1).sum::<f64>();
+    assert_eq!(shoelace, 3.0);
+    let (c, s) = (0.6, 0.8);
+    // Each plane by its two in-plane unit axes: (u, w) sits at u·e_u + w·e_w.
+    let planes = [("flat", Vec3::X, Vec3::Y), ("tilted", Vec3::X, v(0.0, c, s))];
+    for &(name, e_u, e_w) in &planes {
+        let to_3d = |u: f64, w: f64| e_u * u + e_w * w;
+        let to_2d = |p: Vec3| (p.dot(e_u), p.dot(e_w));
+        let mut text = String::new();
+        for &(u, w) in &l {
+            let p = to_3d(u, w);
+            text += &format!("v {} {} {}\n", p.x, p.y, p.z);
+        }
+        text += "f 1 2 3 4 5 6\n";
+        let mesh = Mesh::from_obj("l.obj", text.as_bytes(), &MeshTransform::default()).unwrap();
+        assert_eq!(mesh.triangle_count(), 4, "{name}");
+        let plane_normal = (to_3d(1.0, 0.0) - to_3d(0.0, 0.0)).cross(to_3d(0.0, 1.0) - to_3d(0.0, 0.0));
+        // The triangles' areas add up to the shoelace area: they do not overlap and leave no
+        // gap (an overlap, as the fan's, adds area). The corners are exact in the plane z = 0
+        // and rounded once (0.6, 0.8) in the tilted one: 1e-12 is far above that rounding.
+        let mut area = 0.0;
+        for t in 0..4 {
+            let [a, b, q] = mesh.corners(t);
+            area += 0.5 * (b - a).cross(q - a).length();
+            // Each keeps the face's winding, so its normal is the plane's.
+            assert!((mesh.normals()[t as usize] - plane_normal).length() < 1e-12, "{name}: triangle {t}");
+        }
+        assert!((area - shoelace).abs() < 1e-12, "{name}: area {area} against {shoelace}");
+        // Where a point is: inside (or on) a triangle, in the face's own coordinates.
+        let covering = |u: f64, w: f64| {
+            (0..4u32)
+                .filter(|&t| {
+                    let k = mesh.corners(t).map(to_2d);
+                    let side =
+                        |a: (f64, f64), b: (f64, f64)| (b.0 - a.0) * (w - a.1) - (b.1 - a.1) * (u - a.0);
+                    side(k[0], k[1]) >= -1e-12 && side(k[1], k[2]) >= -1e-12 && side(k[2], k[0]) >= -1e-12
+                })
+                .count()
+        };
+        // No point of the notch (a grid over the open square (1, 2)²) is covered; points of
+        // the L away from the triangles' sides are covered once.
+        for i in 1..10 {
+            for j in 1..10 {
+                let (u, w) = (1.0 + 0.1 * i as f64, 1.0 + 0.1 * j as f64);
+                assert_eq!(covering(u, w), 0, "{name}: notch point ({u}, {w}) is covered");
+            }
+        }
+        for (u, w) in [(0.31, 0.53), (1.71, 0.29), (0.23, 1.83), (0.93, 0.97), (1.87, 0.91)] {
+            assert_eq!(covering(u, w), 1, "{name}: ({u}, {w}) of the L");
+        }
+    }
+}
+
+#[test]
+fn an_obj_face_whose_sides_cross_is_refused_with_its_line() {
+    // A bow tie: its sides (1, 2) and (3, 4) cross at (0.5, 0.5).
+    let e = obj_error("v 0 0 0\nv 1 1 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 3 5\nf 1 2 3 4\n");
+    says(&e, &["bad.obj:7", "sides cross"]);
+    // A one-stroke star, two of whose sides cross although every corner turns left.
+    let mut text = String::new();
+    for k in 0..5 {
+        let a = std::f64::consts::TAU * (2 * k) as f64 / 5.0;
+        text += &format!("v {} {} 0\n", a.cos(), a.sin());
+    }
+    says(
+        &obj_error(&(text + "f 1 2 3 4 5\n")),
+        &["bad.obj:6", "not a simple polygon", "side from corner 1 to 2"],
+    );
+}
+
+#[test]
+fn stl_and_obj_files_with_a_byte_order_mark_read_as_without() {
+    let square = [v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(1.0, 1.0, 0.0)];
+    let stl = ascii_stl(&[square]);
+    let plain = Mesh::from_stl("t.stl", stl.as_bytes(), &MeshTransform::default()).unwrap();
+    let marked = Mesh::from_stl("t.stl", format!("\u{feff}{stl}").as_bytes(), &MeshTransform::default());
+    assert_eq!(marked.unwrap(), plain);
+    // In an OBJ file the mark would hide the first vertex (its line would not start with v).
+    let obj = format!("{SQUARE}f 1 2 3 4\n");
+    let plain = Mesh::from_obj("t.obj", obj.as_bytes(), &MeshTransform::default()).unwrap();
+    let marked = Mesh::from_obj("t.obj", format!("\u{feff}{obj}").as_bytes(), &MeshTransform::default());
+    assert_eq!(marked.unwrap(), plain);
+}
+
 #[test]
 fn the_transform_scales_then_rotates_x_y_z_then_translates() {
     let one = [v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0), v(0.0, 0.0, 1.0)];

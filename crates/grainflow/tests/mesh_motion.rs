@@ -366,3 +366,37 @@ fn a_turning_drum_gives_the_same_bits_on_any_thread_count_and_slot_order() {
         assert_eq!(load, other_load, "{threads} threads, {resort:?}: the drum's load differs");
     }
 }
+
+/// The fastest point of a moving mesh and the box it sweeps (issue 38's set-up guards), each
+/// against its closed form: a translation's |v|; a rotation's ω times the largest distance of a
+/// vertex from the axis, whose vertices then sweep circles; an oscillation's 2π·f·|A|, within
+/// ± A. Tolerance 1e-12 relative: a few roundings of the same numbers by another route.
+#[test]
+fn fastest_points_and_swept_boxes_follow_the_motion() {
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+    let plate = |motion| MeshWall { motion, ..MeshWall::fixed(floor(2, 0.1), 0) };
+    let v = Vec3::new(3.0, -4.0, 0.0);
+    let moving = plate(MeshMotion::Translate { velocity: v });
+    assert!(close(moving.fastest_point_speed().0, 5.0));
+    // Over 2 s: moved by (6, −8, 0).
+    let (lo, hi) = moving.swept_bounds(2.0);
+    assert_eq!((lo, hi), (Vec3::new(-0.1, -8.1, 0.0), Vec3::new(6.1, 0.1, 0.0)));
+    // Turning about the y axis through (0.3, 0, 0): the farthest vertices are at x = −0.1,
+    // 0.4 from the axis; every vertex sweeps a circle in the x-z plane.
+    let turning = plate(MeshMotion::Rotate {
+        origin: Vec3::new(0.3, 0.0, 0.0),
+        axis: Vec3::Y,
+        omega: -50.0,
+        ramp: 0.0,
+    });
+    assert!(close(turning.fastest_point_speed().0, 50.0 * 0.4));
+    let (lo, hi) = turning.swept_bounds(1.0);
+    for (got, want) in [(lo.x, -0.1), (hi.x, 0.7), (lo.y, -0.1), (hi.y, 0.1), (lo.z, -0.4), (hi.z, 0.4)] {
+        assert!(close(got, want), "{lo:?} {hi:?}");
+    }
+    let shaking = plate(MeshMotion::Oscillate { amplitude: Vec3::new(0.0, 0.0, 0.002), frequency: 50.0 });
+    assert!(close(shaking.fastest_point_speed().0, TAU * 50.0 * 0.002));
+    let (lo, hi) = shaking.swept_bounds(1.0);
+    assert!(close(lo.z, -0.002) && close(hi.z, 0.002));
+    assert_eq!(plate(MeshMotion::Fixed).fastest_point_speed().0, 0.0);
+}

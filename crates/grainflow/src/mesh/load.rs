@@ -14,14 +14,16 @@
 //!
 //! The facets' normals are ignored: the winding defines a triangle's normal (right hand), and
 //! exporters often write zeros or stale normals. Binary coordinates are `f32`, widened to `f64`
-//! exactly; ASCII coordinates are read as `f64`.
+//! exactly; ASCII coordinates are read as `f64`. A UTF-8 byte-order mark before an ASCII STL
+//! (or an OBJ file) is skipped.
 //!
 //! ## OBJ
 //! `v x y z` lines (further numbers, a weight or a colour, ignored) and `f` lines of three or
 //! more vertex references, each `i`, `i/t`, `i//n` or `i/t/n` of which only the vertex index
 //! `i` is used: from 1, or negative counting back from the last vertex read so far (−1 is
-//! the last). A polygon is split into the fan of triangles from its first vertex (right for
-//! the convex, planar polygons CAD exports). Everything else (texture coordinates, normals,
+//! the last). A polygon is split into triangles in its own plane: a convex one into the fan
+//! from its first vertex, any other by ear clipping, so that the triangles cover the polygon
+//! and nothing else; one whose sides cross is refused ([`polygon`](super::polygon)). Everything else (texture coordinates, normals,
 //! groups, materials, lines, points) is ignored, and so is anything after a `#`.
 
 use super::build::{build, check_count};
@@ -51,6 +53,7 @@ impl Mesh {
         let (positions, lines) = if let Some(n) = binary_stl_count(bytes) {
             (binary_stl(bytes, n), None)
         } else {
+            let bytes = without_bom(bytes);
             let start = bytes.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(bytes.len());
             let ascii = bytes[start..].get(..5).is_some_and(|w| w.eq_ignore_ascii_case(b"solid"));
             if !ascii || bytes.contains(&0) {
@@ -68,9 +71,15 @@ impl Mesh {
     /// The mesh of an OBJ file's contents (see the [module doc](self)); `name` names it in
     /// messages.
     pub fn from_obj(name: &str, bytes: &[u8], transform: &MeshTransform) -> Result<Mesh, MeshError> {
-        let (positions, triangles, lines) = obj(name, &String::from_utf8_lossy(bytes))?;
+        let (positions, triangles, lines) = obj(name, &String::from_utf8_lossy(without_bom(bytes)))?;
         build(name, &positions, &triangles, Some(&lines), transform)
     }
+}
+
+/// `bytes` without a leading UTF-8 byte-order mark (some Windows editors write one before
+/// `solid` or the first `v`).
+fn without_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes)
 }
 
 /// The facet count n of a binary STL: the file's size is 84 + 50·n.
@@ -206,15 +215,17 @@ fn number(word: &str) -> Result<f64, String> {
     word.parse().map_err(|_| format!("'{word}' is not a number"))
 }
 
-/// The vertices, the fan-triangulated faces and the line of each triangle of an OBJ file.
+/// The vertices, the faces split into triangles ([`polygon`](super::polygon)) and the line of
+/// each triangle of an OBJ file.
 #[allow(clippy::type_complexity)]
 fn obj(name: &str, text: &str) -> Result<(Vec<Vec3>, Vec<[u32; 3]>, Vec<u32>), MeshError> {
     let mut positions = Vec::new();
     // 0-based vertex indices; a positive reference may name a vertex defined further down, so
-    // those are checked at the end.
-    let mut faces: Vec<[i64; 3]> = Vec::new();
-    let mut lines = Vec::new();
-    let mut polygon: Vec<i64> = Vec::new();
+    // those are checked, and the faces split, at the end. Face k's corners are `corners[faces[k].0..faces[k + 1].0]`, its line `faces[k].1`.
+    let mut corners: Vec<i64> = Vec::new();
+    let mut faces: Vec<(usize, usize)> = Vec::new();
+    // Triangles the faces read so far make (n − 2 for n corners).
+    let mut made: usize = 0;
     for (line, raw) in (1..).zip(text.lines()) {
         let err = |reason: String| MeshError::Syntax { file: name.to_string(), line, reason };
         let content = raw.find('#').map_or(raw, |k| &raw[..k]);
@@ -228,7 +239,7 @@ fn obj(name: &str, text: &str) -> Result<(Vec<Vec3>, Vec<[u32; 3]>, Vec<u32>), M
                 positions.push(Vec3::new(xyz[0], xyz[1], xyz[2]));
             }
             Some("f") => {
-                polygon.clear();
+                let start = corners.len();
                 for w in words {
                     let reference = w.split('/').next().unwrap_or("");
                     let i: i64 =
@@ -239,35 +250,47 @@ fn obj(name: &str, text: &str) -> Result<(Vec<Vec3>, Vec<[u32; 3]>, Vec<u32>), M
                         i => positions.len() as i64 + i,
                     };
                     if index < 0 {
-                        let at = Location { triangle: faces.len() as u32, line: Some(line32(line)) };
+                        let triangle = u32::try_from(made).unwrap_or(u32::MAX);
+                        let at = Location { triangle, line: Some(line32(line)) };
                         let count = positions.len();
                         return Err(MeshError::BadIndex { file: name.to_string(), at, index: i, count });
                     }
-                    polygon.push(index);
+                    corners.push(index);
                 }
-                if polygon.len() < 3 {
-                    return Err(err(format!("a face needs three or more vertices, not {}", polygon.len())));
+                let n = corners.len() - start;
+                if n < 3 {
+                    return Err(err(format!("a face needs three or more vertices, not {n}")));
                 }
-                for j in 1..polygon.len() - 1 {
-                    faces.push([polygon[0], polygon[j], polygon[j + 1]]);
-                    lines.push(line32(line));
-                }
+                made += n - 2;
+                faces.push((start, line));
             }
             _ => {}
         }
     }
-    let mut triangles = Vec::with_capacity(faces.len());
-    for (t, face) in (0u32..).zip(&faces) {
-        if let Some(&i) = face.iter().find(|&&i| i >= positions.len() as i64) {
-            let at = Location { triangle: t, line: Some(lines[t as usize]) };
-            return Err(MeshError::BadIndex {
-                file: name.to_string(),
-                at,
-                index: i + 1,
-                count: positions.len(),
-            });
+    let mut triangles = Vec::with_capacity(made);
+    let mut lines = Vec::with_capacity(made);
+    let ends = faces.iter().skip(1).map(|f| f.0).chain([corners.len()]);
+    for (&(start, line), end) in faces.iter().zip(ends) {
+        let polygon = &corners[start..end];
+        // The triangle of the fan from the first corner that first holds a corner (the
+        // numbering of triangles in messages).
+        let first = u32::try_from(triangles.len()).unwrap_or(u32::MAX);
+        if let Some(j) = polygon.iter().position(|&i| i >= positions.len() as i64) {
+            let triangle = first.saturating_add(j.saturating_sub(2) as u32);
+            let at = Location { triangle, line: Some(line32(line)) };
+            let (index, count) = (polygon[j] + 1, positions.len());
+            return Err(MeshError::BadIndex { file: name.to_string(), at, index, count });
         }
-        triangles.push(face.map(|i| i as u32));
+        let points: Vec<Vec3> = polygon.iter().map(|&i| positions[i as usize]).collect();
+        let split = super::polygon::triangulate(&points).map_err(|reason| MeshError::Syntax {
+            file: name.to_string(),
+            line,
+            reason,
+        })?;
+        for t in split {
+            triangles.push(t.map(|k| polygon[k] as u32));
+            lines.push(line32(line));
+        }
     }
     Ok((positions, triangles, lines))
 }

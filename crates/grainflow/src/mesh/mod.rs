@@ -26,6 +26,7 @@ pub mod grid;
 pub mod keyframes;
 pub mod load;
 pub mod motion;
+pub mod polygon;
 
 pub use contact::{ClosestPoint, MeshContact, Primitive, Region, closest_point_on_triangle, sphere_contacts};
 pub use grid::TriangleGrid;
@@ -419,6 +420,71 @@ impl MeshWall {
         match &self.surface_factor {
             None => self.surface,
             Some(k) => self.surface.scaled(k.value(tau)),
+        }
+    }
+
+    /// The largest speed a point of the mesh reaches under its rigid motion, m/s, and how it
+    /// comes about: |v| of a translation; |ω| times the largest distance of a vertex from the
+    /// axis for a rotation (the ramp only rises to ω); 2π·f·|A| at the centre of an
+    /// oscillation. A surface velocity (`surface`) slides the surface in its own plane and
+    /// moves no point of it towards a particle, so it is not counted.
+    pub fn fastest_point_speed(&self) -> (f64, String) {
+        match self.motion {
+            MeshMotion::Fixed => (0.0, "fixed".into()),
+            MeshMotion::Translate { velocity } => {
+                (velocity.length(), format!("translating at {:.4e} m/s", velocity.length()))
+            }
+            MeshMotion::Rotate { origin, axis, omega, .. } => {
+                let reach = self
+                    .mesh
+                    .vertices()
+                    .iter()
+                    .map(|&x| {
+                        let d = x - origin;
+                        (d - axis * d.dot(axis)).length()
+                    })
+                    .fold(0.0, f64::max);
+                (
+                    omega.abs() * reach,
+                    format!("turning at {:.4e} rad/s with a vertex {reach:.4e} m from the axis", omega.abs()),
+                )
+            }
+            MeshMotion::Oscillate { amplitude, frequency } => {
+                let v = std::f64::consts::TAU * frequency * amplitude.length();
+                (v, format!("oscillating by {:.4e} m at {frequency:e} Hz", amplitude.length()))
+            }
+        }
+    }
+
+    /// A box holding every place the mesh's surface takes in the first `span` s of its motion
+    /// (from the pose as loaded), m: its bounds for a fixed mesh; moved by the displacement
+    /// for a translation (within its window) and by ± the amplitude for an oscillation; for a
+    /// rotation the boxes of its vertices' circles about the axis (a point of a triangle is a
+    /// mean of its corners, and its circle's extent along an axis is at most theirs).
+    pub fn swept_bounds(&self, span: f64) -> (Vec3, Vec3) {
+        let (lo, hi) = self.mesh.bounds();
+        match self.motion {
+            MeshMotion::Fixed => (lo, hi),
+            MeshMotion::Translate { velocity } => {
+                let moved = velocity * self.window.clock(span);
+                (lo + moved.min(Vec3::ZERO), hi + moved.max(Vec3::ZERO))
+            }
+            MeshMotion::Oscillate { amplitude, .. } => (lo - amplitude.abs(), hi + amplitude.abs()),
+            MeshMotion::Rotate { origin, axis, .. } => {
+                // A circle of radius ρ in the plane normal to `axis` spans ρ·√(1 − a_k²) about
+                // its centre along axis k.
+                let half = Vec3::ONE - axis * axis;
+                let spread =
+                    Vec3::new(half.x.max(0.0).sqrt(), half.y.max(0.0).sqrt(), half.z.max(0.0).sqrt());
+                let mut out = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+                for &x in self.mesh.vertices() {
+                    let d = x - origin;
+                    let centre = origin + axis * d.dot(axis);
+                    let rho = (x - centre).length();
+                    out = (out.0.min(centre - spread * rho), out.1.max(centre + spread * rho));
+                }
+                out
+            }
         }
     }
 

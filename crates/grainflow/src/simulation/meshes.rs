@@ -793,3 +793,37 @@ fn wall_coeffs_of(
     sized.pull_off = crate::with_normal_submodel!(law.normal, |N| contact_reach::<N>(coeffs, c, r));
     sized
 }
+
+/// A mesh that comes, within the first `span` s of its motion ([`MeshWall::swept_bounds`]),
+/// closer than `max_radius` to a face of a periodic axis (or crosses it): its index, the axis
+/// and the extent it sweeps along it. Meshes have no periodic images, as particles have: a
+/// particle beyond that face would meet such a mesh on one side only, so set-up refuses it.
+pub fn periodic_mesh_reach(
+    meshes: &[MeshWall],
+    periodic: &crate::boundary::Periodic,
+    max_radius: f64,
+    span: f64,
+) -> Option<(usize, usize, f64, f64)> {
+    let (lo, hi) = (periodic.lo.to_array(), periodic.hi.to_array());
+    meshes.iter().enumerate().find_map(|(m, wall)| {
+        let (a, b) = wall.swept_bounds(span);
+        let (a, b) = (a.to_array(), b.to_array());
+        (0..3)
+            .find(|&k| periodic.axes[k] && !(a[k] >= lo[k] + max_radius && b[k] <= hi[k] - max_radius))
+            .map(|k| (m, k, a[k], b[k]))
+    })
+}
+
+/// The sentence for [`periodic_mesh_reach`]'s finding about the mesh called `name`.
+pub fn periodic_mesh_message(
+    name: &str,
+    (axis, from, to): (usize, f64, f64),
+    periodic: &crate::boundary::Periodic,
+    max_radius: f64,
+) -> String {
+    let x = ["x", "y", "z"][axis];
+    let (lo, hi) = (periodic.lo.to_array()[axis], periodic.hi.to_array()[axis]);
+    format!(
+        "mesh '{name}' reaches across or within {max_radius:e} m (the largest particle radius) of the periodic faces {x} = {lo:e} and {x} = {hi:e} m (it spans {x} from {from:e} to {to:e} m over the run): meshes have no periodic images, so a particle across the face would meet it on one side only; keep the mesh more than {max_radius:e} m inside the faces of the periodic axis {x}, or make the axis non-periodic (for a flat floor along a periodic axis, use a [[walls]] plane)"
+    )
+}
