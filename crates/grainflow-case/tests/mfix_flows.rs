@@ -432,3 +432,97 @@ fn an_internal_stl_surface_turns_by_its_motion_file() {
     let e = mfix::load(&path, &[], Some(&dir.path().join("motion.toml"))).expect_err("no IS 2").to_string();
     assert!(e.contains("its STL walls are is = 1"), "{e}");
 }
+
+/// A square floor at height `y` over [0, `l`]² in x and z, facing +y, as ASCII STL.
+fn floor_stl(y: f64, l: f64) -> String {
+    let mut s = String::from("solid floor\n");
+    for [a, b, c] in [[[0.0, 0.0], [0.0, l], [l, l]], [[0.0, 0.0], [l, l], [l, 0.0]]] {
+        s.push_str("facet normal 0 1 0\nouter loop\n");
+        for [x, z] in [a, b, c] {
+            s.push_str(&format!("vertex {x} {y} {z}\n"));
+        }
+        s.push_str("endloop\nendfacet\n");
+    }
+    s.push_str("endsolid floor\n");
+    s
+}
+
+/// A CGS deck's STL is in centimetres, as every length of the deck (MFIX reads the geometry in
+/// the deck's units): a floor at 5 cm holds the bead at 5 cm plus its radius, not at the box
+/// floor (issue 38). The bead (1 cm, 2.6 g/cm³, 10.9 g) rests on the floor compressed by
+/// m·g/k_n = 2.1e-6 m with KN_W = 5e7 dyne/cm = 5e4 N/m: its centre ends at 0.06 m within
+/// 1e-5 m once its bounces (e = 0.5, a 4 cm drop) have died out.
+#[test]
+fn a_cgs_deck_reads_its_stl_in_centimetres() {
+    let deck = "\
+RUN_NAME = 'CGS_STL'
+UNITS = 'CGS'
+RUN_TYPE = 'NEW'
+TSTOP = 1.0
+COORDINATES = 'CARTESIAN'
+XLENGTH = 20.0  YLENGTH = 20.0  ZLENGTH = 20.0
+IMAX = 4  JMAX = 4  KMAX = 4
+CARTESIAN_GRID = .T.
+USE_STL = .T.
+RO_G0 = 0.0
+MMAX = 1
+SOLIDS_MODEL(1) = 'DEM'
+D_P0(1) = 2.0
+RO_S0(1) = 2.6
+PARTICLES = 1
+KN = 5.0e7  KN_W = 5.0e7
+MEW = 0.3  MEW_W = 0.3
+DES_EN_INPUT(1) = 0.5
+DES_EN_WALL_INPUT(1) = 0.5
+BC_TYPE(1) = 'CG_NSW'
+BC_X_W(1) = 0.0  BC_X_E(1) = 20.0  BC_Y_S(1) = 0.0  BC_Y_N(1) = 20.0  BC_Z_B(1) = 0.0  BC_Z_T(1) = 20.0
+";
+    let (_dir, path) = folder(
+        deck,
+        &[
+            ("particle_input.dat", "10.0 10.0 10.0 1.0 2.6 0.0 0.0 0.0\n"),
+            ("geometry_0001.stl", &floor_stl(5.0, 20.0)),
+        ],
+    );
+    let d = load(&path, &[]).expect("deck loads");
+    assert_eq!(d.raw.meshes[0].scale, Some(0.01), "cm → m");
+    let mut sim = Simulation::new(d.case.config.clone(), d.case.particles.clone()).expect("set-up");
+    let steps = sim.total_steps();
+    sim.run_with(steps, |_| {});
+    let y = sim.particles().position[0].y;
+    let m = 2600.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-6;
+    let rest = 0.06 - m * 9.80665 / 5.0e4;
+    assert!((y - rest).abs() < 1e-5, "the bead rests at y = {y} m, the floor holds it at {rest} m");
+}
+
+/// `PARTICLES = 0` with `GENER_PART_CONFIG`: no particle file, the IC regions are seeded
+/// (docs/mfix-decks.md); ⌊ε·V/v⌋ = ⌊0.01·1/(π/6·0.1³)⌋ = 19 particles in the 1 m³ box.
+#[test]
+fn no_particle_file_with_generated_particles_is_accepted() {
+    let deck = format!(
+        "{HEAD}{ONE_PHASE}XLENGTH = 1.0  YLENGTH = 1.0  ZLENGTH = 1.0\nPARTICLES = 0\nGENER_PART_CONFIG = .T.\n\
+         IC_X_W(1) = 0.0  IC_X_E(1) = 1.0  IC_Y_S(1) = 0.0  IC_Y_N(1) = 1.0  IC_Z_B(1) = 0.0  IC_Z_T(1) = 1.0\n\
+         IC_EP_S(1,1) = 0.01\n"
+    );
+    let (_dir, path) = folder(&deck, &[]);
+    let d = load(&path, &[]).expect("PARTICLES = 0 with GENER_PART_CONFIG loads");
+    let v = std::f64::consts::FRAC_PI_6 * 1e-3;
+    assert_eq!(d.case.particles.len(), (0.01 / v).floor() as usize);
+}
+
+/// A fully periodic box has no walls: a particle across a cyclic face overlaps nothing, so
+/// no wall overlap is reported and the initial-overlap limit stays grainflow's own (MFIX's
+/// homogeneous-cooling-system deck is fully periodic; issue 38).
+#[test]
+fn a_fully_periodic_deck_reports_no_wall_overlap() {
+    let deck = format!(
+        "{HEAD}{ONE_PHASE}XLENGTH = 1.0  YLENGTH = 1.0  ZLENGTH = 1.0\nCYCLIC_X = .T.\nCYCLIC_Y = .T.\nCYCLIC_Z = .T.\n\
+         GRAVITY = 0.0\nPARTICLES = 2\n"
+    );
+    // The first straddles the x faces (its centre 0.02 m from x = 0, radius 0.05 m).
+    let file = "0.02 0.5 0.5 0.05 1000.0 0 0 0\n0.5 0.5 0.5 0.05 1000.0 0 0 0\n";
+    let (_dir, path) = folder(&deck, &[("particle_input.dat", file)]);
+    let d = load(&path, &[]).expect("deck loads");
+    assert!(d.notes.iter().all(|n| !n.contains("overlap")), "{:#?}", d.notes);
+    assert_eq!(d.raw.particles.as_ref().and_then(|p| p.max_initial_overlap), None);
+}

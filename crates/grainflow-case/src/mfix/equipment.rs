@@ -430,11 +430,15 @@ impl Translator<'_> {
             self.real("TY_STL", &[])?.map_or(0.0, |g| g.v),
             self.real("TZ_STL", &[])?.map_or(0.0, |g| g.v),
         ];
+        // The STL's coordinates are in the deck's units, as every length MFIX reads (a CGS
+        // deck's geometry is in cm): the file's points and the GUI's translations are scaled
+        // to metres with them; TX_STL … are already converted by `real`.
+        let unit = if self.cgs { super::keywords::Unit::Length.cgs_to_si(1.0) } else { 1.0 };
         for w in walls {
             let (s, t) = if w.from_solver_file {
-                (scale * w.scale, [0, 1, 2].map(|k| scale * w.translate[k] + shift[k]))
+                (unit * scale * w.scale, [0, 1, 2].map(|k| unit * scale * w.translate[k] + shift[k]))
             } else {
-                (w.scale, w.translate)
+                (unit * w.scale, w.translate.map(|x| unit * x))
             };
             eq.meshes.push(RawMesh {
                 name: Some(w.name.clone()),
@@ -583,9 +587,20 @@ impl Translator<'_> {
                     self.real("IC_V_S", &[ic, m])?.map_or(0.0, |g| g.v),
                     self.real("IC_W_S", &[ic, m])?.map_or(0.0, |g| g.v),
                 ];
-                // A granular temperature, m²/s² (cm²/s² in a CGS deck).
-                let theta = self.real("IC_THETA_M", &[ic, m])?.map_or(0.0, |g| g.v.max(0.0))
-                    / if self.cgs { 1e4 } else { 1.0 };
+                // A granular temperature, m²/s² (cm²/s² in a CGS deck): a variance, never
+                // negative (MFIX refuses a negative one).
+                let theta = match self.real("IC_THETA_M", &[ic, m])? {
+                    Some(g) if g.v.is_nan() || g.v < 0.0 => {
+                        return Err(CaseError::invalid(
+                            g.loc.to_string(),
+                            g.key,
+                            g.text,
+                            "must be a granular temperature >= 0 (the variance of the velocity fluctuations)",
+                        ));
+                    }
+                    Some(g) => g.v,
+                    None => 0.0,
+                } / if self.cgs { 1e4 } else { 1.0 };
                 let part = self.psd("IC", ic, m, phase, read_file)?;
                 let sizes = crate::flow::sizes(&part, &show("IC_PSD_TYPE", &[ic, m]), phase)?;
                 parts.push(seed::SeedPhase { ic, m, phase, ep: ep.v, sizes, velocity, theta });
@@ -625,6 +640,16 @@ impl Translator<'_> {
             let m = m as i64 + 1;
             let idx = [i, m];
             let ep = self.real("BC_EP_S", &idx)?;
+            if let Some(g) = &ep
+                && !(0.0..1.0).contains(&g.v)
+            {
+                return Err(CaseError::invalid(
+                    g.loc.to_string(),
+                    g.key.clone(),
+                    g.text.clone(),
+                    "must be a solids volume fraction in [0, 1): a stream of touching spheres holds at most about 0.64, and 1 leaves no room between them",
+                ));
+            }
             let massflow = self.real("BC_MASSFLOW_S", &idx)?;
             let v = Vec3::new(
                 self.real("BC_U_S", &idx)?.map_or(0.0, |g| g.v),

@@ -74,8 +74,21 @@ impl Translator<'_> {
                 }
                 _ => x.clamp(lo[k], hi[k]),
             };
-            a[k] = w.v.min(e.v).max(lo[k]);
-            b[k] = w.v.max(e.v).min(hi[k]);
+            if w.v > e.v {
+                // MFIX stops on such a region (its check of the IC's bounds): it is empty.
+                return Err(CaseError::invalid(
+                    e.loc.to_string(),
+                    show(ke, &[ic]),
+                    e.text,
+                    format!(
+                        "initial condition {ic}'s region ends before it starts: {} = {} is above it (MFIX refuses this region)",
+                        show(kw, &[ic]),
+                        w.text
+                    ),
+                ));
+            }
+            a[k] = w.v.max(lo[k]);
+            b[k] = e.v.min(hi[k]);
             let cells = snap(b[k]) - snap(a[k]);
             volume *= if k == 2 && self.flag("NO_K")? { 1.0 } else { cells };
             if b[k] <= a[k] || cells <= 0.0 {
