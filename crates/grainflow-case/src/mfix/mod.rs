@@ -50,6 +50,7 @@
 //! particle motion (MFIX's DEM05 holds its anvil spheres that way) the same rules can be given
 //! as `[[motion]]` tables in a small TOML file passed beside the deck (`--motion FILE`).
 
+mod cells;
 pub mod deck;
 mod equipment;
 pub mod geometry;
