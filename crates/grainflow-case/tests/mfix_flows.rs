@@ -526,3 +526,58 @@ fn a_fully_periodic_deck_reports_no_wall_overlap() {
     assert!(d.notes.iter().all(|n| !n.contains("overlap")), "{:#?}", d.notes);
     assert_eq!(d.raw.particles.as_ref().and_then(|p| p.max_initial_overlap), None);
 }
+
+/// A 2-D deck (NO_K) with a mass inflow: MFIX's face is a segment of the plane z = 0 and its
+/// area the segment's width times ZLENGTH, the depth of MFIX's one layer of cells. The inflow
+/// brings ε_s·w·ZLENGTH·|v|·ρ_s = 0.1·0.6·0.1·1·1000 = 6 kg/s, and every particle it brings
+/// lies in the plane z = 0 to the placement's rounding margin (2·1e-13 of the box's largest
+/// coordinate, 2 m: 4e-13 m) and stays within it: its z velocity and x, y spin stay below
+/// 1e-9 of the in-plane speeds. The books close (inserted = present + removed through the
+/// bottom outflow).
+#[test]
+fn a_two_dimensional_mass_inflow_feeds_in_its_plane() {
+    let deck = format!(
+        "{HEAD}MMAX = 1\nSOLIDS_MODEL(1) = 'DEM'\nD_P0(1) = 0.05\nRO_S0(1) = 1000.0\nDES_EN_INPUT(1) = 0.9\nDES_EN_WALL_INPUT(1) = 0.9\n\
+         XLENGTH = 1.0  YLENGTH = 2.0  ZLENGTH = 0.1\nNO_K = .T.\nPARTICLES = 0\nTSTOP = 1.0\n\
+         BC_TYPE(1) = 'MI'\nBC_X_W(1) = 0.2  BC_X_E(1) = 0.8  BC_Y_S(1) = 2.0  BC_Y_N(1) = 2.0\n\
+         BC_EP_S(1,1) = 0.1\nBC_V_S(1,1) = -1.0\n\
+         BC_TYPE(2) = 'PO'\nBC_X_W(2) = 0.0  BC_X_E(2) = 1.0  BC_Y_S(2) = 0.0  BC_Y_N(2) = 0.0\n"
+    );
+    let (_dir, path) = folder(&deck, &[]);
+    let d = load(&path, &[]).expect("a 2-D mass inflow loads");
+    let rate = d.raw.insertions[0].mass_rate.expect("a mass rate");
+    assert!((rate - 6.0).abs() < 1e-12, "{rate} kg/s");
+    let mut sim = Simulation::new(d.case.config.clone(), d.case.particles.clone()).expect("set-up");
+    let steps = sim.total_steps();
+    let mut seen = 0usize;
+    sim.run_with(steps, |s| {
+        let p = s.particles();
+        for i in 0..p.len() {
+            assert!(p.position[i].z.abs() <= 4e-13, "particle {} at z = {}", p.id[i], p.position[i].z);
+            assert!(
+                p.velocity[i].z.abs() <= 1e-9 * (1.0 + p.velocity[i].length()),
+                "particle {}: w = {}",
+                p.id[i],
+                p.velocity[i].z
+            );
+            assert!(p.omega[i].x.abs().max(p.omega[i].y.abs()) <= 1e-9 * (1.0 + p.omega[i].z.abs()));
+        }
+        seen = seen.max(p.len());
+    });
+    let books = sim.flow_books();
+    assert!(books.close(), "{books:?}");
+    assert!(seen > 0 && books.removed_total().count > 0, "{books:?}");
+}
+
+/// MFIX's poly_dem_inlet_outlet (legacy_tests/dem-tests, vendored unchanged) is a 2-D deck
+/// with a mass inflow, which now translates; what stops it is its gas: a density of 1.3e-30
+/// g/cm³ but a Wen–Yu drag with μ_g = 1.8e-4 P, which still drags the particles. The message
+/// names the drag.
+#[test]
+fn poly_dem_inlet_outlet_is_refused_for_its_drag() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mfix_decks/poly_dem_inlet_outlet/mfix.dat");
+    let e = load(&p, &[]).expect_err("refused").to_string();
+    assert!(e.contains("RO_G0") && e.contains("'WEN_YU'") && e.contains("MU_G0 = 1.8d-4"), "{e}");
+    assert!(e.contains("still drags the particles"), "{e}");
+    assert!(!e.contains("2-D run (NO_K) is not supported"), "{e}");
+}

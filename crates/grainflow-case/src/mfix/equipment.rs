@@ -147,7 +147,8 @@ struct Flat {
 
 impl Translator<'_> {
     /// What a 2-D (`NO_K`) deck may not have: gravity along z, and the features that place
-    /// particles or walls in 3-D (generated particles, mass inflows, STL walls).
+    /// particles or walls in 3-D (generated particles, STL walls). Mass inflows insert in the
+    /// plane ([`Self::mass_inflow`]).
     pub(super) fn two_d_checks(&mut self, gravity: [f64; 3]) -> Result<(), CaseError> {
         let d = self.deck;
         let loc = d.bool("NO_K", &[])?.map_or(self.origin.to_string(), |g| g.loc.to_string());
@@ -168,16 +169,6 @@ impl Translator<'_> {
                     "NO_K",
                     ".TRUE.",
                     format!("grainflow cannot run this: {what} ({key} with NO_K) are not supported; list the particles in particle_input.dat (x y radius density u v)"),
-                ));
-            }
-        }
-        for idx in d.indices("BC_TYPE") {
-            if let Some(t) = self.word("BC_TYPE", &idx)?
-                && matches!(t.v.as_str(), "MI" | "MASS_INFLOW")
-            {
-                self.block(Self::invalid_word(
-                    &t,
-                    "grainflow cannot run this: a mass inflow in a 2-D run (NO_K) is not supported",
                 ));
             }
         }
@@ -925,7 +916,37 @@ impl Translator<'_> {
         t_start: f64,
         read_file: &input::Opener<'_>,
     ) -> Result<Vec<(RawInsertion, bool)>, CaseError> {
-        let area: f64 = (0..3).filter(|&a| a != f.axis).map(|a| f.hi[a] - f.lo[a]).product();
+        // In 2-D (NO_K) the face is a segment of the plane z = 0, and MFIX's areas take the
+        // deck's ZLENGTH as the depth of its one layer of cells.
+        let no_k = self.flag("NO_K")?;
+        let depth_2d = if no_k {
+            match self.real("ZLENGTH", &[])? {
+                Some(z) if z.v.is_finite() && z.v > 0.0 => Some(z.v),
+                Some(z) => {
+                    return Err(CaseError::invalid(
+                        z.loc.to_string(),
+                        z.key,
+                        z.text,
+                        "must be a positive length: a 2-D mass inflow's area is its width times ZLENGTH, as in MFIX",
+                    ));
+                }
+                None => {
+                    return Err(CaseError::missing(
+                        self.origin,
+                        "ZLENGTH",
+                        format!(
+                            "the depth of MFIX's 2-D cells ({}): mass inflow {i}'s area is its width times ZLENGTH, as in MFIX",
+                            self.unit_name(super::keywords::Unit::Length)
+                        ),
+                    ));
+                }
+            }
+        } else {
+            None
+        };
+        let area: f64 =
+            (0..3).filter(|&a| a != f.axis && !(a == 2 && no_k)).map(|a| f.hi[a] - f.lo[a]).product::<f64>()
+                * depth_2d.unwrap_or(1.0);
         let mut out = Vec::new();
         for (m, phase) in phases.iter().enumerate() {
             let m = m as i64 + 1;
@@ -979,6 +1000,16 @@ impl Translator<'_> {
                 continue;
             }
             let part = self.psd("BC", i, m, phase, read_file)?;
+            if no_k && part.distribution.is_some() {
+                let g = self.word("BC_PSD_TYPE", &idx)?.expect("a distribution is given");
+                self.block(Self::invalid_word(
+                    &g,
+                    format!(
+                        "grainflow cannot run this: a size distribution in a 2-D mass inflow (NO_K) is not supported (spheres of several sizes cannot all be placed with their centres in z = 0); give each size its own phase, as MFIX's poly_dem_inlet_outlet does"
+                    ),
+                ));
+                continue;
+            }
             let dmax = part
                 .max_diameter
                 .or(part.diameters.as_ref().and_then(|d| d.last().copied()))
@@ -996,6 +1027,21 @@ impl Translator<'_> {
             } else {
                 lo[f.axis] = f.at - depth;
                 hi[f.axis] = f.at;
+            }
+            if no_k {
+                // Centres in z = 0: a box one diameter deep in z holds the spheres only there.
+                // The placement keeps a relative rounding margin from the region's faces
+                // (`place::MARGIN` of the region's largest coordinate), so the box is that much
+                // deeper: the centres lie within twice the margin of z = 0 (below 1e-12 m for a
+                // metre-sized box).
+                let scale = lo.abs().max(hi.abs()).max_element().max(phase.diameter);
+                let slack = 2.0 * grainflow::insertion::place::MARGIN * scale;
+                lo.z = -0.5 * phase.diameter - slack;
+                hi.z = 0.5 * phase.diameter + slack;
+            }
+            let mut v = v;
+            if no_k {
+                v.z = 0.0;
             }
             let velocity = if v.length_squared() > 0.0 { v } else { Vec3::from_array(outward) * -speed };
             out.push((

@@ -685,12 +685,29 @@ impl Translator<'_> {
         match self.real("RO_G0", &[])? {
             Some(g) if g.v == 0.0 => {}
             Some(g) => {
-                self.block(CaseError::invalid(
-                    g.loc.to_string(),
-                    g.key,
-                    g.text,
-                    "grainflow cannot run this: a gas density couples gas and particles (drag, buoyancy) and grainflow has no gas phase; a pure granular run has RO_G0 = 0.0",
-                ));
+                // The drag on a particle grows with the gas viscosity, not its density: a deck
+                // with a vanishing gas density (MFIX's poly_dem_inlet_outlet, 1.3d-30) still
+                // drags its particles through the gas.
+                let drag = d.string("DRAG_TYPE", &[], true)?;
+                let (drag_name, drag_at) =
+                    drag.as_ref().map_or(("SYAM_OBRIEN".to_string(), "MFIX's default".to_string()), |t| {
+                        (t.v.clone(), t.loc.to_string())
+                    });
+                let mu = d
+                    .real("MU_G0", &[])?
+                    .map_or("MU_G0 not given: MFIX's Sutherland air viscosity".to_string(), |m| {
+                        format!("MU_G0 = {} ({})", m.text, m.loc)
+                    });
+                let what = if g.v.abs() < 1e-6 {
+                    format!(
+                        "grainflow cannot run this: the gas density is vanishingly small, but the gas still drags the particles: DRAG_TYPE = '{drag_name}' ({drag_at}) with {mu}, and the deck's gas velocities; grainflow has no gas phase and no drag. A pure granular run has RO_G0 = 0.0 (then MFIX computes no drag either)"
+                    )
+                } else {
+                    format!(
+                        "grainflow cannot run this: a gas density couples gas and particles (drag: DRAG_TYPE = '{drag_name}' ({drag_at}) with {mu}; buoyancy) and grainflow has no gas phase; a pure granular run has RO_G0 = 0.0"
+                    )
+                };
+                self.block(CaseError::invalid(g.loc.to_string(), g.key, g.text, what));
             }
             None => {
                 self.block(CaseError::missing(
