@@ -1004,9 +1004,7 @@ impl Translator<'_> {
                 let g = self.word("BC_PSD_TYPE", &idx)?.expect("a distribution is given");
                 self.block(Self::invalid_word(
                     &g,
-                    format!(
-                        "grainflow cannot run this: a size distribution in a 2-D mass inflow (NO_K) is not supported (spheres of several sizes cannot all be placed with their centres in z = 0); give each size its own phase, as MFIX's poly_dem_inlet_outlet does"
-                    ),
+                    "grainflow cannot run this: a size distribution in a 2-D mass inflow (NO_K) is not supported (spheres of several sizes cannot all be placed with their centres in z = 0); give each size its own phase, as MFIX's poly_dem_inlet_outlet does",
                 ));
                 continue;
             }
