@@ -127,6 +127,7 @@ impl FluidGrid {
                 }
             }
         }
+        let all: Vec<u32> = (0..facets.len() as u32).collect();
         let mut frac = vec![f32::NAN; cells.len()];
         // Cells no facet crosses: each connected run of them lies on one side; one centre
         // tells which.
@@ -136,7 +137,6 @@ impl FluidGrid {
             }
             let c = unindex(&cells, start);
             let centre = cells.corner(c) + 0.5 * cells.h;
-            let all: Vec<u32> = (0..facets.len() as u32).collect();
             let side = if nearest_side(centre, &all, facets).1 { 1.0 } else { 0.0 };
             let mut queue = VecDeque::from([start]);
             frac[start] = side;
@@ -178,12 +178,7 @@ impl FluidGrid {
                 // A facet nearer than `reach` crosses the cells around this one, so the
                 // nearest facet is among theirs; farther, it may be anywhere.
                 let (d, front) = nearest_side(p, &near, facets);
-                let front = if d <= reach {
-                    front
-                } else {
-                    let all: Vec<u32> = (0..facets.len() as u32).collect();
-                    nearest_side(p, &all, facets).1
-                };
+                let front = if d <= reach { front } else { nearest_side(p, &all, facets).1 };
                 inside += usize::from(front);
             }
             frac[at] = (inside as f64 / (SAMPLES * SAMPLES * SAMPLES) as f64) as f32;

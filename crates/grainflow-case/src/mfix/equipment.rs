@@ -42,6 +42,9 @@ pub(super) struct Equipment {
     pub particles: Vec<RawParticle>,
 }
 
+/// The most cells of MFIX's grid that are cut by the STL walls here (about 100 MB).
+const MAX_CUT_GRID: usize = 4_000_000;
+
 /// A mass inflow's insertion and its face, for [`Translator::inflows_inside_the_walls`].
 struct Inflow {
     /// Its index in the equipment's insertions.
@@ -117,6 +120,13 @@ fn open_windows(
             }
             open[w + wmax * h] = wet && !near;
         }
+    }
+    if !any && open.iter().all(|&o| o) {
+        // Nothing comes near the face: all of it is open, one region.
+        let (mut a, mut b) = (f.lo, f.hi);
+        a[f.axis] = f.at;
+        b[f.axis] = f.at;
+        return vec![(a, b)];
     }
     let mut runs = Vec::new();
     for h in 0..hmax {
@@ -514,6 +524,13 @@ impl Translator<'_> {
                 }
             }
         }
+        if n.iter().product::<usize>() > MAX_CUT_GRID {
+            self.note(format!(
+                "{}: the mass inflows feed through their whole faces: MFIX's grid has more than {MAX_CUT_GRID} cells, too many to cut by the STL walls here",
+                self.origin
+            ));
+            return Ok(());
+        }
         let own;
         let (facets, fluid) = match grids {
             Some(g) => (&g.facets, &g.fluid),
@@ -562,8 +579,17 @@ impl Translator<'_> {
                     .and_then(|p| p.max_diameter.or(p.diameters.as_ref().and_then(|d| d.last().copied())))
                     .unwrap_or(max_dia)
                     .max(max_dia);
+            let whole = runs.len() == 1
+                && (0..3).all(|x| x == f.axis || (runs[0].0[x] == f.lo[x] && runs[0].1[x] == f.hi[x]));
             let mut parts = Vec::new();
             for (k, (a, b)) in runs.iter().enumerate() {
+                if whole {
+                    // All of the face is open: its region as it was, at the fluid area's rate.
+                    let mut ins = raw.clone();
+                    ins.mass_rate = Some(rate);
+                    parts.push(ins);
+                    break;
+                }
                 let share = (0..3).filter(|&x| x != f.axis).map(|x| b[x] - a[x]).product::<f64>() / open;
                 let mut r = region.clone();
                 let mut lo_r = rmin;
@@ -585,11 +611,15 @@ impl Translator<'_> {
                 parts.push(ins);
             }
             self.note(format!(
-                "{}: mass inflow {}: MFIX feeds it through the part of its face inside the STL walls, {area:.6e} of its {area_full:.6e} m² ({:.1} %), entering through {} runs of open windows",
+                "{}: mass inflow {}: MFIX feeds it through the part of its face inside the STL walls, {area:.6e} of its {area_full:.6e} m² ({:.1} %), {}",
                 self.origin,
                 f.bc,
                 100.0 * area / area_full,
-                runs.len()
+                if whole {
+                    "all of the face open to the particles".to_string()
+                } else {
+                    format!("entering through {} runs of MFIX's open windows", runs.len())
+                }
             ));
             replaced.push((f.insertion, parts));
         }
@@ -862,7 +892,7 @@ impl Translator<'_> {
     /// MFIX's fluid grid (`IMAX`, `JMAX`, `KMAX`) and DES grid cut by the STL walls, when the
     /// deck has both walls and a grid.
     fn stl_grids(
-        &self,
+        &mut self,
         lo: Vec3,
         hi: Vec3,
         walls: &[grainflow::mesh::Mesh],
@@ -879,7 +909,11 @@ impl Translator<'_> {
                 _ => return Ok(None),
             }
         }
-        if n.iter().product::<usize>() > 20_000_000 {
+        if n.iter().product::<usize>() > MAX_CUT_GRID {
+            self.note(format!(
+                "{}: MFIX's grid has more than {MAX_CUT_GRID} cells: GENER_PART_CONFIG counts the IC boxes' volume and skips sites by their nearest triangle, not by MFIX's cut cells",
+                self.origin
+            ));
             return Ok(None);
         }
         let size = hi - lo;
