@@ -71,13 +71,14 @@ fn the_mass_inflow_feeds_only_the_hopper_top_at_mfix_rate() {
     let rate: f64 = d.raw.insertions.iter().map(|i| i.mass_rate.expect("a mass rate")).sum();
     let per_second = rate / (1000.0 * v_mean);
     assert!((per_second / 2887.0 - 1.0).abs() < 0.02, "{per_second} particles/s, MFIX fed 2887");
-    let r_max = 4.0e-3;
+    // The smallest sphere (2 mm) reaches farthest: its centre stays 1 mm inside the box.
+    let r_min = 1.0e-3;
     for ins in &d.raw.insertions {
         let r = ins.region.as_ref().expect("a region");
         let (a, b) = (r.min.expect("box"), r.max.expect("box"));
-        // The centres' range: the box less the largest radius on each side.
-        for x in [a[0] + r_max, b[0] - r_max] {
-            for z in [a[2] + r_max, b[2] - r_max] {
+        // The centres' range: the box less the radius on each side.
+        for x in [a[0] + r_min, b[0] - r_min] {
+            for z in [a[2] + r_min, b[2] - r_min] {
                 let off = ((x - 0.0625).powi(2) + (z - 0.0625).powi(2)).sqrt();
                 assert!(off < 0.0625, "{:?}: ({x}, {z}) is {off} m off the axis", ins.name);
             }

@@ -64,10 +64,13 @@ struct Inflow {
 /// `D_P0` across or a little more, centred on the face; a window is open when it has fluid at
 /// its corners and no facet overlaps its box (1.1 windows across, 1.1 diameters deep either
 /// side of the face), and MFIX closes the rows and columns at and beyond the outermost ones a
-/// facet overlaps. The open windows of each row are returned as runs, each a box on the face.
+/// facet overlaps. The open windows are returned as runs along the rows of bands of rows,
+/// each band tall enough for spheres up to `d_max` across centred in it (its box grown by
+/// `r_min`), each run a box on the face.
 fn open_windows(
     f: &Inflow,
     max_dia: f64,
+    (r_min, d_max): (f64, f64),
     fluid: &super::cells::FluidGrid,
     facets: &[super::cells::Facet],
 ) -> Vec<(Vec3, Vec3)> {
@@ -128,21 +131,35 @@ fn open_windows(
         b[f.axis] = f.at;
         return vec![(a, b)];
     }
-    let mut runs = Vec::new();
     for h in 0..hmax {
+        for w in 0..wmax {
+            if any && !(w > first[0] && w < last[0] && h > first[1] && h < last[1]) {
+                open[w + wmax * h] = false;
+            }
+        }
+    }
+    // Bands of `band` rows, each the windows open in all of its rows: tall enough that the
+    // largest sphere fits with its centre in the band (the region is the band grown by the
+    // smallest radius only, so that no centre leaves the open windows).
+    let band = (((d_max - 2.0 * r_min) / window).ceil().max(1.0) as usize).min(hmax);
+    let mut runs = Vec::new();
+    let mut h0 = 0;
+    while h0 + band <= hmax {
+        let rows = h0..h0 + band;
+        let is_open = |w: usize| rows.clone().all(|h| open[w + wmax * h]);
         let mut w = 0;
         while w < wmax {
-            let inner = !any || (w > first[0] && w < last[0] && h > first[1] && h < last[1]);
-            if !(open[w + wmax * h] && inner) {
+            if !is_open(w) {
                 w += 1;
                 continue;
             }
             let start = w;
-            while w < wmax && open[w + wmax * h] && (!any || (w > first[0] && w < last[0])) {
+            while w < wmax && is_open(w) {
                 w += 1;
             }
-            runs.push((corner(start, h), corner(w, h + 1)));
+            runs.push((corner(start, h0), corner(w, h0 + band)));
         }
+        h0 += band;
     }
     runs
 }
@@ -557,7 +574,17 @@ impl Translator<'_> {
                 })
                 .collect();
             let max_dia = bc_phases.iter().map(|&m| phases[m].diameter).fold(0.0, f64::max);
-            let runs = open_windows(f, max_dia, fluid, facets);
+            let first = raw.phases.first();
+            let d_max = first
+                .and_then(|p| p.max_diameter.or(p.diameters.as_ref().and_then(|d| d.last().copied())))
+                .unwrap_or(max_dia)
+                .max(max_dia);
+            let r_min = 0.5
+                * first
+                    .and_then(|p| p.min_diameter.or(p.diameters.as_ref().and_then(|d| d.first().copied())))
+                    .unwrap_or(d_max)
+                    .min(d_max);
+            let runs = open_windows(f, max_dia, (r_min, d_max), fluid, facets);
             let open: f64 = runs
                 .iter()
                 .map(|(a, b)| (0..3).filter(|&k| k != f.axis).map(|k| b[k] - a[k]).product::<f64>())
@@ -572,13 +599,8 @@ impl Translator<'_> {
             let rate = raw.mass_rate.unwrap_or(0.0) * if f.from_area { area / area_full } else { 1.0 };
             let region = raw.region.clone().expect("an inflow has a box");
             let (rmin, rmax) = (region.min.expect("box"), region.max.expect("box"));
-            let pad = 0.5
-                * raw
-                    .phases
-                    .first()
-                    .and_then(|p| p.max_diameter.or(p.diameters.as_ref().and_then(|d| d.last().copied())))
-                    .unwrap_or(max_dia)
-                    .max(max_dia);
+            // The smallest sphere's centre may reach the runs' edges, none beyond.
+            let pad = r_min;
             let whole = runs.len() == 1
                 && (0..3).all(|x| x == f.axis || (runs[0].0[x] == f.lo[x] && runs[0].1[x] == f.hi[x]));
             let mut parts = Vec::new();
@@ -595,7 +617,7 @@ impl Translator<'_> {
                 let mut lo_r = rmin;
                 let mut hi_r = rmax;
                 for x in (0..3).filter(|&x| x != f.axis) {
-                    // Centres anywhere in the run: the box is grown by the largest radius
+                    // Centres anywhere in the run: the box is grown by the smallest radius
                     // (within the domain).
                     lo_r[x] = (a[x] - pad).max(lo[x]);
                     hi_r[x] = (b[x] + pad).min(hi[x]);
