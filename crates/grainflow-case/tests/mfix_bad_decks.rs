@@ -92,6 +92,17 @@ fn bad_motion_files_and_particle_files_are_reported_with_their_names() {
     std::fs::write(&motion, "[[motion]]\nparticles = 7\nrule = \"hold\"\n").expect("write");
     let e = grainflow_case::mfix::load(&deck, &[], Some(&motion)).expect_err("no particle 7").to_string();
     assert!(e.contains("[[motion]] #1") && e.contains("no particle has this id"), "{e}");
+    // Two tables for one wall: the second would silently replace the first (issue 38).
+    std::fs::write(
+        &motion,
+        "[[walls]]\nis = 2\n[walls.surface]\nvelocity = [1.0, 0.0, 0.0]\n\n[[walls]]\nis = 2\n[walls.surface]\nvelocity = [-1.0, 0.0, 0.0]\n",
+    )
+    .expect("write");
+    let e = grainflow_case::mfix::load(&deck, &[], Some(&motion)).expect_err("is twice").to_string();
+    assert!(
+        e.contains("[[walls]] #2") && e.contains("`is` = 2") && e.contains("[[walls]] #1 already gives"),
+        "{e}"
+    );
     let e = grainflow_case::mfix::load(&dir.path().join("nothere.dat"), &[], None)
         .expect_err("missing")
         .to_string();

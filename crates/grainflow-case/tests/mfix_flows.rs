@@ -432,3 +432,152 @@ fn an_internal_stl_surface_turns_by_its_motion_file() {
     let e = mfix::load(&path, &[], Some(&dir.path().join("motion.toml"))).expect_err("no IS 2").to_string();
     assert!(e.contains("its STL walls are is = 1"), "{e}");
 }
+
+/// A square floor at height `y` over [0, `l`]² in x and z, facing +y, as ASCII STL.
+fn floor_stl(y: f64, l: f64) -> String {
+    let mut s = String::from("solid floor\n");
+    for [a, b, c] in [[[0.0, 0.0], [0.0, l], [l, l]], [[0.0, 0.0], [l, l], [l, 0.0]]] {
+        s.push_str("facet normal 0 1 0\nouter loop\n");
+        for [x, z] in [a, b, c] {
+            s.push_str(&format!("vertex {x} {y} {z}\n"));
+        }
+        s.push_str("endloop\nendfacet\n");
+    }
+    s.push_str("endsolid floor\n");
+    s
+}
+
+/// A CGS deck's STL is in centimetres, as every length of the deck (MFIX reads the geometry in
+/// the deck's units): a floor at 5 cm holds the bead at 5 cm plus its radius, not at the box
+/// floor (issue 38). The bead (1 cm, 2.6 g/cm³, 10.9 g) rests on the floor compressed by
+/// m·g/k_n = 2.1e-6 m with KN_W = 5e7 dyne/cm = 5e4 N/m: its centre ends at 0.06 m within
+/// 1e-5 m once its bounces (e = 0.5, a 4 cm drop) have died out.
+#[test]
+fn a_cgs_deck_reads_its_stl_in_centimetres() {
+    let deck = "\
+RUN_NAME = 'CGS_STL'
+UNITS = 'CGS'
+RUN_TYPE = 'NEW'
+TSTOP = 1.0
+COORDINATES = 'CARTESIAN'
+XLENGTH = 20.0  YLENGTH = 20.0  ZLENGTH = 20.0
+IMAX = 4  JMAX = 4  KMAX = 4
+CARTESIAN_GRID = .T.
+USE_STL = .T.
+RO_G0 = 0.0
+MMAX = 1
+SOLIDS_MODEL(1) = 'DEM'
+D_P0(1) = 2.0
+RO_S0(1) = 2.6
+PARTICLES = 1
+KN = 5.0e7  KN_W = 5.0e7
+MEW = 0.3  MEW_W = 0.3
+DES_EN_INPUT(1) = 0.5
+DES_EN_WALL_INPUT(1) = 0.5
+BC_TYPE(1) = 'CG_NSW'
+BC_X_W(1) = 0.0  BC_X_E(1) = 20.0  BC_Y_S(1) = 0.0  BC_Y_N(1) = 20.0  BC_Z_B(1) = 0.0  BC_Z_T(1) = 20.0
+";
+    let (_dir, path) = folder(
+        deck,
+        &[
+            ("particle_input.dat", "10.0 10.0 10.0 1.0 2.6 0.0 0.0 0.0\n"),
+            ("geometry_0001.stl", &floor_stl(5.0, 20.0)),
+        ],
+    );
+    let d = load(&path, &[]).expect("deck loads");
+    assert_eq!(d.raw.meshes[0].scale, Some(0.01), "cm → m");
+    let mut sim = Simulation::new(d.case.config.clone(), d.case.particles.clone()).expect("set-up");
+    let steps = sim.total_steps();
+    sim.run_with(steps, |_| {});
+    let y = sim.particles().position[0].y;
+    let m = 2600.0 * 4.0 / 3.0 * std::f64::consts::PI * 1e-6;
+    let rest = 0.06 - m * 9.80665 / 5.0e4;
+    assert!((y - rest).abs() < 1e-5, "the bead rests at y = {y} m, the floor holds it at {rest} m");
+}
+
+/// `PARTICLES = 0` with `GENER_PART_CONFIG`: no particle file, the IC regions are seeded
+/// (docs/mfix-decks.md); ⌊ε·V/v⌋ = ⌊0.01·1/(π/6·0.1³)⌋ = 19 particles in the 1 m³ box.
+#[test]
+fn no_particle_file_with_generated_particles_is_accepted() {
+    let deck = format!(
+        "{HEAD}{ONE_PHASE}XLENGTH = 1.0  YLENGTH = 1.0  ZLENGTH = 1.0\nPARTICLES = 0\nGENER_PART_CONFIG = .T.\n\
+         IC_X_W(1) = 0.0  IC_X_E(1) = 1.0  IC_Y_S(1) = 0.0  IC_Y_N(1) = 1.0  IC_Z_B(1) = 0.0  IC_Z_T(1) = 1.0\n\
+         IC_EP_S(1,1) = 0.01\n"
+    );
+    let (_dir, path) = folder(&deck, &[]);
+    let d = load(&path, &[]).expect("PARTICLES = 0 with GENER_PART_CONFIG loads");
+    let v = std::f64::consts::FRAC_PI_6 * 1e-3;
+    assert_eq!(d.case.particles.len(), (0.01 / v).floor() as usize);
+}
+
+/// A fully periodic box has no walls: a particle across a cyclic face overlaps nothing, so
+/// no wall overlap is reported and the initial-overlap limit stays grainflow's own (MFIX's
+/// homogeneous-cooling-system deck is fully periodic; issue 38).
+#[test]
+fn a_fully_periodic_deck_reports_no_wall_overlap() {
+    let deck = format!(
+        "{HEAD}{ONE_PHASE}XLENGTH = 1.0  YLENGTH = 1.0  ZLENGTH = 1.0\nCYCLIC_X = .T.\nCYCLIC_Y = .T.\nCYCLIC_Z = .T.\n\
+         GRAVITY = 0.0\nPARTICLES = 2\n"
+    );
+    // The first straddles the x faces (its centre 0.02 m from x = 0, radius 0.05 m).
+    let file = "0.02 0.5 0.5 0.05 1000.0 0 0 0\n0.5 0.5 0.5 0.05 1000.0 0 0 0\n";
+    let (_dir, path) = folder(&deck, &[("particle_input.dat", file)]);
+    let d = load(&path, &[]).expect("deck loads");
+    assert!(d.notes.iter().all(|n| !n.contains("overlap")), "{:#?}", d.notes);
+    assert_eq!(d.raw.particles.as_ref().and_then(|p| p.max_initial_overlap), None);
+}
+
+/// A 2-D deck (NO_K) with a mass inflow: MFIX's face is a segment of the plane z = 0 and its
+/// area the segment's width times ZLENGTH, the depth of MFIX's one layer of cells. The inflow
+/// brings ε_s·w·ZLENGTH·|v|·ρ_s = 0.1·0.6·0.1·1·1000 = 6 kg/s, and every particle it brings
+/// lies in the plane z = 0 to the placement's rounding margin (2·1e-13 of the box's largest
+/// coordinate, 2 m: 4e-13 m) and stays within it: its z velocity and x, y spin stay below
+/// 1e-9 of the in-plane speeds. The books close (inserted = present + removed through the
+/// bottom outflow).
+#[test]
+fn a_two_dimensional_mass_inflow_feeds_in_its_plane() {
+    let deck = format!(
+        "{HEAD}MMAX = 1\nSOLIDS_MODEL(1) = 'DEM'\nD_P0(1) = 0.05\nRO_S0(1) = 1000.0\nDES_EN_INPUT(1) = 0.9\nDES_EN_WALL_INPUT(1) = 0.9\n\
+         XLENGTH = 1.0  YLENGTH = 2.0  ZLENGTH = 0.1\nNO_K = .T.\nPARTICLES = 0\nTSTOP = 1.0\n\
+         BC_TYPE(1) = 'MI'\nBC_X_W(1) = 0.2  BC_X_E(1) = 0.8  BC_Y_S(1) = 2.0  BC_Y_N(1) = 2.0\n\
+         BC_EP_S(1,1) = 0.1\nBC_V_S(1,1) = -1.0\n\
+         BC_TYPE(2) = 'PO'\nBC_X_W(2) = 0.0  BC_X_E(2) = 1.0  BC_Y_S(2) = 0.0  BC_Y_N(2) = 0.0\n"
+    );
+    let (_dir, path) = folder(&deck, &[]);
+    let d = load(&path, &[]).expect("a 2-D mass inflow loads");
+    let rate = d.raw.insertions[0].mass_rate.expect("a mass rate");
+    assert!((rate - 6.0).abs() < 1e-12, "{rate} kg/s");
+    let mut sim = Simulation::new(d.case.config.clone(), d.case.particles.clone()).expect("set-up");
+    let steps = sim.total_steps();
+    let mut seen = 0usize;
+    sim.run_with(steps, |s| {
+        let p = s.particles();
+        for i in 0..p.len() {
+            assert!(p.position[i].z.abs() <= 4e-13, "particle {} at z = {}", p.id[i], p.position[i].z);
+            assert!(
+                p.velocity[i].z.abs() <= 1e-9 * (1.0 + p.velocity[i].length()),
+                "particle {}: w = {}",
+                p.id[i],
+                p.velocity[i].z
+            );
+            assert!(p.omega[i].x.abs().max(p.omega[i].y.abs()) <= 1e-9 * (1.0 + p.omega[i].z.abs()));
+        }
+        seen = seen.max(p.len());
+    });
+    let books = sim.flow_books();
+    assert!(books.close(), "{books:?}");
+    assert!(seen > 0 && books.removed_total().count > 0, "{books:?}");
+}
+
+/// MFIX's poly_dem_inlet_outlet (legacy_tests/dem-tests, vendored unchanged) is a 2-D deck
+/// with a mass inflow, which now translates; what stops it is its gas: a density of 1.3e-30
+/// g/cm³ but a Wen–Yu drag with μ_g = 1.8e-4 P, which still drags the particles. The message
+/// names the drag.
+#[test]
+fn poly_dem_inlet_outlet_is_refused_for_its_drag() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mfix_decks/poly_dem_inlet_outlet/mfix.dat");
+    let e = load(&p, &[]).expect_err("refused").to_string();
+    assert!(e.contains("RO_G0") && e.contains("'WEN_YU'") && e.contains("MU_G0 = 1.8d-4"), "{e}");
+    assert!(e.contains("still drags the particles"), "{e}");
+    assert!(!e.contains("2-D run (NO_K) is not supported"), "{e}");
+}

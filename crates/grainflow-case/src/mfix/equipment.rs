@@ -42,6 +42,128 @@ pub(super) struct Equipment {
     pub particles: Vec<RawParticle>,
 }
 
+/// The most cells of MFIX's grid that are cut by the STL walls here (about 100 MB).
+const MAX_CUT_GRID: usize = 4_000_000;
+
+/// A mass inflow's insertion and its face, for [`Translator::inflows_inside_the_walls`].
+struct Inflow {
+    /// Its index in the equipment's insertions.
+    insertion: usize,
+    bc: i64,
+    axis: usize,
+    at: f64,
+    lo: Vec3,
+    hi: Vec3,
+    /// +1 if the box lies on the face's upper side, −1 if on its lower.
+    inward: f64,
+    /// The rate is ε_s·A·|v|·ρ_s, of the face's area (not a given BC_MASSFLOW_S).
+    from_area: bool,
+}
+
+/// MFIX's windows on a mass inflow's face (`LAYOUT_MI_DEM`): W × H squares of the largest
+/// `D_P0` across or a little more, centred on the face; a window is open when it has fluid at
+/// its corners and no facet overlaps its box (1.1 windows across, 1.1 diameters deep either
+/// side of the face), and MFIX closes the rows and columns at and beyond the outermost ones a
+/// facet overlaps. The open windows are returned as runs along the rows of bands of rows,
+/// each band tall enough for spheres up to `d_max` across centred in it (its box grown by
+/// `r_min`), each run a box on the face.
+fn open_windows(
+    f: &Inflow,
+    max_dia: f64,
+    (r_min, d_max): (f64, f64),
+    fluid: &super::cells::FluidGrid,
+    facets: &[super::cells::Facet],
+) -> Vec<(Vec3, Vec3)> {
+    let (p, q) = match f.axis {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    };
+    let (plen, qlen) = (f.hi[p] - f.lo[p], f.hi[q] - f.lo[q]);
+    let wmax = (plen / max_dia).floor() as usize;
+    let hmax = (qlen / max_dia).floor() as usize;
+    if wmax == 0 || hmax == 0 || wmax * hmax > 4_000_000 {
+        return Vec::new();
+    }
+    let window = (plen / wmax as f64).min(qlen / hmax as f64);
+    let p0 = f.lo[p] + 0.5 * (plen - wmax as f64 * window);
+    let q0 = f.lo[q] + 0.5 * (qlen - hmax as f64 * window);
+    let corner = |w: usize, h: usize| {
+        let mut c = Vec3::ZERO;
+        c[f.axis] = f.at;
+        c[p] = p0 + w as f64 * window;
+        c[q] = q0 + h as f64 * window;
+        c
+    };
+    let mut open = vec![false; wmax * hmax];
+    let (mut first, mut last) = ([usize::MAX; 2], [0usize; 2]);
+    let mut any = false;
+    let mut half = Vec3::splat(0.55 * window);
+    half[f.axis] = 1.1 * max_dia;
+    let tiny = 1e-9 * window;
+    for h in 0..hmax {
+        for w in 0..wmax {
+            let a = corner(w, h);
+            let centre = a + 0.5 * (corner(w + 1, h + 1) - a);
+            // Fluid at the window's corners, just inside the face.
+            let wet = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].iter().all(|&(u, v)| {
+                let mut x = a;
+                x[p] += u * window + if u == 0.0 { tiny } else { -tiny };
+                x[q] += v * window + if v == 0.0 { tiny } else { -tiny };
+                x[f.axis] += f.inward * tiny;
+                fluid.wet(x)
+            });
+            let near = facets
+                .iter()
+                .any(|t| t.spans(f.axis, f.at) && super::cells::tri_box_overlap(centre, half, t.corners()));
+            if near {
+                any = true;
+                first = [first[0].min(w), first[1].min(h)];
+                last = [last[0].max(w), last[1].max(h)];
+            }
+            open[w + wmax * h] = wet && !near;
+        }
+    }
+    if !any && open.iter().all(|&o| o) {
+        // Nothing comes near the face: all of it is open, one region.
+        let (mut a, mut b) = (f.lo, f.hi);
+        a[f.axis] = f.at;
+        b[f.axis] = f.at;
+        return vec![(a, b)];
+    }
+    for h in 0..hmax {
+        for w in 0..wmax {
+            if any && !(w > first[0] && w < last[0] && h > first[1] && h < last[1]) {
+                open[w + wmax * h] = false;
+            }
+        }
+    }
+    // Bands of `band` rows, each the windows open in all of its rows: tall enough that the
+    // largest sphere fits with its centre in the band (the region is the band grown by the
+    // smallest radius only, so that no centre leaves the open windows).
+    let band = (((d_max - 2.0 * r_min) / window).ceil().max(1.0) as usize).min(hmax);
+    let mut runs = Vec::new();
+    let mut h0 = 0;
+    while h0 + band <= hmax {
+        let rows = h0..h0 + band;
+        let is_open = |w: usize| rows.clone().all(|h| open[w + wmax * h]);
+        let mut w = 0;
+        while w < wmax {
+            if !is_open(w) {
+                w += 1;
+                continue;
+            }
+            let start = w;
+            while w < wmax && is_open(w) {
+                w += 1;
+            }
+            runs.push((corner(start, h0), corner(w, h0 + band)));
+        }
+        h0 += band;
+    }
+    runs
+}
+
 /// A boundary region flat on one axis: the plane and the rectangle on it.
 struct Flat {
     axis: usize,
@@ -52,7 +174,8 @@ struct Flat {
 
 impl Translator<'_> {
     /// What a 2-D (`NO_K`) deck may not have: gravity along z, and the features that place
-    /// particles or walls in 3-D (generated particles, mass inflows, STL walls).
+    /// particles or walls in 3-D (generated particles, STL walls). Mass inflows insert in the
+    /// plane ([`Self::mass_inflow`]).
     pub(super) fn two_d_checks(&mut self, gravity: [f64; 3]) -> Result<(), CaseError> {
         let d = self.deck;
         let loc = d.bool("NO_K", &[])?.map_or(self.origin.to_string(), |g| g.loc.to_string());
@@ -73,16 +196,6 @@ impl Translator<'_> {
                     "NO_K",
                     ".TRUE.",
                     format!("grainflow cannot run this: {what} ({key} with NO_K) are not supported; list the particles in particle_input.dat (x y radius density u v)"),
-                ));
-            }
-        }
-        for idx in d.indices("BC_TYPE") {
-            if let Some(t) = self.word("BC_TYPE", &idx)?
-                && matches!(t.v.as_str(), "MI" | "MASS_INFLOW")
-            {
-                self.block(Self::invalid_word(
-                    &t,
-                    "grainflow cannot run this: a mass inflow in a 2-D run (NO_K) is not supported",
                 ));
             }
         }
@@ -195,6 +308,7 @@ impl Translator<'_> {
         bcs.dedup();
         let mut stl_bcs = Vec::new();
         let mut walls_on_faces = Vec::new();
+        let mut inflows: Vec<Inflow> = Vec::new();
         for i in bcs {
             let Some(t) = self.word("BC_TYPE", &[i])? else { continue };
             let kind = t.v.as_str();
@@ -301,7 +415,19 @@ impl Translator<'_> {
                     // No solids come in: MFIX keeps the face a wall.
                     continue;
                 }
-                eq.insertions.extend(ins);
+                for (raw, from_area) in ins {
+                    inflows.push(Inflow {
+                        insertion: eq.insertions.len(),
+                        bc: i,
+                        axis: f.axis,
+                        at: f.at,
+                        lo: f.lo,
+                        hi: f.hi,
+                        inward: -normal[f.axis],
+                        from_area,
+                    });
+                    eq.insertions.push(raw);
+                }
             } else {
                 eq.outlets.push(RawOutlet {
                     name: Some(format!("bc{i}")),
@@ -359,9 +485,13 @@ impl Translator<'_> {
                 self.origin
             ));
         }
-        if self.flag("GENER_PART_CONFIG")? {
+        let mut grids = None;
+        let gener = self.flag("GENER_PART_CONFIG")?;
+        if gener {
             let walls = self.load_walls(&eq.meshes, read_file)?;
-            eq.particles = self.generated(lo, hi, phases, &walls, read_file)?;
+            let (particles, g) = self.generated(lo, hi, phases, &walls, read_file)?;
+            eq.particles = particles;
+            grids = g;
             if eq.insertions.is_empty()
                 && eq.particles.is_empty()
                 && let Some(g) = d.bool("GENER_PART_CONFIG", &[])?
@@ -374,7 +504,153 @@ impl Translator<'_> {
                 ));
             }
         }
+        self.inflows_inside_the_walls(&mut eq, &inflows, lo, hi, phases, grids.as_ref(), read_file)?;
         Ok(eq)
+    }
+
+    /// MFIX feeds a mass inflow only through the part of its face inside the STL walls: its
+    /// rate is ε_s·|v|·ρ_s times the fluid area of the face's cut cells (`BC_AREA`), and its
+    /// particles enter through the windows of its face (`LAYOUT_MI_DEM`: squares of the
+    /// largest `D_P0` across, centred on the face) that no facet comes near. Each inflow's
+    /// region becomes the runs of open windows, one insertion per run, sharing the rate by
+    /// their areas.
+    fn inflows_inside_the_walls(
+        &mut self,
+        eq: &mut Equipment,
+        inflows: &[Inflow],
+        lo: Vec3,
+        hi: Vec3,
+        phases: &[Phase],
+        grids: Option<&seed::StlGrids>,
+        read_file: &input::Opener<'_>,
+    ) -> Result<(), CaseError> {
+        if inflows.is_empty() || eq.meshes.is_empty() || self.flag("NO_K")? {
+            return Ok(());
+        }
+        let d = self.deck;
+        let mut n = [0usize; 3];
+        for (k, key) in ["IMAX", "JMAX", "KMAX"].iter().enumerate() {
+            match d.int(key, &[])? {
+                Some(g) if g.v > 0 && g.v <= 10_000 => n[k] = g.v as usize,
+                _ => {
+                    self.note(format!(
+                        "{}: the mass inflows feed through their whole faces: without MFIX's grid (IMAX, JMAX, KMAX) the part of a face inside the STL walls is not known",
+                        self.origin
+                    ));
+                    return Ok(());
+                }
+            }
+        }
+        if n.iter().product::<usize>() > MAX_CUT_GRID {
+            self.note(format!(
+                "{}: the mass inflows feed through their whole faces: MFIX's grid has more than {MAX_CUT_GRID} cells, too many to cut by the STL walls here",
+                self.origin
+            ));
+            return Ok(());
+        }
+        let own;
+        let (facets, fluid) = match grids {
+            Some(g) => (&g.facets, &g.fluid),
+            None => {
+                let walls = self.load_walls(&eq.meshes, read_file)?;
+                let facets = super::cells::facets(&walls);
+                let fluid = super::cells::FluidGrid::new(lo, hi, n, &facets);
+                own = (facets, fluid);
+                (&own.0, &own.1)
+            }
+        };
+        let mut replaced: Vec<(usize, Vec<RawInsertion>)> = Vec::new();
+        for f in inflows {
+            let raw = &eq.insertions[f.insertion];
+            let area_full: f64 = (0..3).filter(|&a| a != f.axis).map(|a| f.hi[a] - f.lo[a]).product();
+            let area = fluid.face_area(f.axis, f.at, f.inward, f.lo, f.hi, facets);
+            // MFIX's windows: squares of the largest D_P0 of the inflow's phases.
+            let bc_phases: Vec<usize> = inflows
+                .iter()
+                .filter(|g| g.bc == f.bc)
+                .filter_map(|g| {
+                    let name = eq.insertions[g.insertion].phases.first()?.phase.clone()?;
+                    phases.iter().position(|p| p.name == name)
+                })
+                .collect();
+            let max_dia = bc_phases.iter().map(|&m| phases[m].diameter).fold(0.0, f64::max);
+            let first = raw.phases.first();
+            let d_max = first
+                .and_then(|p| p.max_diameter.or(p.diameters.as_ref().and_then(|d| d.last().copied())))
+                .unwrap_or(max_dia)
+                .max(max_dia);
+            let r_min = 0.5
+                * first
+                    .and_then(|p| p.min_diameter.or(p.diameters.as_ref().and_then(|d| d.first().copied())))
+                    .unwrap_or(d_max)
+                    .min(d_max);
+            let runs = open_windows(f, max_dia, (r_min, d_max), fluid, facets);
+            let open: f64 = runs
+                .iter()
+                .map(|(a, b)| (0..3).filter(|&k| k != f.axis).map(|k| b[k] - a[k]).product::<f64>())
+                .sum();
+            if runs.is_empty() || area.is_nan() || area <= 0.0 {
+                self.block(CaseError::Geometry(format!(
+                    "{}: mass inflow {} lies outside the STL walls: no part of its face is open (MFIX stops on this: \"no un-cut fluid cells adjacent to DEM_MI staging area\")",
+                    self.origin, f.bc
+                )));
+                continue;
+            }
+            let rate = raw.mass_rate.unwrap_or(0.0) * if f.from_area { area / area_full } else { 1.0 };
+            let region = raw.region.clone().expect("an inflow has a box");
+            let (rmin, rmax) = (region.min.expect("box"), region.max.expect("box"));
+            // The smallest sphere's centre may reach the runs' edges, none beyond.
+            let pad = r_min;
+            let whole = runs.len() == 1
+                && (0..3).all(|x| x == f.axis || (runs[0].0[x] == f.lo[x] && runs[0].1[x] == f.hi[x]));
+            let mut parts = Vec::new();
+            for (k, (a, b)) in runs.iter().enumerate() {
+                if whole {
+                    // All of the face is open: its region as it was, at the fluid area's rate.
+                    let mut ins = raw.clone();
+                    ins.mass_rate = Some(rate);
+                    parts.push(ins);
+                    break;
+                }
+                let share = (0..3).filter(|&x| x != f.axis).map(|x| b[x] - a[x]).product::<f64>() / open;
+                let mut r = region.clone();
+                let mut lo_r = rmin;
+                let mut hi_r = rmax;
+                for x in (0..3).filter(|&x| x != f.axis) {
+                    // Centres anywhere in the run: the box is grown by the smallest radius
+                    // (within the domain).
+                    lo_r[x] = (a[x] - pad).max(lo[x]);
+                    hi_r[x] = (b[x] + pad).min(hi[x]);
+                }
+                r.min = Some(lo_r);
+                r.max = Some(hi_r);
+                let mut ins = raw.clone();
+                ins.region = Some(r);
+                ins.mass_rate = Some(rate * share);
+                if runs.len() > 1 {
+                    ins.name = ins.name.map(|n| format!("{n}_{}", k + 1));
+                }
+                parts.push(ins);
+            }
+            self.note(format!(
+                "{}: mass inflow {}: MFIX feeds it through the part of its face inside the STL walls, {area:.6e} of its {area_full:.6e} m² ({:.1} %), {}",
+                self.origin,
+                f.bc,
+                100.0 * area / area_full,
+                if whole {
+                    "all of the face open to the particles".to_string()
+                } else {
+                    format!("entering through {} runs of MFIX's open windows", runs.len())
+                }
+            ));
+            replaced.push((f.insertion, parts));
+        }
+        // Replace from the last, so that the indices before stay valid.
+        replaced.sort_by_key(|r| std::cmp::Reverse(r.0));
+        for (at, parts) in replaced {
+            eq.insertions.splice(at..=at, parts);
+        }
+        Ok(())
     }
 
     /// True (and reported as a blocker) if wall `i` is given a velocity: a deck cannot say
@@ -430,11 +706,15 @@ impl Translator<'_> {
             self.real("TY_STL", &[])?.map_or(0.0, |g| g.v),
             self.real("TZ_STL", &[])?.map_or(0.0, |g| g.v),
         ];
+        // The STL's coordinates are in the deck's units, as every length MFIX reads (a CGS
+        // deck's geometry is in cm): the file's points and the GUI's translations are scaled
+        // to metres with them; TX_STL … are already converted by `real`.
+        let unit = if self.cgs { super::keywords::Unit::Length.cgs_to_si(1.0) } else { 1.0 };
         for w in walls {
             let (s, t) = if w.from_solver_file {
-                (scale * w.scale, [0, 1, 2].map(|k| scale * w.translate[k] + shift[k]))
+                (unit * scale * w.scale, [0, 1, 2].map(|k| unit * scale * w.translate[k] + shift[k]))
             } else {
-                (w.scale, w.translate)
+                (unit * w.scale, w.translate.map(|x| unit * x))
             };
             eq.meshes.push(RawMesh {
                 name: Some(w.name.clone()),
@@ -554,7 +834,7 @@ impl Translator<'_> {
         phases: &[Phase],
         walls: &[grainflow::mesh::Mesh],
         read_file: &input::Opener<'_>,
-    ) -> Result<Vec<RawParticle>, CaseError> {
+    ) -> Result<(Vec<RawParticle>, Option<seed::StlGrids>), CaseError> {
         let d = self.deck;
         let mut ics: Vec<i64> = d.indices("IC_EP_S").into_iter().filter_map(|i| i.first().copied()).collect();
         ics.sort_unstable();
@@ -583,9 +863,20 @@ impl Translator<'_> {
                     self.real("IC_V_S", &[ic, m])?.map_or(0.0, |g| g.v),
                     self.real("IC_W_S", &[ic, m])?.map_or(0.0, |g| g.v),
                 ];
-                // A granular temperature, m²/s² (cm²/s² in a CGS deck).
-                let theta = self.real("IC_THETA_M", &[ic, m])?.map_or(0.0, |g| g.v.max(0.0))
-                    / if self.cgs { 1e4 } else { 1.0 };
+                // A granular temperature, m²/s² (cm²/s² in a CGS deck): a variance, never
+                // negative (MFIX refuses a negative one).
+                let theta = match self.real("IC_THETA_M", &[ic, m])? {
+                    Some(g) if g.v.is_nan() || g.v < 0.0 => {
+                        return Err(CaseError::invalid(
+                            g.loc.to_string(),
+                            g.key,
+                            g.text,
+                            "must be a granular temperature >= 0 (the variance of the velocity fluctuations)",
+                        ));
+                    }
+                    Some(g) => g.v,
+                    None => 0.0,
+                } / if self.cgs { 1e4 } else { 1.0 };
                 let part = self.psd("IC", ic, m, phase, read_file)?;
                 let sizes = crate::flow::sizes(&part, &show("IC_PSD_TYPE", &[ic, m]), phase)?;
                 parts.push(seed::SeedPhase { ic, m, phase, ep: ep.v, sizes, velocity, theta });
@@ -599,11 +890,73 @@ impl Translator<'_> {
             .iter()
             .flat_map(|(_, parts)| parts.iter().map(|p| 0.5 * p.sizes.max_diameter()))
             .fold(0.0, f64::max);
+        // MFIX's MAX_RADIUS covers every phase and every size distribution's largest size,
+        // the inflows' too: it sets the clearance of the seeded sites from the walls.
+        let mut max_radius = max_radius;
+        for (m, phase) in phases.iter().enumerate() {
+            max_radius = max_radius.max(0.5 * phase.diameter);
+            for idx in d.indices("BC_PSD_MAX_DP").into_iter().filter(|i| i.get(1) == Some(&(m as i64 + 1))) {
+                if let Some(g) = self.real("BC_PSD_MAX_DP", &idx)?
+                    && g.v.is_finite()
+                {
+                    max_radius = max_radius.max(0.5 * g.v);
+                }
+            }
+        }
+        let stl = self.stl_grids(lo, hi, walls, max_radius)?;
         for (ic, parts) in &parts_of {
             let region = self.ic_box(*ic, lo, hi)?;
-            out.extend(self.seed(region, parts, walls, max_radius, &mut rng)?);
+            out.extend(self.seed(region, parts, walls, stl.as_ref(), max_radius, &mut rng)?);
         }
-        Ok(out)
+        Ok((out, stl))
+    }
+
+    /// MFIX's fluid grid (`IMAX`, `JMAX`, `KMAX`) and DES grid cut by the STL walls, when the
+    /// deck has both walls and a grid.
+    fn stl_grids(
+        &mut self,
+        lo: Vec3,
+        hi: Vec3,
+        walls: &[grainflow::mesh::Mesh],
+        max_radius: f64,
+    ) -> Result<Option<seed::StlGrids>, CaseError> {
+        let d = self.deck;
+        if walls.is_empty() || self.flag("NO_K")? {
+            return Ok(None);
+        }
+        let mut n = [0usize; 3];
+        for (k, key) in ["IMAX", "JMAX", "KMAX"].iter().enumerate() {
+            match d.int(key, &[])? {
+                Some(g) if g.v > 0 && g.v <= 10_000 => n[k] = g.v as usize,
+                _ => return Ok(None),
+            }
+        }
+        if n.iter().product::<usize>() > MAX_CUT_GRID {
+            self.note(format!(
+                "{}: MFIX's grid has more than {MAX_CUT_GRID} cells: GENER_PART_CONFIG counts the IC boxes' volume and skips sites by their nearest triangle, not by MFIX's cut cells",
+                self.origin
+            ));
+            return Ok(None);
+        }
+        let size = hi - lo;
+        let mut dg = [0usize; 3];
+        for (k, key) in ["DESGRIDSEARCH_IMAX", "DESGRIDSEARCH_JMAX", "DESGRIDSEARCH_KMAX"].iter().enumerate()
+        {
+            // MFIX's default: cells of three largest diameters, or the fluid cell if smaller.
+            let width = (6.0 * max_radius).min(size[k] / n[k] as f64);
+            dg[k] = match d.int(key, &[])? {
+                Some(g) if g.v > 0 && g.v <= 10_000 => g.v as usize,
+                _ => ((size[k] / width).floor() as usize).clamp(1, 10_000),
+            };
+        }
+        if dg.iter().product::<usize>() > 20_000_000 {
+            return Ok(None);
+        }
+        let facets = super::cells::facets(walls);
+        let fluid = super::cells::FluidGrid::new(lo, hi, n, &facets);
+        let des = super::cells::DesGrid::new(lo, hi, dg, &facets, max_radius);
+        let tol_small = d.real("TOL_SMALL_CELL", &[])?.map_or(0.01, |g| g.v);
+        Ok(Some(seed::StlGrids { facets, fluid, des, tol_small }))
     }
 
     /// A DEM mass inflow through face `f`: each phase with a solids volume fraction
@@ -618,13 +971,53 @@ impl Translator<'_> {
         phases: &[Phase],
         t_start: f64,
         read_file: &input::Opener<'_>,
-    ) -> Result<Vec<RawInsertion>, CaseError> {
-        let area: f64 = (0..3).filter(|&a| a != f.axis).map(|a| f.hi[a] - f.lo[a]).product();
+    ) -> Result<Vec<(RawInsertion, bool)>, CaseError> {
+        // In 2-D (NO_K) the face is a segment of the plane z = 0, and MFIX's areas take the
+        // deck's ZLENGTH as the depth of its one layer of cells.
+        let no_k = self.flag("NO_K")?;
+        let depth_2d = if no_k {
+            match self.real("ZLENGTH", &[])? {
+                Some(z) if z.v.is_finite() && z.v > 0.0 => Some(z.v),
+                Some(z) => {
+                    return Err(CaseError::invalid(
+                        z.loc.to_string(),
+                        z.key,
+                        z.text,
+                        "must be a positive length: a 2-D mass inflow's area is its width times ZLENGTH, as in MFIX",
+                    ));
+                }
+                None => {
+                    return Err(CaseError::missing(
+                        self.origin,
+                        "ZLENGTH",
+                        format!(
+                            "the depth of MFIX's 2-D cells ({}): mass inflow {i}'s area is its width times ZLENGTH, as in MFIX",
+                            self.unit_name(super::keywords::Unit::Length)
+                        ),
+                    ));
+                }
+            }
+        } else {
+            None
+        };
+        let area: f64 =
+            (0..3).filter(|&a| a != f.axis && !(a == 2 && no_k)).map(|a| f.hi[a] - f.lo[a]).product::<f64>()
+                * depth_2d.unwrap_or(1.0);
         let mut out = Vec::new();
         for (m, phase) in phases.iter().enumerate() {
             let m = m as i64 + 1;
             let idx = [i, m];
             let ep = self.real("BC_EP_S", &idx)?;
+            if let Some(g) = &ep
+                && !(0.0..1.0).contains(&g.v)
+            {
+                return Err(CaseError::invalid(
+                    g.loc.to_string(),
+                    g.key.clone(),
+                    g.text.clone(),
+                    "must be a solids volume fraction in [0, 1): a stream of touching spheres holds at most about 0.64, and 1 leaves no room between them",
+                ));
+            }
             let massflow = self.real("BC_MASSFLOW_S", &idx)?;
             let v = Vec3::new(
                 self.real("BC_U_S", &idx)?.map_or(0.0, |g| g.v),
@@ -633,6 +1026,7 @@ impl Translator<'_> {
             );
             let inward = -v.dot(Vec3::from_array(outward));
             let rho = phase.density;
+            let from_area = !massflow.as_ref().is_some_and(|q| q.v > 0.0);
             let (mass_rate, speed, what) = match (&ep, &massflow) {
                 (_, Some(q)) if q.v > 0.0 => {
                     let e = ep.as_ref().map_or(0.0, |g| g.v);
@@ -662,6 +1056,14 @@ impl Translator<'_> {
                 continue;
             }
             let part = self.psd("BC", i, m, phase, read_file)?;
+            if no_k && part.distribution.is_some() {
+                let g = self.word("BC_PSD_TYPE", &idx)?.expect("a distribution is given");
+                self.block(Self::invalid_word(
+                    &g,
+                    "grainflow cannot run this: a size distribution in a 2-D mass inflow (NO_K) is not supported (spheres of several sizes cannot all be placed with their centres in z = 0); give each size its own phase, as MFIX's poly_dem_inlet_outlet does",
+                ));
+                continue;
+            }
             let dmax = part
                 .max_diameter
                 .or(part.diameters.as_ref().and_then(|d| d.last().copied()))
@@ -680,33 +1082,51 @@ impl Translator<'_> {
                 lo[f.axis] = f.at - depth;
                 hi[f.axis] = f.at;
             }
+            if no_k {
+                // Centres in z = 0: a box one diameter deep in z holds the spheres only there.
+                // The placement keeps a relative rounding margin from the region's faces
+                // (`place::MARGIN` of the region's largest coordinate), so the box is that much
+                // deeper: the centres lie within twice the margin of z = 0 (below 1e-12 m for a
+                // metre-sized box).
+                let scale = lo.abs().max(hi.abs()).max_element().max(phase.diameter);
+                let slack = 2.0 * grainflow::insertion::place::MARGIN * scale;
+                lo.z = -0.5 * phase.diameter - slack;
+                hi.z = 0.5 * phase.diameter + slack;
+            }
+            let mut v = v;
+            if no_k {
+                v.z = 0.0;
+            }
             let velocity = if v.length_squared() > 0.0 { v } else { Vec3::from_array(outward) * -speed };
-            out.push(RawInsertion {
-                name: Some(format!("bc{i}_{}", phase.name)),
-                region: Some(RawRegion {
-                    kind: Some("box".into()),
-                    min: Some(lo.to_array()),
-                    max: Some(hi.to_array()),
-                    base: None,
-                    axis: None,
-                    length: None,
-                    radius: None,
-                    mesh: None,
-                }),
-                file: None,
-                count: None,
-                volume_fraction: None,
-                mass: None,
-                at: None,
-                rate: None,
-                mass_rate: Some(mass_rate),
-                start: Some(t_start),
-                every: Some(depth / speed),
-                velocity: Some(velocity.to_array()),
-                seed: None,
-                fractions_by: None,
-                phases: vec![part],
-            });
+            out.push((
+                RawInsertion {
+                    name: Some(format!("bc{i}_{}", phase.name)),
+                    region: Some(RawRegion {
+                        kind: Some("box".into()),
+                        min: Some(lo.to_array()),
+                        max: Some(hi.to_array()),
+                        base: None,
+                        axis: None,
+                        length: None,
+                        radius: None,
+                        mesh: None,
+                    }),
+                    file: None,
+                    count: None,
+                    volume_fraction: None,
+                    mass: None,
+                    at: None,
+                    rate: None,
+                    mass_rate: Some(mass_rate),
+                    start: Some(t_start),
+                    every: Some(depth / speed),
+                    velocity: Some(velocity.to_array()),
+                    seed: None,
+                    fractions_by: None,
+                    phases: vec![part],
+                },
+                from_area,
+            ));
         }
         if out.is_empty() {
             self.note(format!(

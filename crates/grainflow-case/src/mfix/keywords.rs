@@ -120,7 +120,9 @@ impl Why {
                 "initial and boundary conditions of the gas and continuum fields (they do not act on the particles once there is no gas)"
             }
             Why::FluidSolver => "fluid solver settings (no fluid is solved)",
-            Why::Grid => "fluid grid (the DEM needs no grid)",
+            Why::Grid => {
+                "fluid grid (the DEM needs no grid; IMAX, JMAX, KMAX only place MFIX's cells: the IC and BC regions on their faces, the cut cells of STL walls)"
+            }
             Why::Thermal => "energy, species and heat transfer (they do not act on the particle motion)",
             Why::Continuum => "continuum (TFM) solids settings (every solids phase is DEM)",
             Why::Pic => "MPPIC settings (every solids phase is DEM)",
@@ -310,7 +312,7 @@ pub const KEYWORDS: &[Keyword] = &[
     refused("N_QUADRIC", Allow::Zero, NO_IMPLICIT),
     refused("QUADRIC_FORM", Allow::Never, NO_IMPLICIT),
     refused("N_USR_DEF", Allow::Zero, NO_IMPLICIT),
-    ignored("TOL_SMALL_CELL", Why::Grid),
+    used("TOL_SMALL_CELL", T::Real, 0, U::None, Real(0.01)),
     ignored("TOL_SMALL_AREA", Why::Grid),
     ignored("TOL_SNAP", Why::Grid),
     ignored("TOL_MERGE", Why::Grid),
@@ -549,9 +551,27 @@ pub const KEYWORDS: &[Keyword] = &[
     ignored("NEIGHBOR_SEARCH_N", Why::Neighbor),
     ignored("NEIGHBOR_SEARCH_RAD_RATIO", Why::Neighbor),
     ignored("DES_NEIGHBOR_SEARCH", Why::Neighbor),
-    ignored("DESGRIDSEARCH_IMAX", Why::Neighbor),
-    ignored("DESGRIDSEARCH_JMAX", Why::Neighbor),
-    ignored("DESGRIDSEARCH_KMAX", Why::Neighbor),
+    used(
+        "DESGRIDSEARCH_IMAX",
+        T::Int,
+        0,
+        U::None,
+        Rule("⌊XLENGTH / min(3 largest diameters, the fluid cell)⌋, at least 1"),
+    ),
+    used(
+        "DESGRIDSEARCH_JMAX",
+        T::Int,
+        0,
+        U::None,
+        Rule("⌊YLENGTH / min(3 largest diameters, the fluid cell)⌋, at least 1"),
+    ),
+    used(
+        "DESGRIDSEARCH_KMAX",
+        T::Int,
+        0,
+        U::None,
+        Rule("⌊ZLENGTH / min(3 largest diameters, the fluid cell)⌋, at least 1"),
+    ),
     ignored("MINIMIZE_DES_FACET_LIST", Why::Neighbor),
     refused(
         "USE_VDH_DEM_MODEL",

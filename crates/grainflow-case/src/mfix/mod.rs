@@ -50,6 +50,7 @@
 //! particle motion (MFIX's DEM05 holds its anvil spheres that way) the same rules can be given
 //! as `[[motion]]` tables in a small TOML file passed beside the deck (`--motion FILE`).
 
+mod cells;
 pub mod deck;
 mod equipment;
 pub mod geometry;
@@ -217,6 +218,26 @@ fn parse_motion(text: &str, origin: &str) -> Result<MotionFile, CaseError> {
         ));
     }
     for (k, w) in m.walls.iter().enumerate() {
+        // A wall moves one way: a second table for the same one would silently replace it.
+        if let Some(j) = m.walls[..k]
+            .iter()
+            .position(|o| (o.bc.is_some() && o.bc == w.bc) || (o.is.is_some() && o.is == w.is))
+        {
+            let (key, id) = match (w.bc, w.is) {
+                (Some(b), _) => ("bc", b),
+                (None, Some(i)) => ("is", i),
+                (None, None) => unreachable!("a match needs an id"),
+            };
+            return Err(CaseError::invalid(
+                format!("{origin}: [[walls]] #{}", k + 1),
+                key,
+                id,
+                format!(
+                    "[[walls]] #{} already gives this wall's motion; give each wall one [[walls]] table",
+                    j + 1
+                ),
+            ));
+        }
         if w.bc.is_some() == w.is.is_some() {
             return Err(CaseError::missing(
                 format!("{origin}: [[walls]] #{}", k + 1),
@@ -447,7 +468,7 @@ impl Translator<'_> {
         let neighbor = RawNeighbor { skin: Some((rlm - 1.0) * dmax) };
         let output = self.output()?;
         let no_file = d.int("PARTICLES", &[])?.is_some_and(|g| g.v == 0);
-        if no_file && equipment.insertions.is_empty() {
+        if no_file && equipment.insertions.is_empty() && !self.flag("GENER_PART_CONFIG")? {
             let g = d.int("PARTICLES", &[])?.expect("given");
             self.block(CaseError::invalid(
                 g.loc.to_string(),
@@ -477,7 +498,7 @@ impl Translator<'_> {
             )
         } else {
             let walls = self.load_walls(&equipment.meshes, read_file)?;
-            self.particles(&phases, lo, hi, &walls, read_file)?
+            self.particles(&phases, lo, hi, &equipment.walls, &walls, read_file)?
         };
         let MotionFile { motion, walls: wall_rules } = motion.unwrap_or_default();
         let mut meshes = equipment.meshes;
@@ -664,12 +685,29 @@ impl Translator<'_> {
         match self.real("RO_G0", &[])? {
             Some(g) if g.v == 0.0 => {}
             Some(g) => {
-                self.block(CaseError::invalid(
-                    g.loc.to_string(),
-                    g.key,
-                    g.text,
-                    "grainflow cannot run this: a gas density couples gas and particles (drag, buoyancy) and grainflow has no gas phase; a pure granular run has RO_G0 = 0.0",
-                ));
+                // The drag on a particle grows with the gas viscosity, not its density: a deck
+                // with a vanishing gas density (MFIX's poly_dem_inlet_outlet, 1.3d-30) still
+                // drags its particles through the gas.
+                let drag = d.string("DRAG_TYPE", &[], true)?;
+                let (drag_name, drag_at) =
+                    drag.as_ref().map_or(("SYAM_OBRIEN".to_string(), "MFIX's default".to_string()), |t| {
+                        (t.v.clone(), t.loc.to_string())
+                    });
+                let mu = d
+                    .real("MU_G0", &[])?
+                    .map_or("MU_G0 not given: MFIX's Sutherland air viscosity".to_string(), |m| {
+                        format!("MU_G0 = {} ({})", m.text, m.loc)
+                    });
+                let what = if g.v.abs() < 1e-6 {
+                    format!(
+                        "grainflow cannot run this: the gas density is vanishingly small, but the gas still drags the particles: DRAG_TYPE = '{drag_name}' ({drag_at}) with {mu}, and the deck's gas velocities; grainflow has no gas phase and no drag. A pure granular run has RO_G0 = 0.0 (then MFIX computes no drag either)"
+                    )
+                } else {
+                    format!(
+                        "grainflow cannot run this: a gas density couples gas and particles (drag: DRAG_TYPE = '{drag_name}' ({drag_at}) with {mu}; buoyancy) and grainflow has no gas phase; a pure granular run has RO_G0 = 0.0"
+                    )
+                };
+                self.block(CaseError::invalid(g.loc.to_string(), g.key, g.text, what));
             }
             None => {
                 self.block(CaseError::missing(
@@ -1224,6 +1262,7 @@ impl Translator<'_> {
         phases: &[Phase],
         lo: Vec3,
         hi: Vec3,
+        faces: &[&str],
         walls: &[grainflow::mesh::Mesh],
         read_file: &input::Opener<'_>,
     ) -> Result<(RawParticles, String), CaseError> {
@@ -1437,7 +1476,7 @@ impl Translator<'_> {
         };
         // MFIX does not check initial overlaps; grainflow's cases refuse more than
         // DEFAULT_MAX_INITIAL_OVERLAP unless told. Say what this deck needs.
-        let overlap = [largest_overlap(&init, lo, hi), largest_mesh_overlap(&init, walls)]
+        let overlap = [largest_overlap(&init, lo, hi, faces), largest_mesh_overlap(&init, walls)]
             .into_iter()
             .flatten()
             .max_by(|a, b| a.0.total_cmp(&b.0));
@@ -1534,15 +1573,15 @@ fn order_hint(key: &str, n: usize) -> String {
 }
 
 /// The largest initial overlap, as a fraction of the smaller radius (pairs) or the radius
-/// (box faces), with who overlaps.
-fn largest_overlap(p: &[(Vec3, f64)], lo: Vec3, hi: Vec3) -> Option<(f64, String)> {
+/// (the box faces that are walls, `faces`: a cyclic or open face is none), with who overlaps.
+fn largest_overlap(p: &[(Vec3, f64)], lo: Vec3, hi: Vec3, faces: &[&str]) -> Option<(f64, String)> {
     let mut best: Option<(f64, String)> = None;
     let mut consider = |ratio: f64, what: &dyn Fn() -> String| {
         if ratio > best.as_ref().map_or(0.0, |b| b.0) {
             best = Some((ratio, what()));
         }
     };
-    for w in &Wall::domain_box(lo, hi, 0) {
+    for w in Wall::domain_box(lo, hi, 0).iter().filter(|w| faces.contains(&w.name.as_str())) {
         for (i, (x, r)) in p.iter().enumerate() {
             let overlap = r - w.distance(*x);
             consider(overlap / r, &|| format!("particle {} and wall {}", i + 1, w.name));

@@ -3,17 +3,20 @@
 //! them, so that a deck starts with MFIX's count in MFIX's lattice:
 //!
 //! - the count is ⌊ε_s·V/v̄⌋, v̄ the mean particle volume of the phase's size distribution and
-//!   V the volume of the grid cells the IC covers (its faces moved to the nearest faces of
-//!   MFIX's uniform grid, `CALC_CELL`, ties to the lower face; MFIX takes the cells' fluid
-//!   volume, the same unless cut cells cross the region);
+//!   V the fluid volume of the grid cells the IC covers (its faces moved to the nearest faces
+//!   of MFIX's uniform grid, `CALC_CELL`, ties to the lower face): with STL walls only the part
+//!   of each cut cell on the particles' side, and no cell behind the walls (MFIX's
+//!   `GET_IC_VOLUME`; [`super::cells`]);
 //! - the sites are MFIX's lattice in the IC region as given, `IC_DES_LATTICE` 'HEXA' (its default) or 'CUBIC', spaced by
 //!   the largest diameter times 1 + `IC_DES_SPACING` (0.05), filled from the bottom (−y)
 //!   upwards, x fastest; seeding stops after the first whole xz-plane that reaches the count,
 //!   and the last sites seeded beyond the count are dropped; `IC_DES_RAND` jitters the sites
 //!   by up to ±½ of `IC_DES_RAND`·spacing·d (a quarter for 'HEXA'), as MFIX does;
-//! - with STL walls, a site is skipped when it lies behind the nearest triangle (outside the
-//!   fluid) or within 1.05 largest radii of a triangle (MFIX measures to the facets' planes
-//!   near the site; grainflow to the triangles themselves, which skips a few sites fewer);
+//! - with STL walls, a site is skipped when its cell has no fluid in it, or (with
+//!   `IC_DES_CHECK_STL_OVERLAP`, the default) when it lies behind the plane of a facet near
+//!   its cell or within 1.05 largest radii of that plane (MFIX's
+//!   `CHECK_IF_PARTICLE_OVERLAPS_STL` on its DES grid, [`super::cells::DesGrid`]); a deck
+//!   without MFIX's grid (`IMAX`, `JMAX`, `KMAX`) falls back to the nearest triangle;
 //! - several phases of one IC are seeded one above the other, each from the last one's top;
 //! - diameters are drawn from the phase's distribution and velocities are the IC's, with
 //!   normal fluctuations of variance `IC_THETA_M` in each component, from a seeded stream
@@ -44,14 +47,16 @@ pub(super) struct SeedPhase<'a> {
 }
 
 impl Translator<'_> {
-    /// The region of IC `ic` as given (clipped to the box), where MFIX seeds its lattice, and
-    /// the volume of the grid cells it covers, which sets MFIX's count.
-    pub(super) fn ic_box(&self, ic: i64, lo: Vec3, hi: Vec3) -> Result<(Vec3, Vec3, f64), CaseError> {
+    /// The region of IC `ic` as given (clipped to the box), where MFIX seeds its lattice, the
+    /// volume of the grid cells it covers, which sets MFIX's count without STL walls, and
+    /// those cells' index ranges on MFIX's grid (when the deck gives the grid).
+    pub(super) fn ic_box(&self, ic: i64, lo: Vec3, hi: Vec3) -> Result<IcRegion, CaseError> {
         const KEYS: [(&str, &str, &str); 3] =
             [("IC_X_W", "IC_X_E", "IMAX"), ("IC_Y_S", "IC_Y_N", "JMAX"), ("IC_Z_B", "IC_Z_T", "KMAX")];
         let mut a = lo;
         let mut b = hi;
         let mut volume = 1.0;
+        let mut range = Some([[0usize; 2]; 3]);
         for (k, (kw, ke, kn)) in KEYS.iter().enumerate() {
             let (Some(w), Some(e)) = (self.real(kw, &[ic])?, self.real(ke, &[ic])?) else {
                 return Err(CaseError::missing(
@@ -74,8 +79,29 @@ impl Translator<'_> {
                 }
                 _ => x.clamp(lo[k], hi[k]),
             };
-            a[k] = w.v.min(e.v).max(lo[k]);
-            b[k] = w.v.max(e.v).min(hi[k]);
+            if w.v > e.v {
+                // MFIX stops on such a region (its check of the IC's bounds): it is empty.
+                return Err(CaseError::invalid(
+                    e.loc.to_string(),
+                    show(ke, &[ic]),
+                    e.text,
+                    format!(
+                        "initial condition {ic}'s region ends before it starts: {} = {} is above it (MFIX refuses this region)",
+                        show(kw, &[ic]),
+                        w.text
+                    ),
+                ));
+            }
+            a[k] = w.v.max(lo[k]);
+            b[k] = e.v.min(hi[k]);
+            match (cells, range.as_mut()) {
+                (Some(n), Some(r)) => {
+                    let dx = (hi[k] - lo[k]) / n as f64;
+                    let index = |x: f64| ((snap(x) - lo[k]) / dx).round().clamp(0.0, n as f64) as usize;
+                    r[k] = [index(a[k]), index(b[k])];
+                }
+                _ => range = None,
+            }
             let cells = snap(b[k]) - snap(a[k]);
             volume *= if k == 2 && self.flag("NO_K")? { 1.0 } else { cells };
             if b[k] <= a[k] || cells <= 0.0 {
@@ -87,21 +113,39 @@ impl Translator<'_> {
                 ));
             }
         }
-        Ok((a, b, volume))
+        Ok(IcRegion { start: a, end: b, volume, cells: range })
     }
 
     /// MFIX's lattice sites for the phases of one IC region, skipped where MFIX skips them
     /// near or behind the STL walls, as particles.
     pub(super) fn seed(
         &mut self,
-        region: (Vec3, Vec3, f64),
+        region: IcRegion,
         parts: &[SeedPhase<'_>],
         walls: &[Mesh],
+        stl: Option<&StlGrids>,
         max_radius: f64,
         rng: &mut InsertRng,
     ) -> Result<Vec<RawParticle>, CaseError> {
         let no_k = self.flag("NO_K")?;
-        let (start, end, volume) = region;
+        let (start, end) = (region.start, region.end);
+        // MFIX counts the fluid volume of the IC's cells: with STL walls, only the part of
+        // each cut cell on the particles' side, and no cell behind the walls.
+        let volume = match (stl, region.cells) {
+            (Some(g), Some(r)) => {
+                let v = g.fluid.fluid_volume(r, g.tol_small);
+                if v < region.volume {
+                    self.note(format!(
+                        "{}: initial condition {}: the fluid volume of its cells inside the STL walls is {v:.6e} m³ of their {:.6e} m³ (MFIX's count is taken from it)",
+                        self.origin,
+                        parts.first().map_or(0, |p| p.ic),
+                        region.volume
+                    ));
+                }
+                v
+            }
+            _ => region.volume,
+        };
         let mut y_init = start.y;
         let mut out = Vec::new();
         for part in parts {
@@ -226,8 +270,26 @@ impl Translator<'_> {
                             p.z = 0.0;
                         }
                         top = top.max(p.y);
-                        if check_stl && !walls.is_empty() && !clear_of(p, walls, 1.05 * max_radius) {
-                            continue;
+                        match stl {
+                            Some(g) => {
+                                // MFIX seeds only in cells with fluid in them, and (with
+                                // IC_DES_CHECK_STL_OVERLAP) clear of the planes of the
+                                // facets around the site's cell.
+                                if !g.fluid.wet(p) {
+                                    continue;
+                                }
+                                if check_stl
+                                    && let Some((west, east)) = g.fluid.faces_of(p)
+                                    && !g.des.clear(p, west, east, &g.facets)
+                                {
+                                    continue;
+                                }
+                            }
+                            None => {
+                                if check_stl && !walls.is_empty() && !clear_of(p, walls, 1.05 * max_radius) {
+                                    continue;
+                                }
+                            }
                         }
                         let diameter = part.sizes.sample(rng);
                         let mut v = part.velocity;
@@ -272,7 +334,25 @@ impl Translator<'_> {
     }
 }
 
-/// True if `p` is in front of its nearest triangle (on the side its normal points to, the
+/// An IC region: its box as given (clipped to the domain), the volume of MFIX's grid cells it
+/// covers and their index ranges [from, to) on each axis (without a grid in the deck, none).
+pub(super) struct IcRegion {
+    pub start: Vec3,
+    pub end: Vec3,
+    pub volume: f64,
+    pub cells: Option<[[usize; 2]; 3]>,
+}
+
+/// MFIX's fluid and DES grids cut by the deck's STL walls ([`super::cells`]).
+pub(super) struct StlGrids {
+    pub facets: Vec<super::cells::Facet>,
+    pub fluid: super::cells::FluidGrid,
+    pub des: super::cells::DesGrid,
+    /// `TOL_SMALL_CELL`: cut cells with less fluid are not counted in an IC's volume.
+    pub tol_small: f64,
+}
+
+/// True if `p` is in front of its nearest triangle (without MFIX's grid in the deck) (on the side its normal points to, the
 /// particles' side) and farther than `gap` from every triangle.
 fn clear_of(p: Vec3, walls: &[Mesh], gap: f64) -> bool {
     let mut best = f64::INFINITY;
