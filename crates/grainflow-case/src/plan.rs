@@ -314,12 +314,21 @@ pub struct Plan {
     pub memory: MemoryEstimate,
     /// The limit it was held to.
     pub limit: MemoryLimit,
+    /// Things the user should know: output intervals below the step, rounded up to it.
+    pub warnings: Vec<String>,
 }
 
 /// Outputs of a run of `steps` steps every `every` steps: steps 0, every, 2·every, … and the
 /// last step.
 fn outputs(steps: u64, every: u64) -> u64 {
     steps / every + 1 + u64::from(!steps.is_multiple_of(every))
+}
+
+/// True for the name of an MFIX deck's mass inflow, `bc<N>_<phase>`.
+fn is_mfix_inflow(name: &str) -> bool {
+    name.strip_prefix("bc")
+        .and_then(|r| r.split_once('_'))
+        .is_some_and(|(n, _)| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
 }
 
 /// Particles of a set drawn from `ins`'s mixture by amount `a` (for the plan).
@@ -358,7 +367,7 @@ fn insertion_plan(ins: &Insertion, t0: f64, t1: f64, dt: f64) -> Result<Insertio
                         num(every),
                         dt / every,
                         dt,
-                        if ins.name.starts_with("bc") {
+                        if is_mfix_inflow(&ins.name) {
                             " (for an MFIX mass inflow: its layer, two diameters deep, must take at least a step to pass, so BC_MASSFLOW_S or the inflow velocity is too large)"
                         } else {
                             ""
@@ -411,6 +420,17 @@ pub fn plan(case: &Case, limit: MemoryLimit) -> Result<Plan, CaseError> {
         .iter()
         .map(|ins| insertion_plan(ins, c.t_start, t_last, dt))
         .collect::<Result<Vec<_>, _>>()?;
+    // Output intervals are rounded to whole steps, at least one: below the step, that is
+    // said rather than done silently.
+    let mut warnings = Vec::new();
+    for (key, iv) in [("interval", case.output.interval), ("vtk_interval", case.output.vtk_interval)] {
+        if let Some(iv) = iv.filter(|&iv| iv < 0.5 * dt) {
+            warnings.push(format!(
+                "[output]: `{key}` = {} s is below the time step dt = {dt:.4e} s: rounded up to one step (an output at every step)",
+                num(iv)
+            ));
+        }
+    }
     let every = crate::run::output_every(case.output.interval, dt, steps);
     let rows = outputs(steps, every);
     let vtk = case.output.vtk_interval.map(|iv| {
@@ -474,6 +494,7 @@ pub fn plan(case: &Case, limit: MemoryLimit) -> Result<Plan, CaseError> {
         outlets: c.outlets.iter().map(|o| o.name.clone()).collect(),
         memory,
         limit,
+        warnings,
     })
 }
 

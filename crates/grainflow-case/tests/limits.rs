@@ -315,3 +315,22 @@ fn set_overrides_are_validated_as_the_file_is() {
     let from_file = parse_text(&edit("mu = 0.3", "mu = -1")).expect_err("refused").to_string();
     assert_eq!(e, from_file);
 }
+
+/// Item 16's other interval: an output interval below the step is rounded up to one step, and
+/// said so (an interval that rounds to one step or more is not).
+#[test]
+fn output_intervals_below_the_step_are_rounded_up_with_a_warning() {
+    let tiny = edit("t_stop = 0.01", "t_stop = 0.01\n[output]\ninterval = 1e-12\nvtk_interval = 1e-12");
+    let plan = plan_of(&tiny, f64::INFINITY).expect("planned");
+    assert_eq!(plan.output_every, 1);
+    assert_eq!(plan.rows, plan.steps + 1, "a row at every step and at the start");
+    assert_eq!(plan.warnings.len(), 2, "{:?}", plan.warnings);
+    for (w, key) in plan.warnings.iter().zip(["`interval`", "`vtk_interval`"]) {
+        assert!(w.starts_with(&format!("[output]: {key} = 1e-12 s is below the time step")), "{w}");
+        assert!(w.contains("rounded up to one step"), "{w}");
+    }
+    let dt = plan.dt;
+    let one = edit("t_stop = 0.01", &format!("t_stop = 0.01\n[output]\ninterval = {:e}", 0.6 * dt));
+    let plan = plan_of(&one, f64::INFINITY).expect("planned");
+    assert!(plan.warnings.is_empty() && plan.output_every == 1, "{:?}", plan.warnings);
+}

@@ -45,6 +45,9 @@ pub fn main(args: CheckArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    for w in &plan.warnings {
+        eprintln!("warning: {w}");
+    }
     let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
     println!("grainflow {} check: {title}: the case is valid; nothing was run", env!("CARGO_PKG_VERSION"));
     for line in plan.lines() {

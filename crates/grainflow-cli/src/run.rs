@@ -277,11 +277,18 @@ pub fn main(args: RunArgs) -> ExitCode {
     for w in &case.warnings {
         eprintln!("warning: {w}");
     }
-    if args.restart.is_none()
-        && let Err(e) = grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit())
-    {
-        eprintln!("error: {}: {e}", args.case.display());
-        return ExitCode::from(EXIT_BAD_INPUT);
+    if args.restart.is_none() {
+        match grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit()) {
+            Ok(plan) => {
+                for w in &plan.warnings {
+                    eprintln!("warning: {w}");
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {}: {e}", args.case.display());
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+        }
     }
     let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
     println!("grainflow {}: {title}", env!("CARGO_PKG_VERSION"));
