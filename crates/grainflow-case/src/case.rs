@@ -4,6 +4,7 @@ use crate::error::CaseError;
 use crate::input;
 use crate::particles;
 use crate::raw::*;
+use crate::set::SetOverride;
 use grainflow::contact::coefficients::{MAX_PHASES, MAX_WALL_MATERIALS};
 use grainflow::contact::limits::{self, Range};
 use grainflow::contact::{
@@ -72,6 +73,54 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let raw = parse_raw(&text, &path.display().to_string())?;
     from_raw_opened(raw, &text, &input::open_beside(&dir))
+}
+
+/// [`load`] with `--set` overrides applied to the file's keys before it is validated (see
+/// [`SetOverride`]): a key set is validated exactly as if the file said it. The case hash
+/// covers the overrides.
+pub fn load_with(path: &Path, sets: &[SetOverride]) -> Result<Case, CaseError> {
+    if sets.is_empty() {
+        return load(path);
+    }
+    let text = input::read_text(path, input::Kind::CaseFile)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let (raw, source) = parse_raw_with(&text, &path.display().to_string(), sets)?;
+    from_raw_opened(raw, &source, &input::open_beside(&dir))
+}
+
+/// [`parse`] with `--set` overrides (see [`load_with`]).
+pub fn parse_with(
+    text: &str,
+    origin: &str,
+    read_file: &dyn Fn(&str) -> Result<String, CaseError>,
+    sets: &[SetOverride],
+) -> Result<Case, CaseError> {
+    let (raw, source) = parse_raw_with(text, origin, sets)?;
+    from_raw(raw, &source, read_file)
+}
+
+/// The raw case with the overrides applied, and the text its hash covers: the file's, then
+/// each override. The file is read as it is first, so that its own mistakes are reported at
+/// their lines; a mistake only the overrides make names them.
+fn parse_raw_with(text: &str, origin: &str, sets: &[SetOverride]) -> Result<(RawCase, String), CaseError> {
+    use serde::Deserialize;
+    parse_raw(text, origin)?;
+    let mut table: toml::Table = toml::from_str(input::strip_bom(text))
+        .map_err(|e| CaseError::Syntax(did_you_mean(format!("{origin}: {e}"))))?;
+    let mut source = text.to_string();
+    for set in sets {
+        set.apply(&mut table).map_err(CaseError::Syntax)?;
+        source.push_str(&format!("\0--set\0{}={}", set.path, set.text));
+    }
+    let shown: Vec<String> = sets.iter().map(|s| format!("{}={}", s.path, s.text)).collect();
+    let raw = RawCase::deserialize(toml::Value::Table(table)).map_err(|e| {
+        CaseError::Syntax(did_you_mean(format!(
+            "{origin} with --set {}: {}",
+            shown.join(" --set "),
+            e.to_string().trim_end()
+        )))
+    })?;
+    Ok((raw, source))
 }
 
 fn parse_raw(text: &str, origin: &str) -> Result<RawCase, CaseError> {

@@ -171,6 +171,7 @@ pub fn read_data_from(s: &mut Stream<'_>, phases: &[Phase]) -> Result<DataFile, 
                     return Err(err(line_no, format!("diameter {d} and density {rho} must be positive")));
                 }
                 sorted &= atoms.last().is_none_or(|a| a.id < id);
+                crate::plan::check_reading(atoms.len(), &path, line_no)?;
                 atoms.push(ParticleInit {
                     id,
                     phase: (ty - 1) as u32,

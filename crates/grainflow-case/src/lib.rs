@@ -14,9 +14,12 @@ pub mod mfix;
 pub mod outdir;
 pub mod output;
 pub mod particles;
+pub mod plan;
 pub mod raw;
 pub mod run;
+pub mod set;
 pub mod vtk;
 
-pub use case::{Case, OutputSettings, load, parse};
+pub use case::{Case, OutputSettings, load, load_with, parse, parse_with};
 pub use error::CaseError;
+pub use set::SetOverride;

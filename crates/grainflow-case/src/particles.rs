@@ -31,6 +31,7 @@ pub fn read_mfix_from(s: &mut Stream<'_>, phases: &[Phase]) -> Result<Vec<Partic
         })?;
         let id =
             u32::try_from(out.len() + 1).map_err(|_| err(format!("more than {} particles", u32::MAX)))?;
+        crate::plan::check_reading(out.len(), &path, line)?;
         out.push(ParticleInit {
             id,
             phase: phase as u32,
@@ -172,6 +173,7 @@ pub fn read_csv_from(s: &mut Stream<'_>, phases: &[Phase]) -> Result<Vec<Particl
         let v3 = |a: usize| -> Result<Vec3, CaseError> {
             Ok(Vec3::new(get(a)?.unwrap_or(0.0), get(a + 1)?.unwrap_or(0.0), get(a + 2)?.unwrap_or(0.0)))
         };
+        crate::plan::check_reading(out.len(), path, line)?;
         out.push(ParticleInit {
             id,
             phase: phase as u32,

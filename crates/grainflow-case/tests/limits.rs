@@ -196,3 +196,141 @@ fn the_engine_refuses_coincident_centres_and_motion_cycles_itself() {
     let e = e.to_string();
     assert!(e.contains("cycle (1 follows 2 follows 1)"), "{e}");
 }
+
+/// The base case with an insertion (`keys` before its region) pouring glass into the upper
+/// part of the box.
+fn with_insertion(keys: &str) -> String {
+    let id = INLINE.replace("[[particles.list]]\n", "[[particles.list]]\nid = 1\n");
+    edit(
+        INLINE,
+        &format!(
+            "{id}[[insertions]]\nname = \"pour\"\n{keys}\n[insertions.region]\nkind = \"box\"\nmin = [0.0, 0.06, 0.0]\nmax = [0.1, 0.1, 0.1]\n[[insertions.phases]]\nphase = \"glass\"\n"
+        ),
+    )
+}
+
+fn plan_of(text: &str, limit: f64) -> Result<grainflow_case::plan::Plan, CaseError> {
+    grainflow_case::plan::plan(
+        &parse_text(text).expect("a valid case"),
+        grainflow_case::plan::MemoryLimit::given(limit),
+    )
+}
+
+/// The plan's figures are the run's: the step count and the time-series rows as the run
+/// loop counts them, and a rate insertion's batches and particles exactly (a count rate
+/// brings batch k's total to rate·(k + 1)·every, and the empty region places every bead).
+#[test]
+fn the_plan_counts_what_the_run_does() {
+    let text = with_insertion("rate = 1000.0\nevery = 0.002");
+    let plan = plan_of(&text, f64::INFINITY).expect("planned");
+    let case = parse_text(&text).expect("valid");
+    let mut sim = grainflow::Simulation::new(case.config, case.particles).expect("set-up");
+    assert_eq!(plan.dt, sim.dt());
+    assert_eq!(plan.steps, sim.total_steps());
+    let every = grainflow_case::run::output_every(None, sim.dt(), sim.total_steps());
+    assert_eq!(plan.output_every, every);
+    // Rows at steps 0, every, 2·every, … and at the last step.
+    let rows = (0..=sim.total_steps()).filter(|s| s % every == 0 || *s == sim.total_steps()).count();
+    assert_eq!(plan.rows as usize, rows);
+    let steps = sim.total_steps();
+    sim.run_with(steps, |_| {});
+    let books = sim.flow_books();
+    assert_eq!(books.missed, vec![0]);
+    let inserted = books.inserted_total().count;
+    let p = &plan.insertions[0];
+    // Batches at 0, 0.002, …, 0.008 s (the last step starts before 0.01 s): 5 of 2 beads.
+    assert_eq!((p.batches, p.particles, p.largest_batch), (5, 10.0, 2.0));
+    assert_eq!(inserted, 10, "{books:?}");
+    // All at once: the count.
+    let p = plan_of(&with_insertion("count = 300"), f64::INFINITY).expect("planned");
+    assert_eq!((p.insertions[0].batches, p.insertions[0].particles), (1, 300.0));
+    assert_eq!(p.memory.arriving, 300.0);
+}
+
+/// Item 16: batches more often than the steps are refused, naming `every`; one a step is
+/// accepted.
+#[test]
+fn batches_more_often_than_the_steps_are_refused() {
+    let dt = plan_of(BASE, f64::INFINITY).expect("planned").dt;
+    let e = plan_of(&with_insertion("rate = 1000.0\nevery = 1e-12"), f64::INFINITY)
+        .expect_err("refused")
+        .to_string();
+    for w in ["[[insertions]] 'pour'", "`every` = 1e-12 is invalid", "give every >= dt"] {
+        assert!(e.contains(w), "message lacks '{w}': {e}");
+    }
+    plan_of(&with_insertion(&format!("rate = 1000.0\nevery = {dt:e}")), f64::INFINITY)
+        .expect("one batch a step");
+    let e = plan_of(&with_insertion(&format!("rate = 1000.0\nevery = {:e}", 0.5 * dt)), f64::INFINITY)
+        .expect_err("two a step")
+        .to_string();
+    assert!(e.contains("would come 2.000e0 times in a step"), "{e}");
+}
+
+/// Item 17: past the limit, the refusal names the key that brings the particles and gives
+/// the figures: 10⁶ beads by count; by volume fraction 0.5 of the 0.1 × 0.04 × 0.1 m region,
+/// 2·10⁻⁴ m³ of 4 mm beads (3.3510·10⁻⁸ m³ each): 5968.3; by mass 1 kg of 8.3776·10⁻⁵ kg
+/// beads: 11 936.6; at 10⁶ beads/s in batches every 1 ms, the ten batches whose steps start
+/// before 0.01 s: 10⁴. Each at 544 bytes (Euler: 152 of state, 88 of neighbour list, 7 pairs
+/// of 43.5).
+#[test]
+fn past_the_memory_limit_the_refusal_names_the_key() {
+    let mib = 1024.0 * 1024.0;
+    for (keys, key, value, particles) in [
+        ("count = 1000000", "count", "1000000", "1.0000e6 inserted"),
+        ("volume_fraction = 0.5", "volume_fraction", "0.5", "5.9683e3 inserted"),
+        ("mass = 1.0", "mass", "1", "1.1937e4 inserted"),
+        ("rate = 1e6\nevery = 0.001", "rate", "1e6", "1.0000e4 inserted"),
+    ] {
+        let e = plan_of(&with_insertion(keys), 64.0 * mib).expect_err("over the limit").to_string();
+        for w in [
+            format!("[[insertions]] 'pour': `{key}` = {value} is invalid"),
+            particles.into(),
+            "544 bytes each".into(),
+            "64.0 MiB (--memory-limit)".into(),
+        ] {
+            assert!(e.contains(&w), "{keys}: message lacks '{w}': {e}");
+        }
+    }
+    // The base case (one bead) fits in 64 MiB plus a little: the base is 64 MiB.
+    plan_of(BASE, 65.0 * mib).expect("one bead fits");
+}
+
+/// `--set` is the file saying it: the same validated case (the hash aside, which covers the
+/// overrides), and the same messages.
+#[test]
+fn set_overrides_are_validated_as_the_file_is() {
+    use grainflow_case::{SetOverride, parse_with};
+    let sets = |s: &[&str]| s.iter().map(|a| SetOverride::parse(a).expect("parses")).collect::<Vec<_>>();
+    let with =
+        parse_with(BASE, "case.toml", &files, &sets(&["time.t_stop=0.002", "contact.particle.mu=0.5"]))
+            .expect("valid");
+    let edited = parse_text(&edit("t_stop = 0.01", "t_stop = 0.002").replacen("mu = 0.3", "mu = 0.5", 1))
+        .expect("valid");
+    assert_eq!(with.config.t_stop, edited.config.t_stop);
+    assert_eq!(format!("{:?}", with.config), format!("{:?}", edited.config));
+    assert_ne!(with.hash, edited.hash, "the hash covers the overrides");
+    let e = parse_with(BASE, "case.toml", &files, &sets(&["contact.particle.mu=-1"]))
+        .expect_err("refused")
+        .to_string();
+    let from_file = parse_text(&edit("mu = 0.3", "mu = -1")).expect_err("refused").to_string();
+    assert_eq!(e, from_file);
+}
+
+/// Item 16's other interval: an output interval below the step is rounded up to one step, and
+/// said so (an interval that rounds to one step or more is not).
+#[test]
+fn output_intervals_below_the_step_are_rounded_up_with_a_warning() {
+    let tiny = edit("t_stop = 0.01", "t_stop = 0.01\n[output]\ninterval = 1e-12\nvtk_interval = 1e-12");
+    let plan = plan_of(&tiny, f64::INFINITY).expect("planned");
+    assert_eq!(plan.output_every, 1);
+    assert_eq!(plan.rows, plan.steps + 1, "a row at every step and at the start");
+    assert_eq!(plan.warnings.len(), 2, "{:?}", plan.warnings);
+    for (w, key) in plan.warnings.iter().zip(["`interval`", "`vtk_interval`"]) {
+        assert!(w.starts_with(&format!("[output]: {key} = 1e-12 s is below the time step")), "{w}");
+        assert!(w.contains("rounded up to one step"), "{w}");
+    }
+    let dt = plan.dt;
+    let one = edit("t_stop = 0.01", &format!("t_stop = 0.01\n[output]\ninterval = {:e}", 0.6 * dt));
+    let plan = plan_of(&one, f64::INFINITY).expect("planned");
+    assert!(plan.warnings.is_empty() && plan.output_every == 1, "{:?}", plan.warnings);
+}

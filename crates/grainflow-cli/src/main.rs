@@ -4,9 +4,11 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod check;
 mod convert;
 mod example;
 mod run;
+mod signals;
 mod verify;
 
 /// grainflow — a discrete element method engine for granular flows (MFIX-DEM compatible).
@@ -15,7 +17,7 @@ mod verify;
     name = "grainflow",
     version,
     about = "grainflow — a discrete element method (DEM) engine for granular flows, MFIX-DEM compatible",
-    after_help = "Quick start:\n  grainflow example settling-bed\n  grainflow run settling-bed/case.toml --out settling-bed/out\n  grainflow verify dem05\n\nCase-file keys, units and defaults: docs/case-file.md. Exit codes: 0 success, 1 a verification check or an output failed, 2 bad input."
+    after_help = "Quick start:\n  grainflow example settling-bed\n  grainflow check settling-bed/case.toml\n  grainflow run settling-bed/case.toml --out settling-bed/out\n  grainflow verify dem05\n\nCase-file keys, units and defaults: docs/case-file.md. Exit codes: 0 success, 1 a verification check or an output failed, 2 bad input."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -27,6 +29,10 @@ enum Command {
     /// Run a case file (TOML, or an MFIX deck: mfix.dat, *.mfx) and write its time series and
     /// particle snapshots.
     Run(run::RunArgs),
+    /// Validate a case file or MFIX deck as `run` does and print its plan (time step and
+    /// steps, outputs, insertions, memory estimate) without running it; exit 0 if it would
+    /// run, 2 if it is refused.
+    Check(check::CheckArgs),
     /// Translate an MFIX deck (mfix.dat, *.mfx) into the equivalent grainflow case file
     /// (TOML, written to standard output).
     Convert(convert::ConvertArgs),
@@ -56,6 +62,7 @@ fn main() -> ExitCode {
     };
     match cli.command {
         Command::Run(args) => run::main(args),
+        Command::Check(args) => check::main(args),
         Command::Convert(args) => convert::main(args),
         Command::Verify(args) => verify::main(args),
         Command::Example(args) => example::main(args),

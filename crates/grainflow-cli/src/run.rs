@@ -10,8 +10,6 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 use std::time::Instant;
 
@@ -259,10 +257,19 @@ pub struct RunArgs {
     /// count.
     #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     threads: Option<u16>,
+    /// TOML case files only: set a key as if the file said so, by its dotted path (e.g.
+    /// --set time.t_stop=0.1 --set insertions.pour.count=500; entries of [[tables]] by
+    /// position from 0 or by name). Validated as the file is. May be repeated.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Refuse, before it starts, a run whose memory estimate exceeds this (e.g. 8GB, 500MiB;
+    /// default: half the memory available).
+    #[arg(long, value_name = "SIZE", value_parser = grainflow_case::plan::parse_size)]
+    pub memory_limit: Option<f64>,
 }
 
 /// Exit code of a run stopped by SIGINT/SIGTERM (128 + SIGINT, the shell's convention).
-const EXIT_INTERRUPTED: u8 = 130;
+pub(crate) const EXIT_INTERRUPTED: u8 = 130;
 
 fn parse_checkpoint_every(s: &str) -> Result<CheckpointEvery, String> {
     let t = s.trim();
@@ -293,8 +300,17 @@ pub fn load_case(
     case: &Path,
     overrides: &[String],
     motion: Option<&Path>,
+    set: &[String],
 ) -> Result<grainflow_case::Case, String> {
+    let sets =
+        set.iter().map(|s| grainflow_case::SetOverride::parse(s)).collect::<Result<Vec<_>, String>>()?;
     if grainflow_case::mfix::is_deck(case) {
+        if let Some(s) = set.first() {
+            return Err(format!(
+                "--set {s}: --set applies to TOML case files; {} is an MFIX deck: give KEYWORD=VALUE overrides after it (e.g. TSTOP=0.1)",
+                case.display()
+            ));
+        }
         // Deck messages name the deck (and its line) already.
         return grainflow_case::mfix::load(case, overrides, motion)
             .map(|d| d.case)
@@ -312,7 +328,7 @@ pub fn load_case(
             case.display()
         ));
     }
-    grainflow_case::load(case).map_err(|e| match e {
+    grainflow_case::load_with(case, &sets).map_err(|e| match e {
         // Syntax and read errors name the file already; the others name table and key.
         CaseError::Syntax(_) | CaseError::Read { .. } => e.to_string(),
         _ => format!("{}: {e}", case.display()),
@@ -320,7 +336,10 @@ pub fn load_case(
 }
 
 pub fn main(args: RunArgs) -> ExitCode {
-    let case = match load_case(&args.case, &args.overrides, args.motion.as_deref()) {
+    // Before the set-up, which can take long (particle files, seeded lattices, placement).
+    let stop = crate::signals::install();
+    grainflow_case::plan::set_memory_limit(args.memory_limit);
+    let case = match load_case(&args.case, &args.overrides, args.motion.as_deref(), &args.set) {
         Ok(c) => c,
         Err(e) => {
             eprintln!("error: {e}");
@@ -330,18 +349,21 @@ pub fn main(args: RunArgs) -> ExitCode {
     for w in &case.warnings {
         eprintln!("warning: {w}");
     }
-    let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
-    println!("grainflow {}: {title}", env!("CARGO_PKG_VERSION"));
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // A second signal while the checkpoint is being written is ignored: the flag is set.
-        if let Err(e) = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst)) {
-            eprintln!(
-                "warning: cannot catch SIGINT/SIGTERM ({e}); an interrupted run will not write a checkpoint"
-            );
+    if args.restart.is_none() {
+        match grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit()) {
+            Ok(plan) => {
+                for w in &plan.warnings {
+                    eprintln!("warning: {w}");
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {}: {e}", args.case.display());
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
         }
     }
+    let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
+    println!("grainflow {}: {title}", env!("CARGO_PKG_VERSION"));
     // A restart continues in its checkpoint's folder unless told otherwise.
     let out = match (&args.out, &args.restart) {
         (Some(out), _) => out.clone(),
@@ -372,6 +394,7 @@ pub fn main(args: RunArgs) -> ExitCode {
     let mut progress = Progress::new(args.quiet);
     let mut flow = FlowReport::default();
     let result = run_case(case, &out, &options, |sim| {
+        crate::signals::running();
         progress.update(sim);
         flow.update(sim, &progress);
     });

@@ -618,6 +618,38 @@ fn cases() -> Vec<Hostile> {
             expect: expect.into(),
         });
     }
+    // Plans that cannot work, refused before the run starts (issue 38, items 16, 17, 20).
+    let pour = |every: &str, amount: &str| {
+        format!(
+            "{INLINE}[[insertions]]\nname = \"pour\"\n{amount}every = {every}\n[insertions.region]\nkind = \"box\"\nmin = [0.0, 0.06, 0.0]\nmax = [0.1, 0.1, 0.1]\n[[insertions.phases]]\nphase = \"glass\"\n"
+        )
+    };
+    v.push(toml(
+        "insertion: every = 1e-12, far below the step (hung)",
+        INLINE,
+        &pour("1e-12", "rate = 1000.0\n"),
+        "[[insertions]] 'pour': `every` = 1e-12 is invalid",
+    ));
+    let mut h = toml(
+        "insertion: 1e8 beads in all past --memory-limit 1GB",
+        INLINE,
+        &pour("0.01", "rate = 1e9\ncount = 100000000\n"),
+        "`count` = 100000000 is invalid: the run would hold up to",
+    );
+    h.args.extend(strings(&["--memory-limit", "1GB"]));
+    v.push(h);
+    for (name, set, expect) in [
+        ("--set: a misspelt key", "time.tstop=0.1", "did you mean `t_stop`?"),
+        ("--set: no such entry", "phases.7.density=1", "`phases` has 1 entry (0 to 0), not an entry 7"),
+        ("--set: not a value", "time.t_stop=0.1s", "`0.1s` is not a TOML value"),
+    ] {
+        v.push(Hostile {
+            name: name.into(),
+            files: vec![("case.toml".into(), text(base("case.toml")))],
+            args: strings(&[RUN_CASE, &["--set", set]].concat()),
+            expect: expect.into(),
+        });
+    }
     // `convert` reads decks through the same reader.
     v.push(Hostile {
         name: "convert: @( ) 30 000 deep".into(),

@@ -295,41 +295,19 @@ impl Simulation {
             return Err(EngineError::BadReference("gravity must be a finite vector in m/s²".into()));
         }
         let sizes = RunSizes::of(&config.phases, &particles, &config.insertions);
-        let speed = timestep::characteristic_speed(&particles, &config.insertions, &config.meshes);
-        let flow =
-            inflow::FlowStage::new(config.insertions, config.outlets, &particles, config.phases.len())?;
-        let table = |phases: &[Phase]| {
-            CoeffTable::build(
-                &config.law,
-                phases,
-                &config.wall_materials,
-                &config.pair_params,
-                &config.wall_params,
-            )
-        };
-        let reference = table(&config.phases)?;
+        let reference = CoeffTable::build(
+            &config.law,
+            &config.phases,
+            &config.wall_materials,
+            &config.pair_params,
+            &config.wall_params,
+        )?;
         // Contacts' own sizes where they differ from the phases' (where they do not, the
         // phases' coefficients are the contacts' own, and cost nothing per contact).
         let own = config.law.sizes == ContactSizes::Own && sizes.vary;
-        let time_step = if own {
-            timestep::choose(
-                config.time_step,
-                &config.law,
-                &sizes.smallest,
-                &table(&sizes.smallest)?,
-                config.t_stop - config.t_start,
-                &speed,
-            )?
-        } else {
-            timestep::choose(
-                config.time_step,
-                &config.law,
-                &config.phases,
-                &reference,
-                config.t_stop - config.t_start,
-                &speed,
-            )?
-        };
+        let time_step = choose_time_step(&config, &particles, &sizes, &reference)?;
+        let flow =
+            inflow::FlowStage::new(config.insertions, config.outlets, &particles, config.phases.len())?;
         let r_max = particles.max_radius().max(flow.max_radius());
         let peak_floor = sum_floor(&config.law, &config.phases, &reference);
         let coeffs =
@@ -1214,6 +1192,44 @@ type Common = (Option<f64>, Option<(f64, f64)>);
 
 fn thread_blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usize>] {
     if par { plan.blocks_for(n) } else { &[] }
+}
+
+/// The time step [`Simulation::new`] takes for `config` and `particles`: for planning a run
+/// before it is built.
+pub fn time_step_of(config: &SimulationConfig, particles: &Particles) -> Result<TimeStepChoice, EngineError> {
+    let sizes = RunSizes::of(&config.phases, particles, &config.insertions);
+    let reference = CoeffTable::build(
+        &config.law,
+        &config.phases,
+        &config.wall_materials,
+        &config.pair_params,
+        &config.wall_params,
+    )?;
+    choose_time_step(config, particles, &sizes, &reference)
+}
+
+/// The time step of a run: from the smallest sizes its particles take when contacts have
+/// their own sizes and these vary, else from the phases' (`reference` is their table).
+fn choose_time_step(
+    config: &SimulationConfig,
+    particles: &Particles,
+    sizes: &RunSizes,
+    reference: &CoeffTable,
+) -> Result<TimeStepChoice, EngineError> {
+    let speed = timestep::characteristic_speed(particles, &config.insertions, &config.meshes);
+    let span = config.t_stop - config.t_start;
+    if config.law.sizes == ContactSizes::Own && sizes.vary {
+        let table = CoeffTable::build(
+            &config.law,
+            &sizes.smallest,
+            &config.wall_materials,
+            &config.pair_params,
+            &config.wall_params,
+        )?;
+        timestep::choose(config.time_step, &config.law, &sizes.smallest, &table, span, &speed)
+    } else {
+        timestep::choose(config.time_step, &config.law, &config.phases, reference, span, &speed)
+    }
 }
 
 /// The floor of the force stage's quanta for a case (see `forces::sum`), from its reference

@@ -1068,6 +1068,22 @@ impl Translator<'_> {
                 .max_diameter
                 .or(part.diameters.as_ref().and_then(|d| d.last().copied()))
                 .unwrap_or(phase.diameter);
+            // What the inflow brings by TSTOP, at least (in its largest particles), must fit
+            // the memory limit: refused here, at its keyword, before the run is planned.
+            let span = self.real("TSTOP", &[])?.map_or(0.0, |g| g.v) - t_start;
+            let at_least = mass_rate * span.max(0.0) / (rho * std::f64::consts::FRAC_PI_6 * dmax.powi(3));
+            let needed = crate::plan::estimate(at_least, 0.0, 0.0, 0.0, grainflow::Integrator::Euler).bytes;
+            if let Err(why) = crate::plan::check_memory(
+                needed,
+                &format!(
+                    "mass inflow {i} ({mass_rate:e} kg/s until TSTOP, {at_least:.4e} particles at least)"
+                ),
+            ) {
+                let g =
+                    massflow.as_ref().filter(|q| q.v > 0.0).or(ep.as_ref()).expect("one of them is given");
+                self.block(CaseError::invalid(g.loc.to_string(), g.key.clone(), g.text.clone(), why));
+                continue;
+            }
             // The layer just inside the face, two largest diameters deep (whole spheres fit
             // in it at any height of one diameter's range); a batch each time the stream has
             // carried the last one through it, so the layer's solids fraction is ε_s.

@@ -163,6 +163,12 @@ impl Translator<'_> {
                     ),
                 ));
             }
+            if let Err(why) = crate::plan::check_memory(
+                crate::plan::seeded_bytes(want),
+                &format!("seeding {want:e} particles in initial condition {ic}"),
+            ) {
+                return Err(CaseError::invalid(self.origin, show("IC_EP_S", &idx), part.ep, why));
+            }
             let want = want as usize;
             if want == 0 {
                 continue;

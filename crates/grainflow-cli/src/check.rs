@@ -1,0 +1,57 @@
+//! `grainflow check CASE [--set KEY=VALUE]…`: validates a case (TOML or an MFIX deck) as
+//! `grainflow run` does and prints its plan (time step and steps, outputs, insertions,
+//! memory) without running it.
+
+use crate::EXIT_BAD_INPUT;
+use clap::Args;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// The case file: TOML (docs/case-file.md), or an MFIX deck, `*.dat` or `*.mfx`.
+    case: PathBuf,
+    /// MFIX decks only: KEYWORD=VALUE overrides applied after the deck (as `grainflow run`).
+    #[arg(value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// MFIX decks only: a TOML file of [[motion]] tables (as `grainflow run`).
+    #[arg(long, value_name = "FILE")]
+    motion: Option<PathBuf>,
+    /// TOML case files only: set a key by its dotted path (as `grainflow run --set`).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// The memory limit the plan is held to (as `grainflow run --memory-limit`).
+    #[arg(long, value_name = "SIZE", value_parser = grainflow_case::plan::parse_size)]
+    memory_limit: Option<f64>,
+}
+
+pub fn main(args: CheckArgs) -> ExitCode {
+    let _stop = crate::signals::install();
+    grainflow_case::plan::set_memory_limit(args.memory_limit);
+    let case = match crate::run::load_case(&args.case, &args.overrides, args.motion.as_deref(), &args.set) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    for w in &case.warnings {
+        eprintln!("warning: {w}");
+    }
+    let plan = match grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit()) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: {}: {e}", args.case.display());
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    for w in &plan.warnings {
+        eprintln!("warning: {w}");
+    }
+    let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
+    println!("grainflow {} check: {title}: the case is valid; nothing was run", env!("CARGO_PKG_VERSION"));
+    for line in plan.lines() {
+        println!("{line}");
+    }
+    ExitCode::SUCCESS
+}
