@@ -798,8 +798,11 @@ impl RunNote {
                     let t = |c: &str, u: &str| -> Option<grainflow::Tally> {
                         Some(grainflow::Tally { count: c.parse().ok()?, units: u.parse().ok()? })
                     };
-                    note.flow =
-                        Some(FlowCount { inserted: t(ic, iu)?, removed: t(rc, ru)?, missed: missed.parse().ok()? });
+                    note.flow = Some(FlowCount {
+                        inserted: t(ic, iu)?,
+                        removed: t(rc, ru)?,
+                        missed: missed.parse().ok()?,
+                    });
                 }
                 _ => {}
             }
