@@ -518,6 +518,7 @@ pub(crate) fn insertions(
         let rtable = format!("{table} region");
         let region = region(raw_region, &rtable, meshes, Some(stream))?;
         check_insertion_region(&region, raw_region, &rtable, domain, mixture.max_diameter())?;
+        let plane_z = ins.plane_z.map(|z| plane(z, &region, mixture.max_diameter(), &table)).transpose()?;
         out.push(Insertion {
             name,
             region,
@@ -528,9 +529,31 @@ pub(crate) fn insertions(
             seed: ins.seed.unwrap_or(k as u64 + 1),
             given: Vec::new(),
             max_initial_overlap: grainflow::insertion::DEFAULT_MAX_INITIAL_OVERLAP,
+            plane_z,
         });
     }
     Ok(out)
+}
+
+/// An insertion's `plane_z`: finite, and the region holds spheres of the largest diameter
+/// `d_max` centred there (its z range covers z ± d_max/2), so that the placement's centres
+/// lie in the plane to its rounding margin before they are put in it exactly.
+fn plane(z: f64, region: &Region, d_max: f64, table: &str) -> Result<f64, CaseError> {
+    let z = finite(table, "plane_z", z)?;
+    let (lo, hi) = region.bounds();
+    let r = 0.5 * d_max;
+    if lo.z > z - r || hi.z < z + r {
+        return Err(CaseError::invalid(
+            table,
+            "plane_z",
+            z,
+            format!(
+                "the region's z range [{:e}, {:e}] m must hold spheres of the largest diameter {d_max:e} m centred at z = {z:e} m",
+                lo.z, hi.z
+            ),
+        ));
+    }
+    Ok(z)
 }
 
 /// An insertion of the particles of `file`, as they are, at `at`: no other key that draws or
@@ -554,6 +577,7 @@ fn given(
         ("every", ins.every.is_some()),
         ("velocity", ins.velocity.is_some()),
         ("seed", ins.seed.is_some()),
+        ("plane_z", ins.plane_z.is_some()),
         ("fractions_by", ins.fractions_by.is_some()),
         ("[[insertions.phases]]", !ins.phases.is_empty()),
     ];

@@ -581,6 +581,9 @@ pub struct RawInsertion {
     /// Seed of the insertion's random stream. Default: its position among the insertions.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+    /// Every centre placed at exactly this z, m (a run in that plane). Default: none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plane_z: Option<f64>,
     /// How the phases' `fraction`s are meant: "number" (default) or "mass".
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fractions_by: Option<String>,

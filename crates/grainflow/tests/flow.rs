@@ -62,6 +62,7 @@ fn pour_config(rate: f64, outlet: bool) -> SimulationConfig {
         seed: 7,
         given: Vec::new(),
         max_initial_overlap: grainflow::insertion::DEFAULT_MAX_INITIAL_OVERLAP,
+        plane_z: None,
     }];
     if outlet {
         c.outlets = vec![

@@ -1138,6 +1138,7 @@ impl Translator<'_> {
                     every: Some(depth / speed),
                     velocity: Some(velocity.to_array()),
                     seed: None,
+                    plane_z: no_k.then_some(0.0),
                     fractions_by: None,
                     phases: vec![part],
                 },

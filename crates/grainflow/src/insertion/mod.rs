@@ -49,6 +49,12 @@ pub struct Insertion {
     /// fraction of the smaller radius are reported in a notice ([`crate::Simulation::flow_notices`]);
     /// one at the centre of a present particle stops the run (its contact has no normal).
     pub max_initial_overlap: f64,
+    /// Centres placed at exactly this z, m: a run in the plane z = `plane_z` (MFIX's 2-D
+    /// decks), whose spheres must start in it bit for bit to stay in it (the slightest offset
+    /// grows when a bed in the plane is compressed). The region then holds the spheres at
+    /// that z to within the placement's margin, so the snap changes a centre's distance to
+    /// neighbours in the plane only to second order. `None`: anywhere in the region.
+    pub plane_z: Option<f64>,
 }
 
 /// The default of [`Insertion::max_initial_overlap`] (the case file's
@@ -103,6 +109,7 @@ impl Insertion {
             seed: 0,
             given,
             max_initial_overlap: DEFAULT_MAX_INITIAL_OVERLAP,
+            plane_z: None,
         })
     }
 }

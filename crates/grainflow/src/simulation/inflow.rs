@@ -793,10 +793,13 @@ impl Simulation {
         let centres = place(region, &diameters, &obstacles, &mut self.flow.feeds[k].rng);
         let mut new = Vec::with_capacity(centres.len());
         for (&(phase, d, density), c) in drawn.iter().zip(centres) {
-            let Some(position) = c else {
+            let Some(mut position) = c else {
                 self.flow.feeds[k].missed += 1;
                 continue;
             };
+            if let Some(z) = ins.plane_z {
+                position.z = z;
+            }
             let id = u32::try_from(self.flow.next_id).map_err(|_| {
                 EngineError::BadReference(format!(
                     "insertion '{}': particle ids beyond {}",
