@@ -28,16 +28,11 @@ pub struct CheckArgs {
 pub fn main(args: CheckArgs) -> ExitCode {
     let _stop = crate::signals::install();
     grainflow_case::plan::set_memory_limit(args.memory_limit);
-    let case = match crate::run::load_case(&args.case, &args.overrides, args.motion.as_deref(), &args.set) {
+    let case = match crate::run::load_and_warn(&args.case, &args.overrides, args.motion.as_deref(), &args.set)
+    {
         Ok(c) => c,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
+        Err(code) => return code,
     };
-    for w in &case.warnings {
-        eprintln!("warning: {w}");
-    }
     let plan = match grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit()) {
         Ok(p) => p,
         Err(e) => {

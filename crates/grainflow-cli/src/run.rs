@@ -295,8 +295,25 @@ fn parse_checkpoint_every(s: &str) -> Result<CheckpointEvery, String> {
     }
 }
 
+/// [`load_case`], its warnings printed; a refusal printed and turned into the bad-input exit.
+pub fn load_and_warn(
+    case: &Path,
+    overrides: &[String],
+    motion: Option<&Path>,
+    set: &[String],
+) -> Result<grainflow_case::Case, ExitCode> {
+    let case = load_case(case, overrides, motion, set).map_err(|e| {
+        eprintln!("error: {e}");
+        ExitCode::from(EXIT_BAD_INPUT)
+    })?;
+    for w in &case.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(case)
+}
+
 /// Reads a case file, or translates an MFIX deck. The error is the message to print.
-pub fn load_case(
+fn load_case(
     case: &Path,
     overrides: &[String],
     motion: Option<&Path>,
@@ -339,16 +356,10 @@ pub fn main(args: RunArgs) -> ExitCode {
     // Before the set-up, which can take long (particle files, seeded lattices, placement).
     let stop = crate::signals::install();
     grainflow_case::plan::set_memory_limit(args.memory_limit);
-    let case = match load_case(&args.case, &args.overrides, args.motion.as_deref(), &args.set) {
+    let case = match load_and_warn(&args.case, &args.overrides, args.motion.as_deref(), &args.set) {
         Ok(c) => c,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
+        Err(code) => return code,
     };
-    for w in &case.warnings {
-        eprintln!("warning: {w}");
-    }
     if args.restart.is_none() {
         match grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit()) {
             Ok(plan) => {

@@ -295,13 +295,7 @@ impl Simulation {
             return Err(EngineError::BadReference("gravity must be a finite vector in m/s²".into()));
         }
         let sizes = RunSizes::of(&config.phases, &particles, &config.insertions);
-        let reference = CoeffTable::build(
-            &config.law,
-            &config.phases,
-            &config.wall_materials,
-            &config.pair_params,
-            &config.wall_params,
-        )?;
+        let reference = coeff_table(&config, &config.phases)?;
         // Contacts' own sizes where they differ from the phases' (where they do not, the
         // phases' coefficients are the contacts' own, and cost nothing per contact).
         let own = config.law.sizes == ContactSizes::Own && sizes.vary;
@@ -1198,14 +1192,13 @@ fn thread_blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usi
 /// before it is built.
 pub fn time_step_of(config: &SimulationConfig, particles: &Particles) -> Result<TimeStepChoice, EngineError> {
     let sizes = RunSizes::of(&config.phases, particles, &config.insertions);
-    let reference = CoeffTable::build(
-        &config.law,
-        &config.phases,
-        &config.wall_materials,
-        &config.pair_params,
-        &config.wall_params,
-    )?;
-    choose_time_step(config, particles, &sizes, &reference)
+    choose_time_step(config, particles, &sizes, &coeff_table(config, &config.phases)?)
+}
+
+/// The coefficient table of `config`'s law and walls for `phases` (the case's, or sized as
+/// the run's smallest particles).
+fn coeff_table(config: &SimulationConfig, phases: &[Phase]) -> Result<CoeffTable, EngineError> {
+    CoeffTable::build(&config.law, phases, &config.wall_materials, &config.pair_params, &config.wall_params)
 }
 
 /// The time step of a run: from the smallest sizes its particles take when contacts have
@@ -1219,13 +1212,7 @@ fn choose_time_step(
     let speed = timestep::characteristic_speed(particles, &config.insertions, &config.meshes);
     let span = config.t_stop - config.t_start;
     if config.law.sizes == ContactSizes::Own && sizes.vary {
-        let table = CoeffTable::build(
-            &config.law,
-            &sizes.smallest,
-            &config.wall_materials,
-            &config.pair_params,
-            &config.wall_params,
-        )?;
+        let table = coeff_table(config, &sizes.smallest)?;
         timestep::choose(config.time_step, &config.law, &sizes.smallest, &table, span, &speed)
     } else {
         timestep::choose(config.time_step, &config.law, &config.phases, reference, span, &speed)
