@@ -35,8 +35,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 MP=${MP:-$ROOT/bench/liggghts-mesh}
-# The settled LIGGGHTS states (MB-sized data files) stay outside the repository.
-SETTLED=${SETTLED:-$ROOT/../shared/peers/liggghts-mesh}
 RUNS=${RUNS:-3}
 NINSERT=${NINSERT:-26000}
 NSETTLE=${NSETTLE:-4000}
