@@ -6,7 +6,7 @@ use crate::math::{Vec3, pick};
 
 /// The incremental Mindlin spring: the history is the elastic tangential force, incremented
 /// by −k(δ)·v_t·Δt each step; F_t = history − η_t·v_t, capped at μ·F. Identical to
-/// [`MfixTotal`] for the linear law.
+/// [`MfixTotal`](super::MfixTotal) for the linear law.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct IncrementalMindlin;
 
