@@ -7,7 +7,7 @@
 
 pub mod case;
 pub mod error;
-mod flow;
+
 pub mod input;
 pub mod lammps;
 pub mod mfix;

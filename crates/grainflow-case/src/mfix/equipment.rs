@@ -878,7 +878,7 @@ impl Translator<'_> {
                     None => 0.0,
                 } / if self.cgs { 1e4 } else { 1.0 };
                 let part = self.psd("IC", ic, m, phase, read_file)?;
-                let sizes = crate::flow::sizes(&part, &show("IC_PSD_TYPE", &[ic, m]), phase)?;
+                let sizes = crate::case::flow::sizes(&part, &show("IC_PSD_TYPE", &[ic, m]), phase)?;
                 parts.push(seed::SeedPhase { ic, m, phase, ep: ep.v, sizes, velocity, theta });
             }
             if !parts.is_empty() {

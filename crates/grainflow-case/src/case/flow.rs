@@ -1,7 +1,7 @@
 //! `[[insertions]]`, `[[outlets]]` and `[domain] leaving` → the engine's insertions and
 //! outlets, with messages naming table, key and value.
 
-use crate::case::{check, vec3};
+use super::fields::{check, vec3};
 use crate::error::CaseError;
 use crate::raw::{RawInsertPhase, RawInsertion, RawOutlet, RawRegion};
 use grainflow::contact::limits;
