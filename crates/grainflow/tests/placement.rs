@@ -562,8 +562,12 @@ proptest! {
             // diameters wide (boxes about 0.3–0.55, cylinders and meshes 0.2–0.45 measured over
             // 1 500 cases of these shapes and sizes): the floors leave room for the unlucky case
             // and fail for a placement that gives up early.
-            let floor = if spec.region <= 1 { 0.25 } else { 0.15 };
-            let phi = got / period_volume(&case.region, case.covers, &case.periodic);
+            // A case asking little more than the dilute 0.2 may ask less than the floor: then
+            // 95 % of its volume, as in the dilute cases.
+            let volume = period_volume(&case.region, case.covers, &case.periodic);
+            let floor: f64 = if spec.region <= 1 { 0.25 } else { 0.15 };
+            let floor = floor.min(0.95 * asked / volume);
+            let phi = got / volume;
             prop_assert!(phi >= floor, "solid fraction {} reached, {} of {} placed", phi, n, valid);
         }
     }
