@@ -64,10 +64,10 @@ pub(super) fn particles<'h>(
         }
         let mut stream = open(file)?;
         init = match format.as_str() {
-            "mfix" => particles::read_mfix_from(&mut stream, &phases)?,
-            "csv" => particles::read_csv_from(&mut stream, &phases)?,
+            "mfix" => particles::read_mfix_from(&mut stream, phases)?,
+            "csv" => particles::read_csv_from(&mut stream, phases)?,
             "lammps" => {
-                let data = crate::lammps::read_data_from(&mut stream, &phases)?;
+                let data = crate::lammps::read_data_from(&mut stream, phases)?;
                 if let Some((blo, bhi)) = data.bounds {
                     // A larger domain along a walled axis only holds the file's box (LAMMPS
                     // shrink-wraps a flow's open top); a periodic axis of another length, or a

@@ -121,7 +121,7 @@ pub(super) fn step(
     let dt = check_stability(
         time_step,
         t_stop - t_start,
-        &law,
+        law,
         &step_phases,
         wall_materials,
         pair_params,
