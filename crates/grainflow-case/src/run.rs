@@ -995,26 +995,7 @@ fn run_simulation(
     mesh_loads.start_flow(sim, options.restart.is_none(), flow_from);
     let mut files = vec![ts_path.clone()];
     let vtk_dir = out.join("vtk");
-    let mut vtk = match vtk_interval {
-        Some(iv) => {
-            let fixed = mesh_shapes(sim, false);
-            let moving = sim.meshes().iter().any(|w| w.motion.moves());
-            let mut files = vec!["walls.vtp", "particles.pvd", "contacts.pvd"];
-            files.extend(fixed.first().map(|_| FIXED_MESHES_FILE));
-            files.extend(moving.then_some("meshes.pvd"));
-            for f in files {
-                folder.record(&Path::new("vtk").join(f))?;
-            }
-            // A series of another run is not continued (its frames were removed).
-            let from = if folder.continues() { start_step } else { 0 };
-            Some((
-                VtkSeries::resume(&vtk_dir, sim.walls(), health.domain.0, health.domain.1, &fixed, from)
-                    .map_err(io_err(&vtk_dir))?,
-                output_every(Some(iv), sim.dt(), sim.total_steps()),
-            ))
-        }
-        None => None,
-    };
+    let mut vtk = open_vtk(sim, health, folder, &vtk_dir, vtk_interval, start_step)?;
     let vtk_every = vtk.as_ref().map(|(_, k)| *k);
     let checkpoint_path = out.join(CHECKPOINT_FILE);
     // The row and snapshot of an output (`scheduled`: on the output schedule; the extra row
@@ -1179,15 +1160,7 @@ fn run_simulation(
         files.push(c.clone());
     }
     if vtk.is_some() {
-        files.push(vtk_dir.join("particles.pvd"));
-        files.push(vtk_dir.join("contacts.pvd"));
-        files.push(vtk_dir.join("walls.vtp"));
-        if sim.meshes().iter().any(|w| !w.motion.moves()) {
-            files.push(vtk_dir.join(FIXED_MESHES_FILE));
-        }
-        if sim.meshes().iter().any(|w| w.motion.moves()) {
-            files.push(vtk_dir.join("meshes.pvd"));
-        }
+        push_vtk_files(sim, &vtk_dir, &mut files);
     }
     let steps = sim.step_index() - start_step;
     Ok(RunSummary {
@@ -1214,4 +1187,49 @@ fn run_simulation(
         neighbor_builds: sim.neighbors().stats().builds - builds_before,
         run_id: sim.run_id().to_string(),
     })
+}
+
+/// The VTK series of a run that writes one (`vtk_interval`), with the files it records, and
+/// its output period in steps.
+fn open_vtk(
+    sim: &Simulation,
+    health: Health,
+    folder: &mut OutputFolder,
+    vtk_dir: &Path,
+    vtk_interval: Option<f64>,
+    start_step: u64,
+) -> Result<Option<(VtkSeries, u64)>, RunError> {
+    Ok(match vtk_interval {
+        Some(iv) => {
+            let fixed = mesh_shapes(sim, false);
+            let moving = sim.meshes().iter().any(|w| w.motion.moves());
+            let mut files = vec!["walls.vtp", "particles.pvd", "contacts.pvd"];
+            files.extend(fixed.first().map(|_| FIXED_MESHES_FILE));
+            files.extend(moving.then_some("meshes.pvd"));
+            for f in files {
+                folder.record(&Path::new("vtk").join(f))?;
+            }
+            // A series of another run is not continued (its frames were removed).
+            let from = if folder.continues() { start_step } else { 0 };
+            Some((
+                VtkSeries::resume(vtk_dir, sim.walls(), health.domain.0, health.domain.1, &fixed, from)
+                    .map_err(io_err(vtk_dir))?,
+                output_every(Some(iv), sim.dt(), sim.total_steps()),
+            ))
+        }
+        None => None,
+    })
+}
+
+/// The series files of a run's VTK output, once it has ended.
+fn push_vtk_files(sim: &Simulation, vtk_dir: &Path, files: &mut Vec<PathBuf>) {
+    files.push(vtk_dir.join("particles.pvd"));
+    files.push(vtk_dir.join("contacts.pvd"));
+    files.push(vtk_dir.join("walls.vtp"));
+    if sim.meshes().iter().any(|w| !w.motion.moves()) {
+        files.push(vtk_dir.join(FIXED_MESHES_FILE));
+    }
+    if sim.meshes().iter().any(|w| w.motion.moves()) {
+        files.push(vtk_dir.join("meshes.pvd"));
+    }
 }
