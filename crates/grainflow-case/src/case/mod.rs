@@ -1,8 +1,8 @@
 //! From a raw case file to a validated [`Case`]: SI values, engine objects, cross-field checks.
 
 //!
-//! [`validate`] reads the tables in a fixed order, one validator per table, each in its own
-//! module on the field helpers of [`fields`]; the first mistake found is the one reported.
+//! `validate` reads the tables in a fixed order, one validator per table, each in its own
+//! module on the field helpers of `fields`; the first mistake found is the one reported.
 
 mod contact;
 mod domain;
