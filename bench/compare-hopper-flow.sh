@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# grainflow against LIGGGHTS 3.8 on the hopper of $PEERS/liggghts-mesh, filled by insertion and
+# grainflow against LIGGGHTS 3.8 on the hopper of bench/liggghts-mesh, filled by insertion and
 # discharged (issue #29), in the same session, filling included: both codes from an empty
 # hopper, the same 9 976-triangle mesh (the peer's make_geometry.py, checked against its
 # checksums), the same spheres, contact law, time step and number of steps. LIGGGHTS runs the
@@ -28,14 +28,13 @@
 # Results go on top of bench/results/<date>-hopper-flow.md (the day's earlier runs stay below).
 #
 #   bench/compare-hopper-flow.sh       (RUNS=3; NINSERT=26000 NSETTLE=4000 NDISCHARGE=20000;
-#                                       CARGO= the cargo command; PEERS= the peers' folder)
+#                                       CARGO= the cargo command; MP= the LIGGGHTS mesh inputs, default bench/liggghts-mesh)
 set -euo pipefail
 # One block, read whole before it runs (an edit of this file during a run changes nothing).
 {
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-PEERS=${PEERS:-$ROOT/../shared/peers}
-MP=$PEERS/liggghts-mesh
+MP=${MP:-$ROOT/bench/liggghts-mesh}
 RUNS=${RUNS:-3}
 NINSERT=${NINSERT:-26000}
 NSETTLE=${NSETTLE:-4000}

@@ -2,7 +2,7 @@
 # grainflow against LIGGGHTS 3.8 on triangle-mesh walls (issue #28), in the same session: the
 # hopper discharge of 30 000 spheres with the same conical surface as 520, 9 976 and 99 552
 # triangles, and the drum of 15 750 spheres turning at 1 rev/s (12 096 triangles). Inputs and
-# settled states: $PEERS/liggghts-mesh (its README); grainflow's cases: bench/cases/hopper_*.toml,
+# settled states: bench/liggghts-mesh, the settled states in $SETTLED; grainflow's cases: bench/cases/hopper_*.toml,
 # bench/cases/drum.toml. The STL files (38 MB) are generated into the work folder by the peers'
 # make_geometry.py and checked against its checksums.
 #
@@ -38,8 +38,9 @@ set -euo pipefail
 {
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-PEERS=${PEERS:-$ROOT/../shared/peers}
-MP=$PEERS/liggghts-mesh
+MP=${MP:-$ROOT/bench/liggghts-mesh}
+# The settled LIGGGHTS states (MB-sized data files) stay outside the repository.
+SETTLED=${SETTLED:-$ROOT/../shared/peers/liggghts-mesh}
 RUNS=${RUNS:-3}
 CASES=${CASES:-"hopper_500 hopper_10k hopper_100k drum"}
 HOPPER_WARM=${HOPPER_WARM:-500}
@@ -66,7 +67,7 @@ trap 'rm -rf "$W"' EXIT
 mkdir -p "$W/data"
 python3 "$MP/make_geometry.py" "$W/data" >/dev/null
 (cd "$W/data" && sha256sum --quiet -c "$MP/stl.sha256") || echo "warning: the STL files differ from $MP/stl.sha256" >&2
-ln -s "$MP"/*.data "$W/data/"
+ln -s "$SETTLED"/*.data "$W/data/"
 cd "$W"
 
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }

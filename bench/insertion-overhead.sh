@@ -27,14 +27,15 @@
 # Results go on top of bench/results/<date>-insertion.md (the day's earlier runs stay below).
 #
 #   bench/insertion-overhead.sh        (RUNS=3; WARM=10000 RUN=5000 RATE=2700;
-#                                       CARGO= the cargo command; PEERS= the peers' folder)
+#                                       CARGO= the cargo command; MP= the LIGGGHTS mesh inputs, default bench/liggghts-mesh)
 set -euo pipefail
 # One block, read whole before it runs (an edit of this file during a run changes nothing).
 {
 cd "$(dirname "$0")/.."
 ROOT=$PWD
-PEERS=${PEERS:-$ROOT/../shared/peers}
-MP=$PEERS/liggghts-mesh
+MP=${MP:-$ROOT/bench/liggghts-mesh}
+# The settled LIGGGHTS states (MB-sized data files) stay outside the repository.
+SETTLED=${SETTLED:-$ROOT/../shared/peers/liggghts-mesh}
 RUNS=${RUNS:-3}
 WARM=${WARM:-10000}
 RUN=${RUN:-5000}
@@ -51,7 +52,7 @@ trap 'rm -rf "$W"' EXIT
 mkdir -p "$W/data"
 python3 "$MP/make_geometry.py" "$W/data" >/dev/null
 (cd "$W/data" && sha256sum --quiet -c "$MP/stl.sha256") || echo "warning: the STL files differ from $MP/stl.sha256" >&2
-ln -s "$MP/hopper_10k_settled.data" "$W/data/"
+ln -s "$SETTLED/hopper_10k_settled.data" "$W/data/"
 cd "$W"
 
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }

@@ -604,18 +604,14 @@ fn validate<'h>(
         "model",
         contact.model.as_deref(),
         NormalModel::LinearSpringDashpot,
-        &[
-            ("lsd", NormalModel::LinearSpringDashpot),
-            ("hertz", NormalModel::Hertz),
-            ("jkr", NormalModel::Jkr),
-        ],
+        NormalModel::CHOICES,
     )?;
     let tangential = choose(
         "[contact]",
         "tangential",
         contact.tangential.as_deref(),
         TangentialModel::MfixTotal,
-        &[("mfix", TangentialModel::MfixTotal), ("incremental_mindlin", TangentialModel::IncrementalMindlin)],
+        TangentialModel::CHOICES,
     )?;
     let history = choose(
         "[contact]",
@@ -1840,6 +1836,6 @@ fn layer(
                 "surface energy γ in J/m² for the {what}, required by the jkr model (LAMMPS's: the pull-off force is 3πγR*)"
             ),
         )),
-        _ => Ok(p),
+        NormalModel::LinearSpringDashpot | NormalModel::Hertz | NormalModel::Jkr => Ok(p),
     }
 }

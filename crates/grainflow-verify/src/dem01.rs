@@ -51,7 +51,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{self, Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, summary_markdown, write_file};
+use crate::report::{CaseOutcome, SuiteOptions, case_dir, summary_markdown, write_file};
 use grainflow::contact::damping_coefficient;
 use grainflow::{Integrator, Simulation, TimeStepRule};
 use grainflow_case::Case;
@@ -82,7 +82,7 @@ pub const INTEGRATORS: [Integrator; 2] = [Integrator::Euler, Integrator::AdamsBa
 
 /// The shipped case, parsed.
 pub fn case() -> Result<Case, VerifyError> {
-    crate::suite::shipped_case("dem01/dem01.toml", CASE, &[])
+    crate::report::shipped_case("dem01/dem01.toml", CASE, &[])
 }
 
 /// Sets k_n and e_n of every phase pair and every phase–wall pair of `case`.

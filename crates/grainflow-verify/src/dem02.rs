@@ -46,7 +46,7 @@ use crate::check::Check;
 use crate::dem01::{FloorContact, GRAVITY, H0, RADIUS, set_kn_en};
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions};
+use crate::report::{CaseOutcome, SuiteOptions};
 use grainflow::Simulation;
 use grainflow_case::Case;
 use rayon::prelude::*;
@@ -68,7 +68,7 @@ pub const SIGMA_MAX: f64 = 0.1;
 
 /// The shipped case, parsed.
 pub fn case() -> Result<Case, VerifyError> {
-    crate::suite::shipped_case("dem02/dem02.toml", CASE, &[])
+    crate::report::shipped_case("dem02/dem02.toml", CASE, &[])
 }
 
 /// Hard-sphere bounce height h_k = R + (h₀ − R)·e_n^(2k), m.
@@ -417,7 +417,7 @@ pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, Veri
     let start = Instant::now();
     let report = evaluate()?;
     let title = "bouncing particle height (MFIX DEM02)";
-    let (files, png) = crate::suite::write_case_files(
+    let (files, png) = crate::report::write_case_files(
         dir,
         "dem02",
         title,

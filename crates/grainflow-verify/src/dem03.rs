@@ -32,7 +32,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions};
+use crate::report::{CaseOutcome, SuiteOptions};
 use grainflow::contact::damping_coefficient;
 use grainflow::{Simulation, TimeStepRule};
 use grainflow_case::Case;
@@ -50,7 +50,7 @@ pub const REFERENCE_STEP: f64 = 1e-7;
 
 /// The shipped case, parsed.
 pub fn case() -> Result<Case, VerifyError> {
-    crate::suite::shipped_case("dem03/dem03.toml", CASE, &[])
+    crate::report::shipped_case("dem03/dem03.toml", CASE, &[])
 }
 
 /// One classical Runge–Kutta (RK4) step of y′ = f(t, y) from t to t + h.
@@ -552,7 +552,7 @@ pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, Veri
     let title = "two stacked, compressed particles (MFIX DEM03)";
     let fig = figure(&report.runs, &report.convergence);
     let (files, png) =
-        crate::suite::write_case_files(dir, "dem03", title, &csv(&report.runs), &fig, &report.checks)?;
+        crate::report::write_case_files(dir, "dem03", title, &csv(&report.runs), &fig, &report.checks)?;
     let z = report.runs.first().map_or(f64::NAN, |r| r.system.omega_max() * r.dt);
     Ok(CaseOutcome {
         name: "dem03",

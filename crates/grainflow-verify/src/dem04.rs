@@ -39,7 +39,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions};
+use crate::report::{CaseOutcome, SuiteOptions};
 use grainflow::Simulation;
 use grainflow_case::Case;
 use rayon::prelude::*;
@@ -58,7 +58,7 @@ pub const ROLLING_SPEED: f64 = 5.0 / 7.0;
 
 /// The shipped case, parsed.
 pub fn case() -> Result<Case, VerifyError> {
-    crate::suite::shipped_case("dem04/dem04.toml", CASE, &[])
+    crate::report::shipped_case("dem04/dem04.toml", CASE, &[])
 }
 
 /// The shipped case with μ set for every pair and wall.
@@ -429,7 +429,7 @@ pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, Veri
     let start = Instant::now();
     let report = evaluate()?;
     let title = "ball slipping on a rough surface (MFIX DEM04)";
-    let (files, png) = crate::suite::write_case_files(
+    let (files, png) = crate::report::write_case_files(
         dir,
         "dem04",
         title,

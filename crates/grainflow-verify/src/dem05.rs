@@ -10,7 +10,7 @@ use crate::check::{Check, markdown_table};
 use crate::error::{VerifyError, io_at};
 use crate::kharaz::{self, Quantity, Source};
 use crate::plot::{self, Color, Figure, LineStyle, MarkerShape, Panel, Series, SeriesStyle};
-use crate::suite::{CaseOutcome, SuiteOptions};
+use crate::report::{CaseOutcome, SuiteOptions};
 use grainflow::state::ParticleInit;
 use grainflow::{Integrator, LeverArm, Particles, Simulation, TimeStepRule, Vec3};
 use grainflow_case::Case;
@@ -187,7 +187,7 @@ pub fn case(model: Model) -> Result<Case, VerifyError> {
         Model::Lsd => (LSD_CASE, "dem05/lsd.toml"),
         Model::Hertz => (HERTZ_CASE, "dem05/hertz.toml"),
     };
-    crate::suite::shipped_case(name, text, &[("particle_input.dat", PARTICLE_INPUT)])
+    crate::report::shipped_case(name, text, &[("particle_input.dat", PARTICLE_INPUT)])
 }
 
 fn wall_subset(p: &Particles) -> Particles {
@@ -736,7 +736,7 @@ pub fn run_case(dir: &Path, options: &SuiteOptions) -> Result<CaseOutcome, Verif
 /// Writes `DIR/dem05/`: dem05.csv (and dem05_converged.csv), the figures and summary.md.
 /// Returns the files written.
 pub fn write(report: &Report, dir: &Path) -> Result<Vec<PathBuf>, VerifyError> {
-    let out = crate::suite::case_dir(dir, "dem05")?;
+    let out = crate::report::case_dir(dir, "dem05")?;
     let mut files = Vec::new();
     let csv_path = out.join("dem05.csv");
     write_atomic(&csv_path, impacts_csv(&report.mfix).as_bytes()).map_err(io_at(&csv_path))?;

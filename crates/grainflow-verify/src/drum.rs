@@ -35,7 +35,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
+use crate::report::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
 use grainflow::mesh::MeshMotion;
 use grainflow::state::ParticleInit;
 use grainflow::{Particles, Simulation, Vec3};
@@ -640,7 +640,7 @@ pub fn run_case(dir: &Path, options: &SuiteOptions) -> Result<CaseOutcome, Verif
         );
     }
     write_file(out.join("drum_angles.csv"), &by_fr, &mut files)?;
-    let png = crate::suite::write_figure(&out, "drum", &figure(&report), &mut files)?;
+    let png = crate::report::write_figure(&out, "drum", &figure(&report), &mut files)?;
     let title = "rotating drum: dynamic angle of repose in the rolling regime";
     let mut summary = summary_markdown(title, &report.checks);
     let _ = write!(

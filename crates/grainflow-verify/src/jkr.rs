@@ -18,7 +18,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions};
+use crate::report::{CaseOutcome, SuiteOptions};
 use grainflow::contact::geometry::ContactGeometry;
 use grainflow::contact::law::{contact_force_dyn, normal_spring_energy};
 use grainflow::{ContactLaw, Simulation, Vec3};
@@ -59,7 +59,7 @@ pub struct Row {
 
 /// The shipped case, parsed.
 pub fn case() -> Result<Case, VerifyError> {
-    crate::suite::shipped_case("jkr/pair.toml", CASE, &[])
+    crate::report::shipped_case("jkr/pair.toml", CASE, &[])
 }
 
 /// The rows of a LAMMPS `fix print` file as `in.jkr_pair.lmp` writes it.
@@ -361,7 +361,7 @@ pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, Veri
     let (more, cmp) = run_checks(&run, &lammps);
     checks.extend(more);
     let title = "JKR cohesion: closed forms and a pair pulled off, against LAMMPS";
-    let (files, png) = crate::suite::write_case_files(
+    let (files, png) = crate::report::write_case_files(
         dir,
         "jkr",
         title,

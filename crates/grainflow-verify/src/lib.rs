@@ -14,6 +14,7 @@ pub mod jkr;
 pub mod kharaz;
 pub mod packing;
 pub mod plot;
+pub mod report;
 pub mod rolling;
 pub mod silo;
 pub mod suite;

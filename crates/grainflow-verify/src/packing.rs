@@ -24,7 +24,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
+use crate::report::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
 use grainflow::{Particles, Simulation};
 use grainflow_case::Case;
 use rayon::prelude::*;
@@ -350,7 +350,7 @@ pub fn run_case(dir: &Path, options: &SuiteOptions) -> Result<CaseOutcome, Verif
         }
     }
     write_file(out.join("packing_profiles.csv"), &prof, &mut files)?;
-    let png = crate::suite::write_figure(&out, "packing", &figure(&report), &mut files)?;
+    let png = crate::report::write_figure(&out, "packing", &figure(&report), &mut files)?;
     let title = "poured packing: volume fraction against friction (Silbert et al. 2002)";
     let mut summary = summary_markdown(title, &report.checks);
     let _ = write!(summary, "\nΔt = {:.2e} s; {:.1} s.\n", report.dt, report.wall_seconds);

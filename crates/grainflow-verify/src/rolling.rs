@@ -31,7 +31,7 @@ use crate::check::Check;
 use crate::chung_ooi::{effective_modulus, effective_shear_modulus};
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
+use crate::report::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
 use grainflow::state::ParticleInit;
 use grainflow::{Particles, Simulation, Vec3};
 use grainflow_case::Case;
@@ -455,7 +455,7 @@ pub fn run_plane(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, Ver
         );
     }
     write_file(out.join("rolling_plane.csv"), &csv, &mut files)?;
-    let png = crate::suite::write_figure(&out, "rolling_plane", &plane_figure(&report), &mut files)?;
+    let png = crate::report::write_figure(&out, "rolling_plane", &plane_figure(&report), &mut files)?;
     let title = "sphere sliding into rolling on a horizontal plane";
     let mut summary = summary_markdown(title, &report.checks);
     let _ = write!(
@@ -791,7 +791,7 @@ pub fn run_incline(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, V
         );
     }
     write_file(out.join("rolling_incline.csv"), &csv, &mut files)?;
-    let png = crate::suite::write_figure(&out, "rolling_incline", &incline_figure(&report), &mut files)?;
+    let png = crate::report::write_figure(&out, "rolling_incline", &incline_figure(&report), &mut files)?;
     let title = "sphere released on an incline: rolling or sliding";
     let mut summary = summary_markdown(title, &report.checks);
     let _ = write!(

@@ -36,7 +36,7 @@
 use crate::check::Check;
 use crate::error::VerifyError;
 use crate::plot::{Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
+use crate::report::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
 use grainflow::insertion::region::Region;
 use grainflow::insertion::{Amount, Schedule};
 use grainflow::mesh::{Mesh, MeshTransform, MeshWall};
@@ -687,7 +687,7 @@ pub fn run_case(dir: &Path, options: &SuiteOptions) -> Result<CaseOutcome, Verif
         );
     }
     write_file(out.join("silo_rates.csv"), &table, &mut files)?;
-    let png = crate::suite::write_figure(&out, "silo", &figure(&report), &mut files)?;
+    let png = crate::report::write_figure(&out, "silo", &figure(&report), &mut files)?;
     let title = "silo discharge: Beverloo's correlation (flat-bottomed silo, circular orifice)";
     let mut summary = summary_markdown(title, &report.checks);
     let _ = write!(summary, "\nΔt = {:.2e} s; {:.1} s.\n", report.dt, report.wall_seconds);

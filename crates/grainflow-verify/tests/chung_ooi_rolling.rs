@@ -2,7 +2,7 @@
 //! and the CSV files have the promised headers and row counts. Release only.
 
 use grainflow_verify::CheckKind;
-use grainflow_verify::suite::{CaseOutcome, SuiteOptions};
+use grainflow_verify::report::{CaseOutcome, SuiteOptions};
 use std::path::Path;
 
 /// Fails with every failed check listed; prints the checks with `--nocapture`.

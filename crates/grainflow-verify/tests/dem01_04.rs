@@ -2,7 +2,7 @@
 //! (CSV headers and row counts, figures, summary). Release only for the full cases; the RK4
 //! reference integrator of DEM03 is tested in any profile.
 
-use grainflow_verify::suite::{CaseOutcome, SuiteOptions};
+use grainflow_verify::report::{CaseOutcome, SuiteOptions};
 use grainflow_verify::{CheckKind, dem01, dem02, dem03, dem04};
 use std::path::Path;
 

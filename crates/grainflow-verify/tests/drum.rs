@@ -2,7 +2,7 @@
 //! written with the promised columns, and the run is deterministic. Release only.
 
 use grainflow_verify::CheckKind;
-use grainflow_verify::suite::SuiteOptions;
+use grainflow_verify::report::SuiteOptions;
 
 #[test]
 #[cfg_attr(debug_assertions, ignore = "expensive: run with --release")]

@@ -4,7 +4,7 @@
 //! from `bench/lammps/in.jkr_pair.lmp` still writes that output and grainflow still follows it.
 
 use grainflow_verify::jkr::{self, LAMMPS_TOLERANCE};
-use grainflow_verify::suite::SuiteOptions;
+use grainflow_verify::report::SuiteOptions;
 use grainflow_verify::{Check, CheckKind};
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -2,7 +2,7 @@
 //! μ = 0, falling with μ) and the files are written. Release only.
 
 use grainflow_verify::CheckKind;
-use grainflow_verify::suite::SuiteOptions;
+use grainflow_verify::report::SuiteOptions;
 
 #[test]
 #[cfg_attr(debug_assertions, ignore = "expensive: run with --release")]

@@ -2,7 +2,7 @@
 //! them) and the files are written with the promised columns. Release only.
 
 use grainflow_verify::CheckKind;
-use grainflow_verify::suite::SuiteOptions;
+use grainflow_verify::report::SuiteOptions;
 
 #[test]
 #[cfg_attr(debug_assertions, ignore = "expensive: run with --release")]

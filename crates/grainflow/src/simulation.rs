@@ -1097,14 +1097,11 @@ fn choose_time_step(
 
 /// The floor of the force stage's quanta for a case (see `forces::sum`), from its reference
 /// force: the largest normal force of any contact at an overlap of the largest reference
-/// radius.
+/// radius, k_n·R^p with the normal model's force exponent p (JKR's floor ignores its
+/// cohesion).
 fn sum_floor(law: &ContactLaw, phases: &[Phase], coeffs: &CoeffTable) -> forces::Peak {
     let r = phases.iter().map(|p| p.radius()).fold(0.0, f64::max);
-    let power = match law.normal {
-        crate::contact::NormalModel::LinearSpringDashpot => 1.0,
-        // Hertz and JKR: a stiffness in N/m^1.5 (JKR's floor ignores its cohesion).
-        _ => 1.5,
-    };
+    let (power, _) = law.normal.exponents();
     let kn = coeffs.all().map(|c| c.kn).fold(0.0, f64::max);
     forces::peak_floor(kn * r.powf(power), r)
 }

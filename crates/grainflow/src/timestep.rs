@@ -1,6 +1,7 @@
 //! The time step (reference: MFIX-DEM model §5).
 
-use crate::contact::{CoeffTable, ContactLaw, NormalDamping, NormalModel};
+use crate::contact::normal::StabilityRule;
+use crate::contact::{CoeffTable, ContactLaw, NormalDamping};
 use crate::error::EngineError;
 use crate::material::Phase;
 
@@ -37,12 +38,10 @@ pub fn collision_time(kn: f64, eta_n: f64, m_eff: f64) -> f64 {
 }
 
 /// The stiffness MFIX's collision time takes: k_n, or K_n (Hertz, as if linear); for JKR the
-/// Hertz K_n = (4/3)E*·√R* of its elastic part.
+/// Hertz K_n = (4/3)E*·√R* of its elastic part (the normal model's own
+/// `NormalSubModel::collision_stiffness`).
 fn linear_stiffness(law: &ContactLaw, c: &crate::contact::ContactCoeffs) -> f64 {
-    match law.normal {
-        NormalModel::LinearSpringDashpot | NormalModel::Hertz => c.kn,
-        NormalModel::Jkr => c.kn * c.r_star.sqrt(),
-    }
+    law.normal.collision_stiffness(c)
 }
 
 /// η_n in kg/s for the phase pair's effective mass, whatever the damping's scaling.
@@ -238,11 +237,7 @@ pub fn choose(
     span: f64,
     speed: &(f64, String),
 ) -> Result<TimeStepChoice, EngineError> {
-    let model = match law.normal {
-        NormalModel::LinearSpringDashpot => "linear spring-dashpot k_n",
-        NormalModel::Hertz => "Hertzian K_n taken as a linear stiffness, as MFIX does",
-        NormalModel::Jkr => "JKR's Hertzian (4/3)E*√R* taken as a linear stiffness, as MFIX does for Hertz",
-    };
+    let model = law.normal.collision_stiffness_is();
     if phases.is_empty() {
         return Err(EngineError::BadReference("at least one phase is needed".into()));
     }
@@ -353,32 +348,35 @@ pub struct StabilityLimit {
     pub reason: String,
 }
 
-/// Stability limit of explicit integration for the contact law:
-/// - linear spring–dashpot: Δt ≤ t_c/5 (ω·Δt ≤ 0.63, well inside the explicit schemes' ω·Δt < 2), t_c the collision time of the stiffest contact over
-///   all phase pairs **and** phase–wall pairs (MFIX's rule leaves the walls out); the
-///   suggestion is t_c/50, MFIX's default;
-/// - Hertz: Δt ≤ 0.3·T_R with the Rayleigh time T_R = πR√(ρ/G)/(0.1631ν + 0.8766) of the
-///   smallest phase (Thornton's and Li et al.'s criterion); the suggestion is 0.1·T_R.
+/// Stability limit of explicit integration for the contact law, by its normal model's rule
+/// ([`StabilityRule`]):
+/// - [`CollisionTime`](StabilityRule::CollisionTime) (linear spring–dashpot): Δt ≤ t_c/5
+///   (ω·Δt ≤ 0.63, well inside the explicit schemes' ω·Δt < 2), t_c the collision time of the
+///   stiffest contact over all phase pairs **and** phase–wall pairs (MFIX's rule leaves the
+///   walls out); the suggestion is t_c/50, MFIX's default;
+/// - [`RayleighTime`](StabilityRule::RayleighTime) (Hertz, JKR): Δt ≤ 0.3·T_R with the
+///   Rayleigh time T_R = πR√(ρ/G)/(0.1631ν + 0.8766) of the smallest phase (Thornton's and Li
+///   et al.'s criterion); the suggestion is 0.1·T_R.
 pub fn stability_limit(
     law: &ContactLaw,
     phases: &[Phase],
     wall_materials: &[crate::material::WallMaterial],
     table: &CoeffTable,
 ) -> StabilityLimit {
-    match law.normal {
-        NormalModel::LinearSpringDashpot => {
+    match law.normal.stability() {
+        StabilityRule::CollisionTime => {
             let mut best = (f64::INFINITY, String::new());
             for m in 0..phases.len() {
                 for l in m..phases.len() {
                     let c = table.pair(m, l);
-                    let t = collision_time(c.kn, absolute_eta(law, c), c.m_eff);
+                    let t = collision_time(linear_stiffness(law, c), absolute_eta(law, c), c.m_eff);
                     if t < best.0 {
                         best = (t, format!("contact '{}'-'{}'", phases[m].name, phases[l].name));
                     }
                 }
                 for (w, wm) in wall_materials.iter().enumerate() {
                     let c = table.wall(m, w);
-                    let t = collision_time(c.kn, absolute_eta(law, c), c.m_eff);
+                    let t = collision_time(linear_stiffness(law, c), absolute_eta(law, c), c.m_eff);
                     if t < best.0 {
                         best = (t, format!("contact '{}'-wall '{}'", phases[m].name, wm.name));
                     }
@@ -390,7 +388,7 @@ pub fn stability_limit(
                 reason: format!("collision time {:.4e} s of the {} (limit t_c/5)", best.0, best.1),
             }
         }
-        NormalModel::Hertz | NormalModel::Jkr => {
+        StabilityRule::RayleighTime => {
             let mut best = (f64::INFINITY, String::new());
             for ph in phases {
                 if let (Some(e), Some(nu)) = (ph.youngs_modulus, ph.poisson_ratio) {

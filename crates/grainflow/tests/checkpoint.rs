@@ -7,8 +7,10 @@ mod common;
 
 use common::*;
 use grainflow::checkpoint::{CheckpointError, RestoreError};
-use grainflow::contact::{ContactLaw, NormalModel, TangentialModel};
-use grainflow::{Integrator, MotionRule, PrescribedMotion, Simulation, SimulationConfig, Vec3, Wall};
+use grainflow::contact::{ContactLaw, ContactParams, NormalModel, TangentialModel};
+use grainflow::{
+    Integrator, MotionRule, NormalDamping, PrescribedMotion, Simulation, SimulationConfig, Vec3, Wall,
+};
 
 /// 120 frictional, inelastic particles falling into a box under gravity (many contacts
 /// forming and breaking, neighbour rebuilds), one of them held fixed by prescribed motion.
@@ -16,7 +18,11 @@ fn setup(
     normal: NormalModel,
     integrator: Integrator,
 ) -> (SimulationConfig, Vec<grainflow::state::ParticleInit>) {
-    let law = ContactLaw { tangential: TangentialModel::IncrementalMindlin, ..ContactLaw::mfix(normal) };
+    let mut law = ContactLaw { tangential: TangentialModel::IncrementalMindlin, ..ContactLaw::mfix(normal) };
+    if normal == NormalModel::Jkr {
+        // JKR takes LAMMPS's damping (as in `granular jkr … damping tsuji`).
+        law.damping = NormalDamping::Tsuji;
+    }
     let (phases, params) = match normal {
         NormalModel::LinearSpringDashpot => {
             (vec![phase("glass", 0.004, 2500.0)], lsd_params(500.0, 0.7, 0.4))
@@ -24,7 +30,12 @@ fn setup(
         NormalModel::Hertz => {
             (vec![elastic_phase("glass", 0.004, 2500.0, 5e6, 0.3)], hertz_params(0.7, 0.7, 0.4))
         }
-        NormalModel::Jkr => unreachable!("JKR is not among the laws this test draws"),
+        // Cohesive: contacts hold past the touch (to −δ_c) and pull off, so the restart must
+        // carry the formed contacts' histories as well.
+        NormalModel::Jkr => (
+            vec![elastic_phase("glass", 0.004, 2500.0, 5e6, 0.3)],
+            ContactParams { surface_energy: Some(5e-3), ..hertz_params(0.7, 0.7, 0.4) },
+        ),
     };
     let lo = Vec3::ZERO;
     let hi = Vec3::new(0.03, 0.06, 0.03);
@@ -71,7 +82,7 @@ fn assert_identical(a: &Simulation, b: &Simulation, what: &str) {
 
 #[test]
 fn restarted_runs_are_bit_identical_for_every_integrator_and_law() {
-    for normal in [NormalModel::LinearSpringDashpot, NormalModel::Hertz] {
+    for normal in [NormalModel::LinearSpringDashpot, NormalModel::Hertz, NormalModel::Jkr] {
         for integrator in [Integrator::Euler, Integrator::AdamsBashforth, Integrator::VelocityVerlet] {
             let what = format!("{normal:?} {integrator:?}");
             let (cfg, init) = setup(normal, integrator);

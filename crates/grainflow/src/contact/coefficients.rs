@@ -3,112 +3,10 @@
 use super::ContactLaw;
 #[cfg(test)]
 use super::NormalModel;
-use super::submodel::{ElasticPair, NormalSubModel, per_unit_size};
+use super::normal::{NormalSubModel, per_unit_size};
+use super::params::{ContactCoeffs, ContactParams, ElasticPair};
 use crate::error::EngineError;
 use crate::material::{Phase, WallMaterial};
-
-/// Contact inputs for one phase pair or one phase–wall-material pair.
-///
-/// Which fields are used depends on the normal model: LSD uses `kn`, `kt_fac`, `etat_fac`
-/// and `en`; Hertz uses `en`, `et` and the phases' E and ν; JKR uses `en`, `etat_fac`,
-/// `surface_energy` and the phases' E and ν. All use `mu` and `mu_roll`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactParams {
-    /// Normal spring stiffness k_n, N/m (LSD: MFIX `KN` / `KN_W`).
-    pub kn: Option<f64>,
-    /// Tangential to normal stiffness ratio κ, in [0, 1] (LSD: `KT_FAC` / `KT_W_FAC`, default 2/7).
-    pub kt_fac: f64,
-    /// Tangential to normal damping ratio, in [0, 1] (LSD: `DES_ETAT_FAC` / `DES_ETAT_W_FAC`,
-    /// default 1/2).
-    pub etat_fac: f64,
-    /// Normal coefficient of restitution e_n, in (0, 1] (`DES_EN_INPUT` / `DES_EN_WALL_INPUT`).
-    pub en: f64,
-    /// Tangential coefficient of restitution e_t, in (0, 1] (Hertz: `DES_ET_INPUT` /
-    /// `DES_ET_WALL_INPUT`).
-    pub et: Option<f64>,
-    /// Coulomb friction coefficient μ ≥ 0 (`MEW` / `MEW_W`).
-    pub mu: f64,
-    /// Rolling friction μ_r ≥ 0, m (`MEW_R` / `MEW_RW`): torque −μ_r·|F_n,elastic|·ω̂.
-    pub mu_roll: f64,
-    /// Normal damping per unit effective mass γ_n, 1/s (damping `MassVelocity` only).
-    pub gamma_n: Option<f64>,
-    /// Tangential damping per unit effective mass γ_t, 1/s (damping `MassVelocity` only;
-    /// default γ_n/2, as LAMMPS).
-    pub gamma_t: Option<f64>,
-    /// Hertz only: K_n (N/m^1.5) given directly instead of (4/3)E*√R* from E and ν.
-    pub hertz_kn: Option<f64>,
-    /// Hertz only: K_t (N/m^1.5) given directly instead of 8G*√R*.
-    pub hertz_kt: Option<f64>,
-    /// JKR only: the surface energy γ, J/m² (LAMMPS's: the work of adhesion is 2γ).
-    pub surface_energy: Option<f64>,
-}
-
-impl Default for ContactParams {
-    /// MFIX's defaults; `kn`, `et` unset, e_n = 1, μ = 0.
-    fn default() -> Self {
-        ContactParams {
-            kn: None,
-            kt_fac: 2.0 / 7.0,
-            etat_fac: 0.5,
-            en: 1.0,
-            et: None,
-            mu: 0.0,
-            mu_roll: 0.0,
-            gamma_n: None,
-            gamma_t: None,
-            hertz_kn: None,
-            hertz_kt: None,
-            surface_energy: None,
-        }
-    }
-}
-
-/// Derived coefficients of one contact type, as used in the force loop.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ContactCoeffs {
-    /// Normal stiffness: k_n (N/m, LSD), K_n = (4/3)·E*·√R* (N/m^1.5, Hertz) or (4/3)·E*
-    /// (Pa, JKR: times the contact radius a).
-    pub kn: f64,
-    /// Tangential stiffness: k_t = κ·k_n (N/m, LSD), K_t = 8·G*·√R* (N/m^1.5, Hertz) or 8·G*
-    /// (Pa, JKR: times a).
-    pub kt: f64,
-    /// Normal damping η_n (kg/s, or kg/(s·m^¼) for Hertz). For damping that depends on the
-    /// particles' masses it is per unit mass (`MassVelocity`: γ_n) or per √mass (`Tsuji`:
-    /// α√K_n), and the force loop multiplies by m_eff or √m_eff of the contact.
-    pub eta_n: f64,
-    /// Tangential damping η_t, scaled like `eta_n`.
-    pub eta_t: f64,
-    /// Coulomb friction coefficient.
-    pub mu: f64,
-    /// Rolling friction length, m.
-    pub mu_roll: f64,
-    /// Effective mass used for the damping, kg.
-    pub m_eff: f64,
-    /// R*, m: of the phases' radii (JKR; 0 otherwise), or of the contact's own
-    /// ([`sized`](super::submodel::sized)).
-    pub r_star: f64,
-    /// Surface energy γ, J/m² (JKR; 0 otherwise).
-    pub surface_energy: f64,
-    /// The pull-off distance δ_c, m: a formed contact holds down to overlap −δ_c (JKR; 0
-    /// otherwise).
-    pub pull_off: f64,
-}
-
-/// η(K, M, e) = 2·√(K·M)·|ln e|/√(π² + (ln e)²) for 0 < e ≤ 1, and 2·√(K·M) for e = 0.
-pub fn damping_coefficient(k: f64, m: f64, e: f64) -> f64 {
-    if e <= 0.0 {
-        return 2.0 * (k * m).sqrt();
-    }
-    let l = e.ln();
-    2.0 * (k * m).sqrt() * l.abs() / (std::f64::consts::PI.powi(2) + l * l).sqrt()
-}
-
-/// LAMMPS's fit of Tsuji's damping ratio to the restitution coefficient:
-/// α = 1.2728 − 4.2783e + 11.087e² − 22.348e³ + 27.467e⁴ − 18.022e⁵ + 4.8218e⁶.
-pub fn tsuji_alpha(e: f64) -> f64 {
-    1.2728 - 4.2783 * e + 11.087 * e.powi(2) - 22.348 * e.powi(3) + 27.467 * e.powi(4) - 18.022 * e.powi(5)
-        + 4.8218 * e.powi(6)
-}
 
 /// Coefficients for every phase pair and every phase–wall-material pair.
 #[derive(Debug, Clone, PartialEq)]
@@ -122,7 +20,7 @@ pub struct CoeffTable {
     /// Some pair or wall contact has rolling friction (μ_r ≠ 0).
     rolling: bool,
     /// The coefficients are per unit size ([`CoeffTable::per_unit_size`]): each contact's are
-    /// [`sized`](super::submodel::sized) by its own R* and m_eff.
+    /// [`sized`](super::normal::sized) by its own R* and m_eff.
     sized: bool,
     /// The largest pull-off distance a contact can have, m.
     reach: f64,
@@ -264,8 +162,8 @@ impl CoeffTable {
 
     /// The table per unit size, for [`ContactSizes::Own`](super::ContactSizes::Own): this
     /// table's coefficients (derived at the `phases`' reference diameters and masses) divided
-    /// by their [`size_scales`](super::submodel::NormalSubModel::size_scales) there, so that
-    /// [`sized`](super::submodel::sized) gives each contact its own. `r_max` is the largest
+    /// by their [`size_scales`](super::normal::NormalSubModel::size_scales) there, so that
+    /// [`sized`](super::normal::sized) gives each contact its own. `r_max` is the largest
     /// particle radius of the run, which bounds the pull-off distance ([`reach`](Self::reach)).
     pub fn per_unit_size(&self, law: &ContactLaw, phases: &[Phase], r_max: f64) -> CoeffTable {
         crate::with_normal_submodel!(law.normal, |N| self.per_unit_size_for::<N>(law, phases, r_max))
@@ -392,7 +290,7 @@ mod tests {
     /// evaluated in another order: equal to a few roundings (1e-14).
     #[test]
     fn coefficients_per_unit_size_formed_for_a_size_are_those_derived_at_it() {
-        use crate::contact::submodel::{self, NormalSubModel};
+        use crate::contact::normal::{NormalSubModel, sized};
         use crate::contact::{NormalDamping as D, NormalModel as M};
         let elastic = |name: &str, d: f64, rho: f64| Phase {
             name: name.into(),
@@ -440,7 +338,7 @@ mod tests {
                 (unit.wall(1, 0), direct.wall(1, 0), rb, mb),
             ] {
                 let (s, pull_off) = crate::with_normal_submodel!(normal, |N| (
-                    submodel::sized::<N>(u, damping, r_star, m_eff),
+                    sized::<N>(u, damping, r_star, m_eff),
                     u.pull_off * <N as NormalSubModel>::pull_off_scale(r_star)
                 ));
                 let what = format!("{normal:?} {damping:?}");

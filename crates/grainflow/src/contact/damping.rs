@@ -9,18 +9,14 @@
 //! Scaling: with δ* = (M v²/K)^(1/(p+1)) and τ = δ*/v, both laws become x″ = −x^p − α x^q x′,
 //! x(0) = 0, x′(0) = 1 (p = 1, q = 0 linear; p = 3/2, q = 1/4 Hertz), with α = η/√(MK): the
 //! restitution depends on α alone, not on the impact speed. α(e) is found by bisection on a
-//! fourth-order Runge–Kutta integration of that equation.
+//! fourth-order Runge–Kutta integration of that equation. The exponents (p, q) are the normal
+//! model's own (`NormalSubModel::FORCE_EXPONENT`, `DAMPING_EXPONENT`; [`NormalModel::exponents`]).
+//!
+//! [`NormalModel::exponents`]: super::NormalModel::exponents
 
-use super::NormalModel;
-
-/// Restitution −x′(end) of the dimensionless impact with damping ratio `alpha`; `clip`
+/// Restitution −x′(end) of the dimensionless impact x″ = −x^`p` − `alpha`·x^`q`·x′; `clip`
 /// ends the contact when the normal force would turn attractive (it then flies off freely).
-pub fn restitution(model: NormalModel, alpha: f64, clip: bool) -> f64 {
-    let (p, q) = match model {
-        NormalModel::LinearSpringDashpot => (1.0, 0.0),
-        // JKR takes Tsuji's damping only; its elastic part is Hertz's far from the pull-off.
-        NormalModel::Hertz | NormalModel::Jkr => (1.5, 0.25),
-    };
+pub fn restitution(p: f64, q: f64, alpha: f64, clip: bool) -> f64 {
     // Repulsive force (positive pushes the bodies apart).
     let force = |x: f64, v: f64| {
         let x = x.max(0.0);
@@ -54,40 +50,41 @@ pub fn restitution(model: NormalModel, alpha: f64, clip: bool) -> f64 {
     0.0
 }
 
-/// The damping ratio α = η/√(MK) that gives restitution `e` in (0, 1] exactly.
+/// The damping ratio α = η/√(MK) that gives restitution `e` in (0, 1] exactly, for a force
+/// δ^`p` and a dashpot δ^`q`·v.
 ///
-/// α depends only on (law, e, clipping), and solving for it takes some 60 integrations, so
+/// α depends only on (p, q, e, clipping), and solving for it takes some 60 integrations, so
 /// solutions are remembered for the life of the process.
-pub fn exact_damping_ratio(model: NormalModel, e: f64, clip: bool) -> f64 {
+pub fn exact_damping_ratio(p: f64, q: f64, e: f64, clip: bool) -> f64 {
     use std::collections::HashMap;
     use std::sync::{Mutex, OnceLock};
-    /// (Hertz?, bits of e, clipped?) → α.
-    type Solved = HashMap<(bool, u64, bool), f64>;
+    /// (bits of p, q and e, clipped?) → α.
+    type Solved = HashMap<(u64, u64, u64, bool), f64>;
     static SOLVED: OnceLock<Mutex<Solved>> = OnceLock::new();
-    let key = (model != NormalModel::LinearSpringDashpot, e.to_bits(), clip);
+    let key = (p.to_bits(), q.to_bits(), e.to_bits(), clip);
     let memo = SOLVED.get_or_init(|| Mutex::new(HashMap::new()));
     if let Some(alpha) = memo.lock().ok().and_then(|m| m.get(&key).copied()) {
         return alpha;
     }
-    let alpha = solve_damping_ratio(model, e, clip);
+    let alpha = solve_damping_ratio(p, q, e, clip);
     if let Ok(mut m) = memo.lock() {
         m.insert(key, alpha);
     }
     alpha
 }
 
-fn solve_damping_ratio(model: NormalModel, e: f64, clip: bool) -> f64 {
+fn solve_damping_ratio(p: f64, q: f64, e: f64, clip: bool) -> f64 {
     if e >= 1.0 {
         return 0.0;
     }
     let mut hi = 1.0;
-    while restitution(model, hi, clip) > e && hi < 1e6 {
+    while restitution(p, q, hi, clip) > e && hi < 1e6 {
         hi *= 2.0;
     }
     let mut lo = 0.0;
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
-        if restitution(model, mid, clip) > e {
+        if restitution(p, q, mid, clip) > e {
             lo = mid;
         } else {
             hi = mid;
@@ -102,7 +99,7 @@ fn solve_damping_ratio(model: NormalModel, e: f64, clip: bool) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::damping_coefficient;
+    use crate::contact::{NormalModel, damping_coefficient};
 
     #[test]
     fn linear_unclipped_matches_the_closed_form() {
@@ -111,7 +108,8 @@ mod tests {
         // relative error far below 1e-6.
         for e in [0.1, 0.3, 0.5, 0.7, 0.9, 0.99] {
             let closed = damping_coefficient(1.0, 1.0, e);
-            let exact = exact_damping_ratio(NormalModel::LinearSpringDashpot, e, false);
+            let (p, q) = NormalModel::LinearSpringDashpot.exponents();
+            let exact = exact_damping_ratio(p, q, e, false);
             assert!((exact - closed).abs() <= 1e-6 * closed, "e = {e}: {exact} vs {closed}");
         }
     }
@@ -119,12 +117,13 @@ mod tests {
     #[test]
     fn undamped_impacts_are_elastic_and_damping_lowers_restitution() {
         for m in [NormalModel::LinearSpringDashpot, NormalModel::Hertz] {
+            let (p, q) = m.exponents();
             for clip in [false, true] {
-                assert!((restitution(m, 0.0, clip) - 1.0).abs() < 1e-9);
-                let (a, b) = (restitution(m, 0.1, clip), restitution(m, 0.5, clip));
+                assert!((restitution(p, q, 0.0, clip) - 1.0).abs() < 1e-9);
+                let (a, b) = (restitution(p, q, 0.1, clip), restitution(p, q, 0.5, clip));
                 assert!(1.0 > a && a > b && b > 0.0, "{m:?} clip {clip}: {a} {b}");
-                let alpha = exact_damping_ratio(m, 0.5, clip);
-                assert!((restitution(m, alpha, clip) - 0.5).abs() < 1e-9);
+                let alpha = exact_damping_ratio(p, q, 0.5, clip);
+                assert!((restitution(p, q, alpha, clip) - 0.5).abs() < 1e-9);
             }
         }
     }
@@ -133,7 +132,8 @@ mod tests {
     fn clipping_the_attraction_raises_restitution() {
         // The attractive tail decelerates the separating body; without it, it leaves faster.
         for m in [NormalModel::LinearSpringDashpot, NormalModel::Hertz] {
-            assert!(restitution(m, 0.5, true) > restitution(m, 0.5, false));
+            let (p, q) = m.exponents();
+            assert!(restitution(p, q, 0.5, true) > restitution(p, q, 0.5, false));
         }
     }
 }

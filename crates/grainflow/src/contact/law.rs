@@ -1,13 +1,15 @@
 //! Contact forces and torques (reference: MFIX-DEM model §4).
 //!
 //! One function, [`contact_force`], serves particle–particle and particle–wall contacts; it is
-//! generic over the normal and the tangential sub-model types ([`super::submodel`]) so that
+//! generic over the normal and the tangential sub-model types ([`super::normal`], [`super::tangential`]) so that
 //! the force loop is monomorphised once per law. It forms what every law shares (the normal
 //! and tangential velocities, the history in the tangent plane, the Coulomb cap's choice) and
 //! asks the sub-models for the rest.
 
 use super::geometry::ContactGeometry;
-use super::submodel::{NormalSubModel, TangentialSubModel, mark_formed};
+use super::normal::NormalSubModel;
+use super::submodel::mark_formed;
+use super::tangential::TangentialSubModel;
 use super::{ContactCoeffs, ContactLaw, CoulombCap, HistoryFrame, NormalModel};
 use crate::math::{Vec3, pick};
 

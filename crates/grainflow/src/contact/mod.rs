@@ -1,11 +1,12 @@
 //! Contact detection and contact laws.
 //!
 //! - [`geometry`]: overlap, normal and lever arms of a particle pair or a particle and a wall.
+//! - [`params`]: the plain types of a contact's inputs and derived coefficients.
 //! - [`coefficients`]: stiffness and damping derived from the inputs, per phase pair and per
 //!   phase–wall-material pair (MFIX's formulas).
-//! - [`submodel`]: the sub-models, one type per category (normal: linear, Hertz, JKR;
-//!   tangential: MFIX's total displacement, incremental Mindlin), each with its parameters,
-//!   touch condition, critical force and history size.
+//! - [`normal`], [`tangential`]: the sub-models, one file each (normal: linear, Hertz, JKR;
+//!   tangential: MFIX's total displacement, incremental Mindlin), each with every fact the
+//!   engine needs of it, and each category's registry; [`submodel`]: what they share.
 //! - [`law`]: normal force, tangential spring with the Coulomb cap, torques, generic over the
 //!   sub-models.
 //! - `pair`: the law applied to one pair or wall contact as the force stage gathers it, and the
@@ -20,49 +21,16 @@ pub mod damping;
 pub mod geometry;
 pub mod law;
 pub mod limits;
+pub mod normal;
 pub(crate) mod pair;
+pub mod params;
 pub mod submodel;
+pub mod tangential;
 
-pub use coefficients::{CoeffTable, ContactCoeffs, ContactParams, damping_coefficient, tsuji_alpha};
-
-/// The normal force law.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NormalModel {
-    /// Linear spring–dashpot (MFIX `DES_COLL_MODEL = 'LSD'`, the default):
-    /// F_n = −(k_n·δ + η_n·v_n)·n.
-    LinearSpringDashpot,
-    /// Hertzian (MFIX `DES_COLL_MODEL = 'HERTZIAN'`):
-    /// F_n = −(K_n·δ^1.5 + η_n·δ^0.25·v_n)·n.
-    Hertz,
-    /// JKR cohesion, as LAMMPS `pair granular … jkr … damping tsuji`: Hertz-like elasticity
-    /// on the JKR contact radius a(δ) with adhesion, F_n = −((4/3)E*a³/R* − 4√(πγE*)·a^1.5 +
-    /// η_n·√a·v_n)·n; a contact formed at touch holds until the pull-off distance
-    /// ([`submodel::Jkr`]).
-    Jkr,
-}
-
-impl NormalModel {
-    /// True if the model derives its stiffness from Young's moduli and Poisson's ratios.
-    pub fn elastic(&self) -> bool {
-        matches!(self, NormalModel::Hertz | NormalModel::Jkr)
-    }
-
-    /// True if a formed contact holds to a negative overlap (the model's pull-off distance).
-    pub fn reaches(&self) -> bool {
-        crate::with_normal_submodel!(self, |N| <N as submodel::NormalSubModel>::REACHES)
-    }
-}
-
-/// How the tangential spring force is formed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TangentialModel {
-    /// MFIX 21.3: the stored **total** tangential displacement s times the current stiffness
-    /// (k_t for LSD, K_t·√δ for Hertz). Not conservative for Hertz at small impact angles.
-    MfixTotal,
-    /// Incremental Mindlin: the stored quantity is the elastic tangential force, incremented by
-    /// −k(δ)·v_t·Δt each step and capped by Coulomb. Identical to `MfixTotal` for LSD.
-    IncrementalMindlin,
-}
+pub use coefficients::CoeffTable;
+pub use normal::NormalModel;
+pub use params::{ContactCoeffs, ContactParams, damping_coefficient, tsuji_alpha};
+pub use tangential::TangentialModel;
 
 /// What happens to the stored tangential history when the contact frame turns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -179,12 +147,8 @@ impl ContactLaw {
         }
     }
 
-    /// A short name for messages, e.g. "hertz".
+    /// A short name for messages, e.g. "hertz": the normal model's case-file name.
     pub fn normal_name(&self) -> &'static str {
-        match self.normal {
-            NormalModel::LinearSpringDashpot => "lsd",
-            NormalModel::Hertz => "hertz",
-            NormalModel::Jkr => "jkr",
-        }
+        self.normal.name()
     }
 }

@@ -13,7 +13,8 @@ use crate::contact::geometry::{
     relative_velocity_of_centres, wall_contact,
 };
 use crate::contact::law::{ContactForce, contact_force_for, parts, rolling_torque};
-use crate::contact::submodel::{NormalSubModel, TangentialSubModel, sized};
+use crate::contact::normal::{NormalSubModel, sized};
+use crate::contact::tangential::TangentialSubModel;
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm, NormalDamping, NormalModel};
 use crate::math::Vec3;
 use crate::wall::Wall;

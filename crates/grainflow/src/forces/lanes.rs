@@ -880,14 +880,18 @@ mod tests {
         assert_eq!(cases, 3 * 3 * 4 * 3 * 8);
     }
 
+    /// Every pair of the registries' models (`normal_models!`, `tangential_models!`).
     #[test]
     fn batched_loads_equal_the_scalar_law_on_every_instruction_set() {
-        use crate::contact::submodel::{Hertz, IncrementalMindlin, Jkr, LinearSpringDashpot, MfixTotal};
-        batches_equal_lane_by_lane::<LinearSpringDashpot, MfixTotal>();
-        batches_equal_lane_by_lane::<LinearSpringDashpot, IncrementalMindlin>();
-        batches_equal_lane_by_lane::<Hertz, MfixTotal>();
-        batches_equal_lane_by_lane::<Hertz, IncrementalMindlin>();
-        batches_equal_lane_by_lane::<Jkr, MfixTotal>();
-        batches_equal_lane_by_lane::<Jkr, IncrementalMindlin>();
+        use crate::contact::{NormalModel, TangentialModel};
+        let mut laws = 0;
+        for &normal in NormalModel::ALL {
+            for &tangential in TangentialModel::ALL {
+                let law = ContactLaw { tangential, ..ContactLaw::mfix(normal) };
+                crate::with_submodels!(law, |N, T| batches_equal_lane_by_lane::<N, T>());
+                laws += 1;
+            }
+        }
+        assert_eq!(laws, NormalModel::ALL.len() * TangentialModel::ALL.len());
     }
 }

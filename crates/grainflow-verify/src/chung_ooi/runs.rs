@@ -1,102 +1,16 @@
-//! Chung & Ooi's eight benchmark tests of particle-scale DEM contact mechanics
-//! (Y. C. Chung and J. Y. Ooi, Granular Matter 13 (2011) 643–656), with the Hertz normal law and
-//! the incremental Mindlin tangential spring (`tangential = "incremental_mindlin"`), as Chung &
-//! Ooi use them.
-//!
-//! | test | set-up | exact reference |
-//! |---|---|---|
-//! | 1 | two identical spheres head-on, elastic (glass, limestone) | Hertz: δ_max, F_max, t_c |
-//! | 2 | sphere on a rigid plane, elastic (Al and Mg alloys) | Hertz: δ_max, F_max, t_c |
-//! | 3 | sphere on a rigid plane, e = 0.2 … 1 (Al oxide, cast iron) | measured e = input e |
-//! | 4 | oblique impact at 3.9 m/s, θ = 5 … 85° (Kharaz's Al oxide on Al alloy) | gross sliding |
-//! | 5 | v_n = 5 m/s, v_t = 0.1 … 21 m/s (steel, polyethylene) | gross sliding: Ψ₂ = Ψ₁ − 7 |
-//! | 6 | spinning sphere onto a rigid plane (Al alloy, nylon) | gross sliding: β = x − 1 |
-//! | 7 | counter-spinning spheres head-on (Al alloy, copper) | nothing tangential happens |
-//! | 8 | spinning sphere onto a 5× larger, 1000× denser sphere | gross sliding: β = x − 1 |
-//!
-//! Each test is a case file in `cases/chung_ooi/` (the base run, one particle or pair per
-//! material); sweeps replace its particles programmatically. Every run uses velocity Verlet
-//! with an explicit Δt of about 1/2000 of the shortest contact, the lever arm R
-//! (`lever_arm = "radius"`: the closed forms assume it), a rigid plane as a wall material with
-//! E = 10³⁰ Pa (so E* = E/(1 − ν²) to 10⁻¹⁹), and `damping = "exact_restitution"` so that the
-//! measured restitution equals the input one.
-//!
-//! ## Files (`DIR/chung_ooi/`)
-//!
-//! - `test1.csv`, `test2.csv`: `material,f_max_sim,f_max_analytic,delta_max_sim,
-//!   delta_max_analytic,contact_time_sim,contact_time_analytic` (N, m, s); figures `test1`,
-//!   `test2` (force against overlap and against time).
-//! - `test3.csv`: `material,clip_attraction,en_input,en_sim`, e = 0.2 … 1.0, both clipping
-//!   choices; `test3_mfix_damping.csv`: `material,en_input,en_sim` with MFIX's formula.
-//! - `test4.csv`: per angle θ (deg) the measured e_n, e_t, ω′ (rad/s), rebound angle and
-//!   contact-point rebound angle (deg), each beside its gross-sliding closed form, and whether θ
-//!   is above the gross-sliding threshold.
-//! - `test5.csv`: `material,psi1,psi2_sim,psi2_sliding,omega_norm_sim`, Ψ₁ = v_t/(μv_n),
-//!   Ψ₂ = u′/(μv_n), omega_norm = Rω′/(μv_n) with ω′ the spin in the rolling sense of the
-//!   incident slip (+5 in gross sliding).
-//! - `test6.csv`, `test8.csv` (e = 0.5) and `test6_elastic.csv`, `test8_elastic.csv` (e = 1):
-//!   `material,x,beta_sim,beta_sliding`, β = −u′/u₀, beta_sliding = x − 1.
-//! - `test7.csv` (lever R) and `test7_mfix_lever.csv`: `material,omega0,omega_final,vt_final`,
-//!   sphere 1's spin about z (rad/s) and tangential velocity (m/s) after impact.
-//! - `summary.md`: the runs (Δt, steps, contact time / Δt) and every check.
-//!
-//! ## Closed forms
-//!
-//! E* = [(1 − ν₁²)/E₁ + (1 − ν₂²)/E₂]⁻¹, G* = [(2 − ν₁)/G₁ + (2 − ν₂)/G₂]⁻¹, R*, m* the usual
-//! effective radius and mass, v the normal approach speed.
-//! - Elastic normal impact (tests 1, 2): δ_max = (15m*v²/(16E*√R*))^(2/5),
-//!   F_max = (4/3)E*√R*·δ_max^1.5, t_c = c·δ_max/v with c = (4/5)·B(2/5, 1/2) = 2.943275
-//!   (Chung & Ooi print 2.94328).
-//! - Gross sliding (the contact slides from first touch to separation): the tangential impulse
-//!   is μ times the normal one, (1 + e)m*v_n. For a sphere of radius R (I = (2/5)mR²) this
-//!   changes the contact-point slip by 3.5μ(1 + e)v_n, hence e_t = 1 − μ(1 + e)/tan θ,
-//!   Rω′ = 2.5μ(1 + e)v_n and tan α = (tan θ − μ(1 + e))/e (test 4); Ψ₂ = Ψ₁ − 7 and
-//!   Rω′/(μv_n) = 5 (test 5, e = 1); β = x − 1 (tests 6 and 8; for two spheres the slip changes
-//!   by 3.5·J_t/m*, so the same holds for any mass ratio when u′ is the relative slip).
-//! - With lever R, angular momentum about the contact point gives, whatever sticks or slides,
-//!   Δv_t + (2/5)·R·ΔΩ = 0 (Ω the spin in the rolling sense of t̂): an identity to rounding.
-//! - Coulomb: |F_t| ≤ μF_n at every force evaluation (F_n ≥ 0 when clipped) bounds the friction
-//!   impulse by μJ_n, so β ≤ x′ − 1 whatever sticks or slides, x′ = 3.5μJ_n/(m*u₀) from the
-//!   measured normal impulse: an inequality to rounding, an equality in gross sliding.
-//!
-//! ## When does the contact slide throughout?
-//!
-//! For an elastic contact whose tangential to normal tangent-stiffness ratio is constant,
-//! κ = K_t/(1.5K_n) = 4G*/E* (= 2(1 − ν)/(2 − ν) on a rigid plane or between equal materials),
-//! sliding continues as long as κ·u > μ·δ̇ (the spring would overshoot the moving Coulomb
-//! limit). With u falling linearly in the normal impulse this holds throughout iff
-//! u₀/v_n ≥ μ[3.5(1 + e) − e/κ]: Ψ₁ ≥ 7 − 1/κ in test 5, x ≤ 7/(7 − 1/κ) for tests 6 and 8 with
-//! e = 1, tan θ ≥ μ[3.5(1 + e) − e/κ] (27.8°) in test 4. Beyond these thresholds the result
-//! depends on the tangential model (stick, micro-slip): it is plotted and reported, not
-//! asserted.
-//!
-//! With e < 1 the dashpot of the Hertz law (F = K_nδ^1.5 + ηδ^¼δ̇, Tsuji et al. 1992) makes the
-//! normal force — and the Coulomb limit — rise as δ^¼ at first touch, faster than the Mindlin
-//! spring force (∝ δ^1.5): the contact sticks for a short while before it slides, and the
-//! friction impulse falls short of μJ_n. In units of δ* = (m*v²/K_n)^(2/5) and δ*/v, with
-//! α = η/√(m*K_n) (the engine's damping ratio), the spring force is σ·τ^1.5 and the limit
-//! τ^1.5 + ατ^¼ (times μF₀), σ = κu₀/(μv_n); the stick ends at τ_s^1.25 = α/(σ − 1) and the
-//! friction impulse lost is 0.4μα²m*v_n/(σ − 1). For tests 6 and 8 this lowers β by
-//! Δβ = 0.4α²x/((σ − 1)(1 + e)), σ = 3.5κ(1 + e)/x: 0.03 at x = 1 for e = 0.5 (α = 0.57), 4·10⁻⁶
-//! in e_t for test 4 (e = 0.98, α = 0.014). So the specified tests 6 and 8 (e = 0.5) are
-//! checked against β = x − 1 with this onset correction, and the sweeps are repeated with
-//! e = 1, where β = x − 1 holds exactly up to the threshold. The normal force is clipped at zero
-//! (`clip_attraction = true`) in tests 4–8: otherwise friction also acts on the attractive end
-//! of a damped contact and the friction impulse exceeds μJ_n (β above x − 1 by 0.007 at
-//! x = 0.1).
-//!
-//! Test 8 is an impact between two spheres: while the small one slides across the large one
-//! the line of centres turns (by up to 7·10⁻⁵ rad here). Along the initial normal part of the
-//! normal impulse would count as tangential (3·10⁻⁵ in β), so the results are measured along the
-//! direction of the normal impulse, n̄ ∝ ∫F_n n dt, where the tangential balance is exact to
-//! O(φ²). The turn also changes the normal impulse itself by O(v_tφ/v_n) (restitution 0.99994
-//! instead of 1 for elastic nylon), so the elastic sliding branch is checked with x′ from the
-//! measured normal impulse, and its departure from the nominal x is reported.
+//! The runs of tests 1 to 8: the shipped case of each, swept where the test asks, each impact
+//! measured from the initial and final states, and the checks, tables and figures of each test.
 
+use super::closed_forms::*;
+use super::figures::*;
+use super::{
+    CASE_FILES, CONTACT_TIME_CONSTANT_PRINTED, K_INERTIA, PRINTED, SPIN_SWEEP_POINTS, TEST4_ANGLES_DEG,
+    TEST4_GROSS_SLIDING_FROM_DEG, TEST7_SPINS,
+};
 use crate::check::Check;
 use crate::error::VerifyError;
-use crate::plot::{self, Color, Figure, LineStyle, MarkerShape, Panel, Series};
-use crate::suite::{CaseOutcome, SuiteOptions, case_dir, shipped_case, summary_markdown, write_file};
+use crate::plot::Figure;
+use crate::report::shipped_case;
 use grainflow::contact::coefficients::upper_triangle_index;
 use grainflow::state::ParticleInit;
 use grainflow::{LeverArm, NormalDamping, Particles, Simulation, Vec3};
@@ -104,146 +18,8 @@ use grainflow_case::Case;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
-
-/// The shipped case files, tests 1 to 8.
-pub const CASE_FILES: [(&str, &str); 8] = [
-    ("chung_ooi/test1.toml", include_str!("../cases/chung_ooi/test1.toml")),
-    ("chung_ooi/test2.toml", include_str!("../cases/chung_ooi/test2.toml")),
-    ("chung_ooi/test3.toml", include_str!("../cases/chung_ooi/test3.toml")),
-    ("chung_ooi/test4.toml", include_str!("../cases/chung_ooi/test4.toml")),
-    ("chung_ooi/test5.toml", include_str!("../cases/chung_ooi/test5.toml")),
-    ("chung_ooi/test6.toml", include_str!("../cases/chung_ooi/test6.toml")),
-    ("chung_ooi/test7.toml", include_str!("../cases/chung_ooi/test7.toml")),
-    ("chung_ooi/test8.toml", include_str!("../cases/chung_ooi/test8.toml")),
-];
-
-/// I/(mR²) of a solid sphere.
-pub const K_INERTIA: f64 = 0.4;
-/// The contact-time constant as Chung & Ooi print it (t_c = 2.94328·δ_max/v).
-pub const CONTACT_TIME_CONSTANT_PRINTED: f64 = 2.94328;
-/// Impact angles of test 4, degrees.
-pub const TEST4_ANGLES_DEG: [f64; 17] =
-    [5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0, 55.0, 60.0, 65.0, 70.0, 75.0, 80.0, 85.0];
-/// Test 4 asserts the gross-sliding closed forms from this angle on: the first swept angle
-/// above the elastic threshold atan(μ[3.5(1 + e) − e/κ]) = 27.8°.
-pub const TEST4_GROSS_SLIDING_FROM_DEG: f64 = 30.0;
-/// Spins of test 7, rad/s.
-pub const TEST7_SPINS: [f64; 7] = [0.175, 0.5, 1.0, 2.0, 5.0, 10.0, 21.0];
-/// Number of spins in the sweeps of tests 6 and 8 (log-spaced from 0.175 to 21 rad/s).
-pub const SPIN_SWEEP_POINTS: usize = 41;
-
-/// Values printed by Chung & Ooi (2011), tests 1 and 2 (also in docs/verification.md): material,
-/// F_max (N), δ_max (µm), t_c (µs), and half a unit of the last printed digit of each.
-const PRINTED: [(&str, [f64; 3], [f64; 3]); 4] = [
-    ("glass", [10_697.0, 274.11, 40.34], [0.5, 0.005, 0.005]),
-    ("limestone", [7_108.0, 368.30, 54.20], [0.5, 0.005, 0.005]),
-    ("al_alloy", [11_370.0, 49.717, 731.7], [0.5, 0.0005, 0.05]),
-    ("mg_alloy", [7_233.0, 52.123, 767.1], [0.5, 0.0005, 0.05]),
-];
-
-// ---------------------------------------------------------------------------------------------
-// Closed forms
-// ---------------------------------------------------------------------------------------------
-
-/// E* = [(1 − ν₁²)/E₁ + (1 − ν₂²)/E₂]⁻¹, Pa.
-pub fn effective_modulus(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
-    1.0 / ((1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2)
-}
-
-/// G* = [(2 − ν₁)/G₁ + (2 − ν₂)/G₂]⁻¹ with G = E/(2(1 + ν)), Pa.
-pub fn effective_shear_modulus(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
-    let (g1, g2) = (e1 / (2.0 * (1.0 + nu1)), e2 / (2.0 * (1.0 + nu2)));
-    1.0 / ((2.0 - nu1) / g1 + (2.0 - nu2) / g2)
-}
-
-/// κ = K_t/(1.5K_n) = 4G*/E*: the ratio of the Mindlin tangential stiffness K_t√δ to the
-/// Hertz normal tangent stiffness 1.5K_n√δ.
-pub fn stiffness_ratio(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
-    4.0 * effective_shear_modulus(e1, nu1, e2, nu2) / effective_modulus(e1, nu1, e2, nu2)
-}
-
-/// c in t_c = c·δ_max/v for an elastic Hertz impact: 2∫₀¹(1 − s^(5/2))^(−½)ds = (4/5)B(2/5, ½)
-/// = 2.9432752. With s = 1 − w² the integrand 2w(1 − (1 − w²)^(5/2))^(−½) is smooth (→ 2/√2.5
-/// at w = 0); Simpson's rule with 2 000 panels gives it to about 1e-13.
-pub fn contact_time_constant() -> f64 {
-    let f = |w: f64| {
-        if w == 0.0 { 2.0 / 2.5f64.sqrt() } else { 2.0 * w / (1.0 - (1.0 - w * w).powf(2.5)).sqrt() }
-    };
-    let n = 2000;
-    let h = 1.0 / n as f64;
-    let mut sum = f(0.0) + f(1.0);
-    for k in 1..n {
-        sum += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
-    }
-    2.0 * sum * h / 3.0
-}
-
-/// The elastic Hertz impact: stiffness, largest overlap, largest force, contact time.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HertzImpact {
-    /// K_n = (4/3)E*√R*, N/m^1.5.
-    pub stiffness: f64,
-    /// δ_max = (15m*v²/(16E*√R*))^(2/5), m.
-    pub overlap_max: f64,
-    /// F_max = K_n·δ_max^1.5, N.
-    pub force_max: f64,
-    /// t_c = 2.943275·δ_max/v, s.
-    pub contact_time: f64,
-}
-
-/// The elastic impact of effective modulus `e_star`, radius `r_star` and mass `m_star` at
-/// normal approach speed `v`.
-pub fn hertz_impact(e_star: f64, r_star: f64, m_star: f64, v: f64) -> HertzImpact {
-    let stiffness = 4.0 / 3.0 * e_star * r_star.sqrt();
-    let overlap_max = (15.0 * m_star * v * v / (16.0 * e_star * r_star.sqrt())).powf(0.4);
-    HertzImpact {
-        stiffness,
-        overlap_max,
-        force_max: stiffness * overlap_max.powf(1.5),
-        contact_time: contact_time_constant() * overlap_max / v,
-    }
-}
-
-/// The overlap history m*δ″ = −K_nδ^1.5, δ(0) = 0, δ′(0) = v, at times k·dt (k = 0..n), by
-/// fourth-order Runge–Kutta with `sub` steps per dt; after separation δ goes on linearly.
-pub fn hertz_overlap_history(stiffness: f64, m_star: f64, v: f64, dt: f64, n: usize, sub: usize) -> Vec<f64> {
-    let acc = |d: f64| -stiffness / m_star * d.max(0.0).powf(1.5);
-    let h = dt / sub as f64;
-    let (mut d, mut u) = (0.0f64, v);
-    let mut out = Vec::with_capacity(n + 1);
-    out.push(d);
-    for _ in 0..n {
-        for _ in 0..sub {
-            let (k1d, k1u) = (u, acc(d));
-            let (k2d, k2u) = (u + 0.5 * h * k1u, acc(d + 0.5 * h * k1d));
-            let (k3d, k3u) = (u + 0.5 * h * k2u, acc(d + 0.5 * h * k2d));
-            let (k4d, k4u) = (u + h * k3u, acc(d + h * k3d));
-            d += h / 6.0 * (k1d + 2.0 * k2d + 2.0 * k3d + k4d);
-            u += h / 6.0 * (k1u + 2.0 * k2u + 2.0 * k3u + k4u);
-        }
-        out.push(d);
-    }
-    out
-}
-
-/// u₀/v_n from which an elastic-law contact slides throughout: μ[3.5(1 + e) − e/κ].
-pub fn gross_sliding_slip_ratio(mu: f64, e: f64, kappa: f64) -> f64 {
-    mu * (3.5 * (1.0 + e) - e / kappa)
-}
-
-/// The loss of β caused by sticking at the onset of a damped contact (module docs):
-/// 0.4α²x/((σ − 1)(1 + e)), σ = 3.5κ(1 + e)/x; `None` if σ ≤ 1 (the contact never reaches the
-/// Coulomb limit during the onset).
-pub fn onset_stick_beta_loss(alpha: f64, kappa: f64, e: f64, x: f64) -> Option<f64> {
-    let sigma = 3.5 * kappa * (1.0 + e) / x;
-    (sigma > 1.0).then(|| 0.4 * alpha * alpha * x / ((sigma - 1.0) * (1.0 + e)))
-}
-
-// ---------------------------------------------------------------------------------------------
-// Runs
-// ---------------------------------------------------------------------------------------------
 
 /// The shipped case of test `n` (1–8).
 pub fn case(n: usize) -> Result<Case, VerifyError> {
@@ -261,14 +37,14 @@ pub fn case(n: usize) -> Result<Case, VerifyError> {
 
 /// A material: the phase's or the wall's elastic constants and density.
 #[derive(Debug, Clone, PartialEq)]
-struct Material {
-    name: String,
-    youngs: f64,
-    poisson: f64,
-    density: f64,
+pub(super) struct Material {
+    pub(super) name: String,
+    pub(super) youngs: f64,
+    pub(super) poisson: f64,
+    pub(super) density: f64,
 }
 
-fn phase_material(case: &Case, phase: u32) -> Material {
+pub(super) fn phase_material(case: &Case, phase: u32) -> Material {
     case.config
         .phases
         .get(phase as usize)
@@ -282,7 +58,7 @@ fn phase_material(case: &Case, phase: u32) -> Material {
 }
 
 /// The material of the case's first wall.
-fn wall_material(case: &Case) -> Material {
+pub(super) fn wall_material(case: &Case) -> Material {
     case.config
         .walls
         .first()
@@ -296,12 +72,12 @@ fn wall_material(case: &Case) -> Material {
         .unwrap_or(Material { name: "?".into(), youngs: f64::NAN, poisson: f64::NAN, density: f64::NAN })
 }
 
-fn sphere_mass(r: f64, rho: f64) -> f64 {
+pub(super) fn sphere_mass(r: f64, rho: f64) -> f64 {
     4.0 / 3.0 * PI * r * r * r * rho
 }
 
 /// The shipped particles as initial data (density from the phase).
-fn templates(case: &Case) -> Vec<ParticleInit> {
+pub(super) fn templates(case: &Case) -> Vec<ParticleInit> {
     let p = &case.particles;
     (0..p.len())
         .map(|i| ParticleInit {
@@ -317,7 +93,7 @@ fn templates(case: &Case) -> Vec<ParticleInit> {
 }
 
 /// Renumbers the particles 1..n.
-fn numbered(mut init: Vec<ParticleInit>) -> Vec<ParticleInit> {
+pub(super) fn numbered(mut init: Vec<ParticleInit>) -> Vec<ParticleInit> {
     for (k, p) in init.iter_mut().enumerate() {
         p.id = k as u32 + 1;
     }
@@ -325,7 +101,7 @@ fn numbered(mut init: Vec<ParticleInit>) -> Vec<ParticleInit> {
 }
 
 /// Runs `case` with `init` to its end, calling `hook` after every step.
-fn simulate(
+pub(super) fn simulate(
     case: &Case,
     init: &[ParticleInit],
     mut hook: impl FnMut(&Simulation),
@@ -338,13 +114,13 @@ fn simulate(
 
 /// What a contact partner is: another particle (slot) or the case's first wall.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Partner {
+pub(super) enum Partner {
     Particle(usize),
     Wall,
 }
 
 /// Unit normal from particle i towards its partner and the overlap, in the state `p`.
-fn contact_geometry(sim: &Simulation, p: &Particles, i: usize, partner: Partner) -> (Vec3, f64) {
+pub(super) fn contact_geometry(sim: &Simulation, p: &Particles, i: usize, partner: Partner) -> (Vec3, f64) {
     match partner {
         Partner::Particle(j) => {
             let d = p.position[j] - p.position[i];
@@ -360,7 +136,7 @@ fn contact_geometry(sim: &Simulation, p: &Particles, i: usize, partner: Partner)
 
 /// Velocity of i's surface relative to the partner's at the contact point of normal `n`, with
 /// lever arms R (as the closed forms): v_i − v_j + (R_iω_i + R_jω_j) × n.
-fn contact_velocity(p: &Particles, i: usize, partner: Partner, n: Vec3) -> Vec3 {
+pub(super) fn contact_velocity(p: &Particles, i: usize, partner: Partner, n: Vec3) -> Vec3 {
     let (vj, lj) = match partner {
         Partner::Particle(j) => (p.velocity[j], p.radius[j] * p.omega[j]),
         Partner::Wall => (Vec3::ZERO, Vec3::ZERO),
@@ -372,31 +148,37 @@ fn contact_velocity(p: &Particles, i: usize, partner: Partner, n: Vec3) -> Vec3 
 /// final states, along a contact normal n (i → partner) and the initial slip direction t̂
 /// (or `tangent` when there is no initial slip).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Impact {
+pub(super) struct Impact {
     /// Normal approach speed before, m/s (> 0).
-    vn0: f64,
+    pub(super) vn0: f64,
     /// Normal restitution −v_n′/v_n.
-    en: f64,
+    pub(super) en: f64,
     /// Tangential velocity of i's centre along t̂, before and after, m/s.
-    vt0: f64,
-    vt1: f64,
+    pub(super) vt0: f64,
+    pub(super) vt1: f64,
     /// Spin of i in the rolling sense of t̂ (about t̂ × n), before and after, rad/s.
-    spin0: f64,
-    spin1: f64,
+    pub(super) spin0: f64,
+    pub(super) spin1: f64,
     /// Contact-point slip along t̂ (relative, lever R), before and after, m/s.
-    slip0: f64,
-    slip1: f64,
+    pub(super) slip0: f64,
+    pub(super) slip1: f64,
     /// The bodies have separated by the end of the run.
-    separated: bool,
+    pub(super) separated: bool,
 }
 
-fn impact(sim: &Simulation, initial: &Particles, i: usize, partner: Partner, tangent: Vec3) -> Impact {
+pub(super) fn impact(
+    sim: &Simulation,
+    initial: &Particles,
+    i: usize,
+    partner: Partner,
+    tangent: Vec3,
+) -> Impact {
     let (n, _) = contact_geometry(sim, initial, i, partner);
     impact_along(sim, initial, i, partner, n, tangent)
 }
 
 /// [`impact`] measured along the normal `n` (unit, i → partner) instead of the initial one.
-fn impact_along(
+pub(super) fn impact_along(
     sim: &Simulation,
     initial: &Particles,
     i: usize,
@@ -445,19 +227,19 @@ impl Impact {
 // ---------------------------------------------------------------------------------------------
 
 /// The largest `err` over `items` with its item; a NaN error wins (so that it fails).
-fn worst<T>(items: impl IntoIterator<Item = T>, err: impl Fn(&T) -> f64) -> Option<(f64, T)> {
+pub(super) fn worst<T>(items: impl IntoIterator<Item = T>, err: impl Fn(&T) -> f64) -> Option<(f64, T)> {
     items.into_iter().map(|t| (err(&t), t)).fold(None, |best, (e, t)| match best {
         Some((b, _)) if b.is_nan() || e <= b => best,
         _ => Some((e, t)),
     })
 }
 
-fn rel(a: f64, b: f64) -> f64 {
+pub(super) fn rel(a: f64, b: f64) -> f64 {
     ((a - b) / b).abs()
 }
 
 /// An asserted check over `items`; with no items the check fails (NaN), as it must.
-fn assert_worst<T>(
+pub(super) fn assert_worst<T>(
     name: impl Into<String>,
     tolerance: f64,
     items: impl IntoIterator<Item = T>,
@@ -477,28 +259,28 @@ fn assert_worst<T>(
 
 /// How a test was run, for summary.md.
 #[derive(Debug, Clone)]
-struct RunSummary {
-    test: usize,
-    what: String,
-    runs: usize,
-    dt: f64,
-    steps: u64,
+pub(super) struct RunSummary {
+    pub(super) test: usize,
+    pub(super) what: String,
+    pub(super) runs: usize,
+    pub(super) dt: f64,
+    pub(super) steps: u64,
     /// Shortest elastic contact time / Δt.
-    steps_per_contact: f64,
-    seconds: f64,
+    pub(super) steps_per_contact: f64,
+    pub(super) seconds: f64,
 }
 
 /// What one test produced.
-struct TestOutput {
-    checks: Vec<Check>,
+pub(super) struct TestOutput {
+    pub(super) checks: Vec<Check>,
     /// CSV files: name, text.
-    tables: Vec<(String, String)>,
+    pub(super) tables: Vec<(String, String)>,
     /// Figures: file stem, figure.
-    figures: Vec<(String, Figure)>,
-    runs: RunSummary,
+    pub(super) figures: Vec<(String, Figure)>,
+    pub(super) runs: RunSummary,
 }
 
-fn run_summary(
+pub(super) fn run_summary(
     test: usize,
     what: impl Into<String>,
     runs: usize,
@@ -522,24 +304,24 @@ fn run_summary(
 // ---------------------------------------------------------------------------------------------
 
 /// One material of test 1 or 2: its closed form and what the run gave.
-struct ElasticImpact {
-    material: String,
-    theory: HertzImpact,
-    m_star: f64,
-    v: f64,
+pub(super) struct ElasticImpact {
+    pub(super) material: String,
+    pub(super) theory: HertzImpact,
+    pub(super) m_star: f64,
+    pub(super) v: f64,
     /// (t, δ, F) after every step (and at t = 0).
-    history: Vec<(f64, f64, f64)>,
-    force_max: f64,
-    overlap_max: f64,
-    contact_time: f64,
-    restitution: f64,
+    pub(super) history: Vec<(f64, f64, f64)>,
+    pub(super) force_max: f64,
+    pub(super) overlap_max: f64,
+    pub(super) contact_time: f64,
+    pub(super) restitution: f64,
     /// max |F − K_nδ^1.5|/F_max with the closed-form K_n, over the run.
-    force_overlap_error: f64,
+    pub(super) force_overlap_error: f64,
     /// max |F − K_nδ_ref^1.5|/F_max, δ_ref from an RK4 integration of the Hertz equation.
-    force_time_error: f64,
+    pub(super) force_time_error: f64,
 }
 
-fn elastic_normal_impact(test: usize) -> Result<TestOutput, VerifyError> {
+pub(super) fn elastic_normal_impact(test: usize) -> Result<TestOutput, VerifyError> {
     let start = Instant::now();
     let case = case(test)?;
     let init = templates(&case);
@@ -714,76 +496,6 @@ fn elastic_normal_impact(test: usize) -> Result<TestOutput, VerifyError> {
     })
 }
 
-/// Up to `n` points of a history, evenly spread over the contact.
-fn thin<T: Copy>(points: &[T], n: usize) -> Vec<T> {
-    let step = (points.len() / n.max(1)).max(1);
-    points.iter().copied().step_by(step).collect()
-}
-
-fn elastic_figure(test: usize, results: &[ElasticImpact]) -> Figure {
-    let mut fo = Vec::new();
-    let mut ft = Vec::new();
-    for (k, r) in results.iter().enumerate() {
-        let color = Color::palette(k);
-        let contact: Vec<(f64, f64, f64)> = r.history.iter().copied().filter(|x| x.1 > 0.0).collect();
-        let curve: Vec<(f64, f64)> = (0..=200)
-            .map(|s| {
-                let d = r.theory.overlap_max * s as f64 / 200.0;
-                (d * 1e6, r.theory.stiffness * d.powf(1.5))
-            })
-            .collect();
-        fo.push(Series::line(
-            if k == 0 { "Hertz: (4/3)E*√R*·δ^1.5".to_string() } else { String::new() },
-            curve,
-            LineStyle::Thin,
-            Color::BLACK,
-        ));
-        fo.push(Series::markers(
-            format!("{}: grainflow", r.material),
-            thin(&contact, 40).iter().map(|x| (x.1 * 1e6, x.2)).collect(),
-            if k == 0 { MarkerShape::Circle } else { MarkerShape::Triangle },
-            color,
-        ));
-        let dt = r.history.get(1).map_or(0.0, |x| x.0);
-        let n = r.history.len().saturating_sub(1);
-        let reference = hertz_overlap_history(r.theory.stiffness, r.m_star, r.v, dt, n, 8);
-        let ref_curve: Vec<(f64, f64)> = r
-            .history
-            .iter()
-            .zip(&reference)
-            .filter(|(_, d)| **d > 0.0)
-            .map(|(x, d)| (x.0 * 1e6, r.theory.stiffness * d.powf(1.5)))
-            .collect();
-        ft.push(Series::line(
-            if k == 0 { "Hertz, RK4 integration".to_string() } else { String::new() },
-            thin(&ref_curve, 400),
-            LineStyle::Thin,
-            Color::BLACK,
-        ));
-        ft.push(Series::markers(
-            format!("{}: grainflow", r.material),
-            thin(&contact, 40).iter().map(|x| (x.0 * 1e6, x.2)).collect(),
-            if k == 0 { MarkerShape::Circle } else { MarkerShape::Triangle },
-            color,
-        ));
-    }
-    let what = if test == 1 {
-        "two identical spheres (R = 10 mm) head-on at ±10 m/s"
-    } else {
-        "sphere (R = 0.1 m) on a rigid plane at 0.2 m/s"
-    };
-    Figure {
-        title: format!("Chung & Ooi test {test}: {what}"),
-        note: Some("Hertz, e = 1, μ = 0; markers every ~50 steps of Δt ≈ t_c/2000".into()),
-        panels: vec![
-            Panel {
-                series: fo, ..Panel::new("Force against overlap", "overlap δ (µm)", "normal force (N)")
-            },
-            Panel { series: ft, ..Panel::new("Force against time", "time (µs)", "normal force (N)") },
-        ],
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Test 3: restitution
 // ---------------------------------------------------------------------------------------------
@@ -794,18 +506,18 @@ pub fn test3_restitutions() -> Vec<f64> {
 }
 
 /// A test-3 run: its damping, the input e and the measured e per material.
-type Test3Row = (Damping, f64, Vec<(String, f64)>);
+pub(super) type Test3Row = (Damping, f64, Vec<(String, f64)>);
 
 /// Which damping a test-3 run uses.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Damping {
+pub(super) enum Damping {
     /// Exact restitution with or without clipping.
     Exact { clip: bool },
     /// MFIX's formula, no clipping.
     Mfix,
 }
 
-fn test3() -> Result<TestOutput, VerifyError> {
+pub(super) fn test3() -> Result<TestOutput, VerifyError> {
     let start = Instant::now();
     let base = case(3)?;
     let init = templates(&base);
@@ -922,108 +634,19 @@ fn test3() -> Result<TestOutput, VerifyError> {
     })
 }
 
-fn test3_figure(rows: &[Test3Row]) -> Figure {
-    let materials: Vec<String> =
-        rows.first().map(|r| r.2.iter().map(|x| x.0.clone()).collect()).unwrap_or_default();
-    // (input e, measured e) or (input e, 1e4 × error) of damping `d` and material `m`.
-    let points = |d: Damping, m: &str, error: bool| -> Vec<(f64, f64)> {
-        rows.iter()
-            .filter(|r| r.0 == d)
-            .filter_map(|r| {
-                let v = r.2.iter().find(|x| x.0 == m)?.1;
-                Some((r.1, if error { (v - r.1) * 1e4 } else { v }))
-            })
-            .collect()
-    };
-    let mut left =
-        vec![Series::line("e_sim = e_input", vec![(0.15, 0.15), (1.0, 1.0)], LineStyle::Thin, Color::BLACK)];
-    let mut right = Vec::new();
-    let shapes = [MarkerShape::Circle, MarkerShape::Triangle];
-    for (k, m) in materials.iter().enumerate() {
-        let c = Color::palette(k);
-        for (j, clip) in [false, true].into_iter().enumerate() {
-            let label = format!("{m}, exact, clip = {clip}");
-            let color = if clip { Color::palette(k + 2) } else { c };
-            left.push(Series::markers(
-                label.clone(),
-                points(Damping::Exact { clip }, m, false),
-                shapes[j],
-                color,
-            ));
-            right.push(Series::line(
-                label,
-                points(Damping::Exact { clip }, m, true),
-                LineStyle::Solid,
-                color,
-            ));
-        }
-    }
-    // The damping ratio does not depend on the material: one MFIX-formula curve shows both.
-    if let Some(m) = materials.first() {
-        left.push(Series::line(
-            "MFIX's formula η = 2√(KM)|ln e|/√(π² + ln²e)",
-            points(Damping::Mfix, m, false),
-            LineStyle::Dashed,
-            Color::PURPLE,
-        ));
-    }
-    Figure {
-        title: "Chung & Ooi test 3: normal restitution, Hertz law with a δ^¼ dashpot".into(),
-        note: Some("R = 2.5 mm at 3.9 m/s on a rigid plane; damping solved for exact e (both clipping choices) vs MFIX's linear-law formula".into()),
-        panels: vec![
-            Panel {
-                series: left,
-                x_range: Some((0.15, 1.02)),
-                y_range: Some((0.15, 1.02)),
-                ..Panel::new("Measured against input restitution", "input e", "measured e")
-            },
-            Panel {
-                series: right,
-                x_range: Some((0.15, 1.02)),
-                ..Panel::new("Error of the exact damping", "input e", "(e_sim − e_input) × 10⁴")
-            },
-        ],
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Test 4: oblique impact, constant speed, varying angle
 // ---------------------------------------------------------------------------------------------
 
-/// Gross-sliding closed forms of an impact at angle θ (from the normal) with speed V, lever R:
-/// (e_t, spin ω′ in rad/s, rebound angle, contact-point rebound angle), angles in degrees.
-pub fn gross_sliding_oblique(theta_deg: f64, speed: f64, radius: f64, mu: f64, e: f64) -> [f64; 4] {
-    let t = theta_deg.to_radians();
-    let vn = speed * t.cos();
-    [
-        1.0 - mu * (1.0 + e) / t.tan(),
-        2.5 * mu * (1.0 + e) * vn / radius,
-        ((t.tan() - mu * (1.0 + e)) / e).atan().to_degrees(),
-        ((t.tan() - 3.5 * mu * (1.0 + e)) / e).atan().to_degrees(),
-    ]
-}
-
-/// Rigid-body (hard-sphere) theory of the same impact: sticking (e_t = 5/7) below
-/// tan θ = 3.5μ(1 + e), gross sliding above.
-pub fn rigid_body_oblique(theta_deg: f64, speed: f64, radius: f64, mu: f64, e: f64) -> [f64; 4] {
-    let t = theta_deg.to_radians();
-    if t.tan() >= 3.5 * mu * (1.0 + e) {
-        gross_sliding_oblique(theta_deg, speed, radius, mu, e)
-    } else {
-        let vt0 = speed * t.sin();
-        [5.0 / 7.0, 5.0 / 7.0 * vt0 / radius, (5.0 / 7.0 * t.tan() / e).atan().to_degrees(), 0.0]
-    }
-}
-
-struct Oblique {
-    theta: f64,
-    imp: Impact,
+pub(super) struct Oblique {
+    pub(super) theta: f64,
+    pub(super) imp: Impact,
     /// e_t, ω′, rebound angle, contact-point angle.
-    sim: [f64; 4],
-    sliding: [f64; 4],
+    pub(super) sim: [f64; 4],
+    pub(super) sliding: [f64; 4],
 }
 
-fn test4() -> Result<TestOutput, VerifyError> {
+pub(super) fn test4() -> Result<TestOutput, VerifyError> {
     let start = Instant::now();
     let c = case(4)?;
     let t0 = templates(&c).into_iter().next().ok_or_else(|| {
@@ -1177,48 +800,6 @@ fn test4() -> Result<TestOutput, VerifyError> {
     })
 }
 
-fn test4_figure(rows: &[Oblique], speed: f64, r: f64, mu: f64, e: f64, threshold: f64) -> Figure {
-    let thetas: Vec<f64> = (1..=87).map(|k| k as f64).collect();
-    let panel = |q: usize, title: &str, y: &str| {
-        let sliding: Vec<(f64, f64)> = thetas
-            .iter()
-            .filter(|&&t| t >= threshold - 8.0)
-            .map(|&t| (t, gross_sliding_oblique(t, speed, r, mu, e)[q]))
-            .collect();
-        let rigid: Vec<(f64, f64)> =
-            thetas.iter().map(|&t| (t, rigid_body_oblique(t, speed, r, mu, e)[q])).collect();
-        let series = vec![
-            Series::line("gross sliding (exact)", sliding, LineStyle::Solid, Color::GREY),
-            Series::line(
-                format!("rigid body (stick below {:.1}°)", (3.5 * mu * (1.0 + e)).atan().to_degrees()),
-                rigid,
-                LineStyle::Dashed,
-                Color::BLACK,
-            ),
-            Series::markers(
-                "grainflow, Hertz–Mindlin",
-                rows.iter().map(|o| (o.theta, o.sim[q])).collect(),
-                MarkerShape::Circle,
-                Color::BLUE,
-            ),
-        ];
-        Panel { series, x_range: Some((0.0, 90.0)), ..Panel::new(title, "impact angle θ (deg)", y) }
-    };
-    let mut p_et = panel(0, "Tangential restitution", "e_t = v_t′/v_t0");
-    p_et.y_range = Some((0.5, 1.05));
-    Figure {
-        title: "Chung & Ooi test 4: Al oxide sphere on Al alloy at 3.9 m/s, μ = 0.092, e = 0.98".into(),
-        note: Some(format!(
-            "lever R; gross sliding exact above {threshold:.1}° (elastic threshold for Hertz–Mindlin), below it stick and micro-slip depend on the model"
-        )),
-        panels: vec![
-            panel(2, "Rebound angle", "rebound angle α (deg)"),
-            p_et,
-            panel(1, "Angular velocity", "ω′ (rad/s)"),
-        ],
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Test 5: constant normal, varying tangential velocity
 // ---------------------------------------------------------------------------------------------
@@ -1228,18 +809,18 @@ pub fn test5_tangential_velocities() -> Vec<f64> {
     std::iter::once(0.1).chain((1..=42).map(|k| 0.5 * k as f64)).collect()
 }
 
-struct TangentialRow {
-    material: String,
-    psi1: f64,
-    psi2: f64,
-    omega_norm: f64,
+pub(super) struct TangentialRow {
+    pub(super) material: String,
+    pub(super) psi1: f64,
+    pub(super) psi2: f64,
+    pub(super) omega_norm: f64,
     /// Ψ₁ from which the contact slides throughout, 7 − 1/κ.
-    psi_c: f64,
-    imp: Impact,
-    radius: f64,
+    pub(super) psi_c: f64,
+    pub(super) imp: Impact,
+    pub(super) radius: f64,
 }
 
-fn test5() -> Result<TestOutput, VerifyError> {
+pub(super) fn test5() -> Result<TestOutput, VerifyError> {
     let start = Instant::now();
     let c = case(5)?;
     let temps = templates(&c);
@@ -1381,61 +962,6 @@ fn test5() -> Result<TestOutput, VerifyError> {
     })
 }
 
-fn test5_figure(rows: &[TangentialRow]) -> Figure {
-    let mut materials: Vec<&str> = rows.iter().map(|r| r.material.as_str()).collect();
-    materials.dedup();
-    let x: Vec<f64> = (0..=150).map(|k| k as f64 * 0.1).collect();
-    let mut p2 = vec![
-        Series::line(
-            "gross sliding: Ψ₂ = Ψ₁ − 7",
-            x.iter().map(|&p| (p, p - 7.0)).collect(),
-            LineStyle::Solid,
-            Color::GREY,
-        ),
-        Series::line(
-            "rigid body: stick (0) / slide",
-            x.iter().map(|&p| (p, (p - 7.0).max(0.0))).collect(),
-            LineStyle::Dashed,
-            Color::BLACK,
-        ),
-    ];
-    let mut pw = vec![
-        Series::line("gross sliding: 5", vec![(0.0, 5.0), (15.0, 5.0)], LineStyle::Solid, Color::GREY),
-        Series::line(
-            "rigid body: min(5Ψ₁/7, 5)",
-            x.iter().map(|&p| (p, (5.0 * p / 7.0).min(5.0))).collect(),
-            LineStyle::Dashed,
-            Color::BLACK,
-        ),
-    ];
-    let shapes = [MarkerShape::Circle, MarkerShape::Triangle];
-    for (k, m) in materials.iter().enumerate() {
-        let pts = |f: fn(&TangentialRow) -> f64| {
-            rows.iter().filter(|r| r.material == *m).map(|r| (r.psi1, f(r))).collect()
-        };
-        p2.push(Series::markers(
-            format!("grainflow, {m}"),
-            pts(|r| r.psi2),
-            shapes[k % 2],
-            Color::palette(k),
-        ));
-        pw.push(Series::markers(
-            format!("grainflow, {m}"),
-            pts(|r| r.omega_norm),
-            shapes[k % 2],
-            Color::palette(k),
-        ));
-    }
-    Figure {
-        title: "Chung & Ooi test 5: v_n = 5 m/s, v_t = 0.1 … 21 m/s, μ = 0.3, e = 1, rigid plane".into(),
-        note: Some("Ψ₁ = v_t/(μv_n), Ψ₂ = u′/(μv_n) with u′ the contact-point tangential velocity after impact; lever R".into()),
-        panels: vec![
-            Panel { series: p2, x_range: Some((0.0, 14.5)), ..Panel::new("Contact-point rebound", "Ψ₁", "Ψ₂") },
-            Panel { series: pw, x_range: Some((0.0, 14.5)), ..Panel::new("Spin after impact", "Ψ₁", "Rω′/(μv_n)") },
-        ],
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Tests 6 and 8: spinning sphere, constant normal velocity
 // ---------------------------------------------------------------------------------------------
@@ -1446,38 +972,38 @@ pub fn spin_sweep() -> Vec<f64> {
     (0..=n).map(|k| 0.175 * (21.0f64 / 0.175).powf(k as f64 / n as f64)).collect()
 }
 
-struct SpinRow {
-    material: String,
+pub(super) struct SpinRow {
+    pub(super) material: String,
     /// The input restitution of the contact.
-    e: f64,
-    x: f64,
-    beta: f64,
+    pub(super) e: f64,
+    pub(super) x: f64,
+    pub(super) beta: f64,
     /// x from the measured normal impulse: 3.5μ(1 + e_sim)v_n/u₀.
-    x_measured: f64,
+    pub(super) x_measured: f64,
     /// β lost to the onset stick (module docs), if the contact reaches the limit at all.
-    onset_loss: Option<f64>,
+    pub(super) onset_loss: Option<f64>,
     /// x below which the elastic contact slides throughout, 3.5(1 + e)/(3.5(1 + e) − e/κ).
-    x_c: f64,
+    pub(super) x_c: f64,
     /// Elastic contact time of the Hertz closed form, s (for Δt's report).
-    contact_time: f64,
+    pub(super) contact_time: f64,
     /// Angle between the initial normal and the direction of the normal impulse, rad.
-    turn: f64,
-    imp: Impact,
-    radius: f64,
+    pub(super) turn: f64,
+    pub(super) imp: Impact,
+    pub(super) radius: f64,
 }
 
-struct SpinRun {
+pub(super) struct SpinRun {
     /// The input restitution.
-    e: f64,
-    rows: Vec<SpinRow>,
-    sim: Simulation,
+    pub(super) e: f64,
+    pub(super) rows: Vec<SpinRow>,
+    pub(super) sim: Simulation,
 }
 
 /// Runs test 6 or 8 over [`spin_sweep`], with restitution `e` (the case's own when `None`).
 ///
 /// Test 6: every spinning particle of the file hits the wall. Test 8: every spinning particle
 /// hits the nearest non-spinning one (the large sphere below it).
-fn spin_run(base: &Case, e: Option<f64>) -> Result<SpinRun, VerifyError> {
+pub(super) fn spin_run(base: &Case, e: Option<f64>) -> Result<SpinRun, VerifyError> {
     let mut c = base.clone();
     if let Some(e) = e {
         for p in c.config.wall_params.iter_mut().chain(c.config.pair_params.iter_mut()) {
@@ -1583,7 +1109,7 @@ fn spin_run(base: &Case, e: Option<f64>) -> Result<SpinRun, VerifyError> {
     Ok(SpinRun { e, rows, sim })
 }
 
-fn spin_test(test: usize) -> Result<TestOutput, VerifyError> {
+pub(super) fn spin_test(test: usize) -> Result<TestOutput, VerifyError> {
     let start = Instant::now();
     // Parse once: with exact_restitution, building the coefficients solves for the damping.
     let base = case(test)?;
@@ -1748,87 +1274,21 @@ fn spin_test(test: usize) -> Result<TestOutput, VerifyError> {
     })
 }
 
-fn spin_figure(test: usize, specified: &SpinRun, elastic: &SpinRun) -> Figure {
-    let e = specified.e;
-    let mut materials: Vec<&str> = specified.rows.iter().map(|r| r.material.as_str()).collect();
-    materials.dedup();
-    let shapes = [MarkerShape::Circle, MarkerShape::Triangle];
-    let line = |x1: f64| {
-        Series::line("sliding: β = x − 1", vec![(0.0, -1.0), (x1, x1 - 1.0)], LineStyle::Solid, Color::GREY)
-    };
-    let mut full = vec![line(3.0)];
-    let mut zoom = vec![line(1.6)];
-    let mut el = vec![line(1.6)];
-    for (k, m) in materials.iter().enumerate() {
-        let color = Color::palette(k);
-        let pts = |run: &SpinRun| -> Vec<(f64, f64)> {
-            run.rows.iter().filter(|r| r.material == *m).map(|r| (r.x, r.beta)).collect()
-        };
-        full.push(Series::line(format!("grainflow, {m}"), pts(specified), LineStyle::Solid, color));
-        zoom.push(Series::markers(format!("grainflow, {m}"), pts(specified), shapes[k % 2], color));
-        let corrected: Vec<(f64, f64)> = specified
-            .rows
-            .iter()
-            .filter(|r| r.material == *m && r.x <= 1.0)
-            .filter_map(|r| r.onset_loss.map(|l| (r.x, r.x - 1.0 - l)))
-            .collect();
-        zoom.push(Series::line(format!("x − 1 − Δβ_onset, {m}"), corrected, LineStyle::Dashed, color));
-        el.push(Series::markers(format!("grainflow, e = 1, {m}"), pts(elastic), shapes[k % 2], color));
-        if let Some(r) = elastic.rows.iter().find(|r| r.material == *m) {
-            el.push(Series::line(
-                format!("x_c = 7/(7 − 1/κ) = {:.3}, {m}", r.x_c),
-                vec![(r.x_c, -1.1), (r.x_c, 1.0)],
-                LineStyle::Dashed,
-                color,
-            ));
-        }
-    }
-    let what = if test == 6 {
-        "sphere (R = 0.1 m) onto a rigid plane"
-    } else {
-        "sphere (R₁ = 0.1 m) onto a sphere R₂ = 0.5 m, 1000× denser"
-    };
-    Figure {
-        title: format!("Chung & Ooi test {test}: spinning {what}, v_n = 0.2 m/s, μ = 0.4"),
-        note: Some("β = −u′/u₀ (u the contact-point slip, u₀ = R₁ω₀), x = 3.5μ(1 + e)v_n/u₀; ω₀ = 0.175 … 21 rad/s; lever R".into()),
-        panels: vec![
-            Panel {
-                series: full,
-                x_range: Some((0.0, 25.0)),
-                y_range: Some((-1.1, 1.0)),
-                ..Panel::new(format!("e = {e}, whole sweep"), "x", "β")
-            },
-            Panel {
-                series: zoom,
-                x_range: Some((0.0, 1.6)),
-                y_range: Some((-1.0, 0.6)),
-                ..Panel::new(format!("e = {e}: sliding branch and onset stick"), "x", "β")
-            },
-            Panel {
-                series: el,
-                x_range: Some((0.0, 3.0)),
-                y_range: Some((-1.1, 1.0)),
-                ..Panel::new("e = 1: exact up to x_c", "x = 7μv_n/u₀", "β")
-            },
-        ],
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Test 7: counter-spinning spheres head-on
 // ---------------------------------------------------------------------------------------------
 
-struct NullRow {
-    material: String,
-    omega0: f64,
+pub(super) struct NullRow {
+    pub(super) material: String,
+    pub(super) omega0: f64,
     /// Final ω_z and v_y of sphere 1 and of sphere 2.
-    omega1: [f64; 2],
-    vt1: [f64; 2],
-    en: f64,
-    vn0: f64,
+    pub(super) omega1: [f64; 2],
+    pub(super) vt1: [f64; 2],
+    pub(super) en: f64,
+    pub(super) vn0: f64,
 }
 
-fn test7_run(base: &Case, lever: LeverArm) -> Result<(Vec<NullRow>, Simulation), VerifyError> {
+pub(super) fn test7_run(base: &Case, lever: LeverArm) -> Result<(Vec<NullRow>, Simulation), VerifyError> {
     let mut c = base.clone();
     c.config.law.lever = lever;
     let temps = templates(&c);
@@ -1884,7 +1344,7 @@ fn test7_run(base: &Case, lever: LeverArm) -> Result<(Vec<NullRow>, Simulation),
     Ok((rows, sim))
 }
 
-fn test7() -> Result<TestOutput, VerifyError> {
+pub(super) fn test7() -> Result<TestOutput, VerifyError> {
     let start = Instant::now();
     // Parse once: with exact_restitution, building the coefficients solves for the damping.
     let c = case(7)?;
@@ -1962,11 +1422,8 @@ fn test7() -> Result<TestOutput, VerifyError> {
     })
 }
 
-// ---------------------------------------------------------------------------------------------
-// The case
-// ---------------------------------------------------------------------------------------------
-
-fn run_test(n: usize) -> Result<TestOutput, VerifyError> {
+/// Runs test `n` (1–8).
+pub(super) fn run_test(n: usize) -> Result<TestOutput, VerifyError> {
     match n {
         1 | 2 => elastic_normal_impact(n),
         3 => test3(),
@@ -1974,175 +1431,5 @@ fn run_test(n: usize) -> Result<TestOutput, VerifyError> {
         5 => test5(),
         6 | 8 => spin_test(n),
         _ => test7(),
-    }
-}
-
-/// Everything the case produced, before it is written.
-pub struct Report {
-    /// All checks, test by test.
-    pub checks: Vec<Check>,
-    tests: Vec<TestOutput>,
-    /// Wall-clock seconds of the runs and checks.
-    pub wall_seconds: f64,
-}
-
-/// Runs the eight tests (in parallel) and evaluates their checks; writes nothing.
-pub fn evaluate() -> Result<Report, VerifyError> {
-    let start = Instant::now();
-    let tests: Vec<TestOutput> = (1..=8).into_par_iter().map(run_test).collect::<Result<_, _>>()?;
-    let checks = tests.iter().flat_map(|t| t.checks.iter().cloned()).collect();
-    Ok(Report { checks, tests, wall_seconds: start.elapsed().as_secs_f64() })
-}
-
-const TITLE: &str = "Chung & Ooi (2011) benchmark tests 1–8, Hertz–Mindlin";
-
-fn notes() -> Vec<String> {
-    vec![
-        "Chung & Ooi's eight particle-scale benchmarks with the Hertz law and the incremental Mindlin tangential spring, lever arm R, rigid plane E = 1e30 Pa, velocity Verlet with Δt ≈ t_c/2000. Elastic impacts (tests 1, 2) match the Hertz closed forms and Chung & Ooi's printed values; the measured restitution equals the input (test 3) with the damping solved for the Hertz law, with and without clipping the attractive end of contact, while MFIX's linear-law formula gives e.g. 0.54 for 0.5.".into(),
-        "Gross sliding (tests 4, 5, 6, 8) follows the rigid-body closed forms from the thresholds μ[3.5(1 + e) − e/κ] on, κ = 4G*/E*; below them the stick and micro-slip branches depend on the tangential model and are plotted and reported, not asserted. With e < 1 the δ^¼ dashpot lifts the Coulomb limit faster than the Mindlin spring at first touch, so the contact sticks briefly and β falls below x − 1 by a computable amount (0.03 at x = 1 for e = 0.5); the sweeps of tests 6 and 8 are therefore also run with e = 1, where β = x − 1 holds exactly. The normal force is clipped at zero in tests 4–8 so that friction never acts on an attractive normal force.".into(),
-        "Test 7 (counter-spinning spheres) gives exactly nothing tangential with both lever-arm choices.".into(),
-    ]
-}
-
-/// The suite entry: runs the tests, writes `DIR/chung_ooi/` and reports.
-pub fn run_case(dir: &Path, _options: &SuiteOptions) -> Result<CaseOutcome, VerifyError> {
-    let report = evaluate()?;
-    let files = write(&report, dir)?;
-    let figures = files.iter().filter(|f| f.extension().is_some_and(|e| e == "png")).cloned().collect();
-    Ok(CaseOutcome {
-        name: "chung_ooi",
-        title: TITLE.into(),
-        checks: report.checks.clone(),
-        files,
-        figures,
-        notes: notes(),
-        wall_seconds: report.wall_seconds,
-    })
-}
-
-/// Writes `DIR/chung_ooi/`: test1.csv … test8.csv (and the companion tables), the figures
-/// and summary.md. Returns the files written.
-pub fn write(report: &Report, dir: &Path) -> Result<Vec<PathBuf>, VerifyError> {
-    let out = case_dir(dir, "chung_ooi")?;
-    let mut files = Vec::new();
-    for t in &report.tests {
-        for (name, text) in &t.tables {
-            write_file(out.join(name), text, &mut files)?;
-        }
-    }
-    let jobs: Vec<&(String, Figure)> = report.tests.iter().flat_map(|t| t.figures.iter()).collect();
-    let drawn: Vec<Result<[PathBuf; 2], VerifyError>> = jobs
-        .par_iter()
-        .map(|(stem, fig)| {
-            let (png, svg) = (out.join(format!("{stem}.png")), out.join(format!("{stem}.svg")));
-            plot::write_figure(fig, &png, &svg)?;
-            Ok([png, svg])
-        })
-        .collect();
-    for d in drawn {
-        files.extend(d?);
-    }
-    write_file(out.join("summary.md"), &summary(report), &mut files)?;
-    Ok(files)
-}
-
-fn summary(report: &Report) -> String {
-    let mut s = String::from(
-        "## Runs\n\n| test | what | runs | dt (s) | steps per run | shortest contact / dt | wall time (s) |\n|---|---|---|---|---|---|---|\n",
-    );
-    for t in &report.tests {
-        let r = &t.runs;
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {:.3e} | {} | {:.0} | {:.2} |",
-            r.test, r.what, r.runs, r.dt, r.steps, r.steps_per_contact, r.seconds
-        );
-    }
-    s.push_str("\n## Notes\n\n");
-    for n in notes() {
-        let _ = writeln!(s, "{n}\n");
-    }
-    let body = summary_markdown(TITLE, &report.checks);
-    // summary_markdown starts with the title; put the runs after it.
-    match body.split_once("\n\n") {
-        Some((title, rest)) => {
-            format!("{title}\n\n{s}\n## Checks\n\n{rest}\nTotal wall time {:.2} s.\n", report.wall_seconds)
-        }
-        None => format!("{body}\n{s}"),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn contact_time_constant_is_four_fifths_of_beta() {
-        // (4/5)·B(2/5, 1/2) = 0.8·Γ(0.4)Γ(0.5)/Γ(0.9), evaluated independently.
-        assert!((contact_time_constant() - 2.943_275_184_324_704_7).abs() < 1e-10);
-        assert!((contact_time_constant() - CONTACT_TIME_CONSTANT_PRINTED).abs() < 5e-6);
-    }
-
-    #[test]
-    fn hertz_closed_forms_reproduce_the_printed_values() {
-        // Test 1, glass: E* = E/(2(1 − ν²)), R* = R/2, m* = m/2, v = 20 m/s.
-        let e = effective_modulus(48e9, 0.2, 48e9, 0.2);
-        let m = sphere_mass(0.01, 2800.0);
-        let h = hertz_impact(e, 0.005, 0.5 * m, 20.0);
-        assert!((h.force_max - 10_697.0).abs() < 0.5, "{h:?}");
-        assert!((h.overlap_max * 1e6 - 274.11).abs() < 0.005, "{h:?}");
-        assert!((h.contact_time * 1e6 - 40.34).abs() < 0.005, "{h:?}");
-        // The RK4 history peaks at δ_max and returns to zero at t_c.
-        let dt = h.contact_time / 2000.0;
-        let d = hertz_overlap_history(h.stiffness, 0.5 * m, 20.0, dt, 2100, 4);
-        let peak = d.iter().copied().fold(0.0, f64::max);
-        assert!((peak / h.overlap_max - 1.0).abs() < 1e-6);
-        assert!(d[1999] > 0.0 && d[2001] < 0.0);
-    }
-
-    #[test]
-    fn stiffness_ratio_on_a_rigid_plane() {
-        for nu in [0.2, 0.3, 0.4] {
-            let k = stiffness_ratio(70e9, nu, 1e30, 0.3);
-            assert!((k - 2.0 * (1.0 - nu) / (2.0 - nu)).abs() < 1e-12, "ν = {nu}: {k}");
-            // Equal materials give the same ratio.
-            assert!((stiffness_ratio(70e9, nu, 70e9, nu) - k).abs() < 1e-12);
-        }
-    }
-
-    #[test]
-    fn gross_sliding_forms_are_consistent() {
-        // Test 4 above the threshold: e_t, ω′ and the angular-momentum identity
-        // (1 − e_t)v_t0 = (2/5)Rω′.
-        let (v, r, mu, e) = (3.9, 0.0025, 0.092, 0.98);
-        for theta in [30.0, 50.0, 80.0] {
-            let [et, w, _, _] = gross_sliding_oblique(theta, v, r, mu, e);
-            let vt0 = v * f64::to_radians(theta).sin();
-            assert!(((1.0 - et) * vt0 - K_INERTIA * r * w).abs() < 1e-12 * vt0);
-        }
-        // The elastic threshold of test 5 in Ψ₁ is 7 − 1/κ.
-        let kappa = 0.8;
-        assert!((gross_sliding_slip_ratio(1.0, 1.0, kappa) - (7.0 - 1.0 / kappa)).abs() < 1e-12);
-        // No onset stick without damping, none computed where σ ≤ 1.
-        assert_eq!(onset_stick_beta_loss(0.0, kappa, 1.0, 0.5), Some(0.0));
-        assert_eq!(onset_stick_beta_loss(0.5, kappa, 0.5, 10.0), None);
-    }
-
-    #[test]
-    fn sweeps_have_the_promised_sizes() {
-        assert_eq!(test3_restitutions().len(), 9);
-        let vts = test5_tangential_velocities();
-        assert_eq!((vts.len(), vts[0], vts[42]), (43, 0.1, 21.0));
-        let spins = spin_sweep();
-        assert_eq!(spins.len(), SPIN_SWEEP_POINTS);
-        assert!((spins[0] - 0.175).abs() < 1e-15 && (spins[SPIN_SWEEP_POINTS - 1] - 21.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn every_case_file_parses() {
-        for n in 1..=8 {
-            assert!(case(n).is_ok(), "test {n}: {:?}", case(n).err());
-        }
-        assert!(case(0).is_err() && case(9).is_err());
     }
 }
