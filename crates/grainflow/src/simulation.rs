@@ -1,16 +1,10 @@
 //! The simulation: set-up from a [`SimulationConfig`] and the time loop.
 
 use crate::boundary::Periodic;
-use crate::contact::geometry::{ContactGeometry, pair_contact_separation, relative_velocity, wall_contact};
-use crate::contact::law::{contact_force_dyn, normal_spring_energy};
-use crate::contact::pair::{
-    contact_coeffs, contact_reach, pair_geometry_in_contact, pair_mass, scaled_damping,
-    wall_geometry_in_contact,
-};
-use crate::contact::submodel::formed;
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
-use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, ContactParams, ContactSizes};
+use crate::contact::{CoeffTable, ContactLaw, ContactParams, ContactSizes};
 use crate::error::EngineError;
+use crate::forces::source::{self as sources, LoadRun, Sources, View};
 use crate::forces::{self, ForcePlan};
 use crate::integrate::{self, Integrator};
 use crate::material::{Phase, WallMaterial};
@@ -24,11 +18,10 @@ use crate::timestep::{self, TimeStepChoice, TimeStepRule};
 use crate::wall::Wall;
 
 mod inflow;
-mod meshes;
 mod population;
 
+pub use crate::forces::source::{MeshLoad, periodic_mesh_message, periodic_mesh_reach};
 pub use inflow::{FlowBooks, Tally};
-pub use meshes::{MeshLoad, periodic_mesh_message, periodic_mesh_reach};
 pub use population::ResortRule;
 
 /// Standard gravity, m/s² (MFIX's default, along −y).
@@ -154,9 +147,8 @@ pub struct Simulation {
     particles: Particles,
     phases: Vec<Phase>,
     walls: Vec<Wall>,
-    meshes: Vec<MeshWall>,
-    /// The mesh walls' candidates and contact histories.
-    mesh_stage: meshes::MeshStage,
+    /// Everything the particles touch: pairs, plane walls, mesh walls ([`crate::forces::source`]).
+    pub(crate) sources: Sources,
     /// Insertions, outlets and their books.
     flow: inflow::FlowStage,
     law: ContactLaw,
@@ -199,10 +191,6 @@ pub struct Simulation {
     timing: Option<StageTimes>,
     /// Threads of the force stage (None: the calling thread only).
     pool: Option<std::sync::Arc<rayon::ThreadPool>>,
-    /// Blocks of the parallel force stage.
-    plan: ForcePlan,
-    /// The force stage's working memory on one thread.
-    scratch: Box<forces::Scratch>,
     /// The largest force and torque components of the last force evaluation's loads, from
     /// which the next takes the quanta of its order-free sums (`forces::sum`); `None` before
     /// the first.
@@ -329,10 +317,10 @@ impl Simulation {
         periodic.check(particles.max_radius().max(flow.max_radius()), skin, &config.walls)?;
         let r_max = particles.max_radius().max(flow.max_radius());
         if let Some((m, axis, from, to)) =
-            meshes::periodic_mesh_reach(&config.meshes, &periodic, r_max, config.t_stop - config.t_start)
+            sources::periodic_mesh_reach(&config.meshes, &periodic, r_max, config.t_stop - config.t_start)
         {
             let name = config.meshes[m].mesh.name();
-            return Err(EngineError::BadReference(meshes::periodic_mesh_message(
+            return Err(EngineError::BadReference(sources::periodic_mesh_message(
                 name,
                 (axis, from, to),
                 &periodic,
@@ -348,8 +336,11 @@ impl Simulation {
             particles,
             phases: config.phases,
             walls: config.walls,
-            meshes: config.meshes,
-            mesh_stage: meshes::MeshStage::new(config.t_start),
+            sources: Sources {
+                planes: sources::Planes,
+                pairs: sources::Pairs::default(),
+                meshes: sources::Meshes::new(config.meshes, config.t_start),
+            },
             flow,
             law: config.law,
             coeffs,
@@ -374,8 +365,6 @@ impl Simulation {
             note: Vec::new(),
             timing: None,
             pool: None,
-            plan: ForcePlan::default(),
-            scratch: forces::Scratch::new(),
             load_peak: None,
             peak_floor,
             inexact_sums: 0,
@@ -583,8 +572,8 @@ impl Simulation {
     pub fn heap_bytes(&self) -> MemoryUse {
         MemoryUse {
             particles: self.particles.heap_bytes(),
-            neighbors: self.neighbors.heap_bytes() + self.mesh_stage.heap_bytes(),
-            threads: self.plan.heap_bytes(),
+            neighbors: self.neighbors.heap_bytes() + self.sources.heap_bytes(),
+            threads: self.sources.pairs.plan.heap_bytes(),
         }
     }
 
@@ -672,7 +661,7 @@ impl Simulation {
             Integrator::Euler => {
                 self.compute_forces();
                 let common = self.common_mass_and_inertia();
-                let blocks = thread_blocks(&self.plan, par, n);
+                let blocks = thread_blocks(&self.sources.pairs.plan, par, n);
                 let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
                 integrate::euler(&mut self.particles, &pass);
             }
@@ -680,7 +669,7 @@ impl Simulation {
                 self.compute_forces();
                 let first = !self.history_started;
                 let common = self.common_mass_and_inertia();
-                let blocks = thread_blocks(&self.plan, par, n);
+                let blocks = thread_blocks(&self.sources.pairs.plan, par, n);
                 let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
                 integrate::adams_bashforth(&mut self.particles, &pass, first);
             }
@@ -696,7 +685,7 @@ impl Simulation {
                     self.evaluate_forces(false);
                 }
                 let common = self.common_mass_and_inertia();
-                let blocks = thread_blocks(&self.plan, par, n);
+                let blocks = thread_blocks(&self.sources.pairs.plan, par, n);
                 let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
                 if self.kick_pending {
                     let wrap = self.wrap();
@@ -710,7 +699,7 @@ impl Simulation {
                 if defer {
                     self.kick_pending = true;
                 } else {
-                    let blocks = thread_blocks(&self.plan, par, n);
+                    let blocks = thread_blocks(&self.sources.pairs.plan, par, n);
                     let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
                     integrate::verlet_kick(&mut self.particles, &pass, None);
                 }
@@ -727,7 +716,7 @@ impl Simulation {
         if !self.kick_pending
             && let Some(per) = self.wrap()
         {
-            integrate::wrap(&mut self.particles, per, thread_blocks(&self.plan, par, n));
+            integrate::wrap(&mut self.particles, per, thread_blocks(&self.sources.pairs.plan, par, n));
         }
         self.step += 1;
         self.drifted = false;
@@ -757,7 +746,7 @@ impl Simulation {
     fn finish_kick(&mut self, par: bool) {
         let n = self.particles.len();
         let common = self.common_mass_and_inertia();
-        let blocks = thread_blocks(&self.plan, par, n);
+        let blocks = thread_blocks(&self.sources.pairs.plan, par, n);
         let (gravity, dt, wrap) = (self.gravity, self.time_step.dt, self.wrap());
         let pass = integrate::Pass { runs: &self.free, gravity, dt, blocks, common };
         integrate::verlet_kick(&mut self.particles, &pass, wrap);
@@ -794,7 +783,7 @@ impl Simulation {
     fn evaluate_forces(&mut self, advance_history: bool) {
         let t0 = self.timing.map(|_| std::time::Instant::now());
         let par = self.parallel();
-        let blocks = thread_blocks(&self.plan, par, self.particles.len());
+        let blocks = thread_blocks(&self.sources.pairs.plan, par, self.particles.len());
         self.neighbors.update(&self.particles, &self.walls, blocks);
         if let (Some(t0), Some(t)) = (t0, self.timing.as_mut()) {
             t.neighbor += t0.elapsed().as_secs_f64();
@@ -838,138 +827,83 @@ impl Simulation {
         self.common().1
     }
 
-    /// The force stage for one law; with `par`, on the thread pool.
+    /// The force stage for one law; with `par`, on the thread pool: every contact source's
+    /// loads, in their order.
     fn force_loop<N: NormalSubModel, T: TangentialSubModel>(&mut self, advance_history: bool, par: bool) {
-        let clock = self.timing.map(|_| std::time::Instant::now());
         let common_mass = self.common().0.map(forces::CommonMass::of);
         let peak_before = self.load_peak.unwrap_or([0.0; 2]);
         let quanta = forces::Quanta::new(peak_before, self.peak_floor);
-        let mut peak = [0.0; 2];
-        let p = &mut self.particles;
-        let build = self.neighbors.stats().builds;
-        let (offsets, partners, pair_history, in_contact, wall_pairs, wall_history) =
-            self.neighbors.split_mut();
-        let x = forces::ForceInputs {
-            position: &p.position,
-            velocity: &p.velocity,
-            omega: &p.omega,
-            radius: &p.radius,
-            mass: &p.mass,
-            phase: &p.phase,
+        let (time, r_max) = (self.positions_time(), self.r_max());
+        let mut run = LoadRun {
+            particles: &mut self.particles,
+            neighbors: &mut self.neighbors,
             held: &self.held,
-            common_mass,
             walls: &self.walls,
             coeffs: &self.coeffs,
             law: self.law,
-            images: self.periodic.images(),
-            dt: if advance_history { self.time_step.dt } else { 0.0 },
-            advance: advance_history,
-            offsets,
-            partners,
-            wall_pairs,
+            periodic: self.periodic,
+            common_mass,
+            pool: self.pool.as_deref().filter(|_| par),
             quanta,
+            advance: advance_history,
+            dt: self.time_step.dt,
+            time,
+            r_max,
+            peak: [0.0; 2],
+            times: self.timing.as_mut(),
         };
-        let blocks = self.pool.as_ref().filter(|_| par).map(|pool| {
-            let plan = &mut self.plan;
-            plan.prepare(
-                build,
-                forces::BLOCKS_PER_THREAD * pool.current_num_threads(),
-                offsets,
-                partners,
-                in_contact,
-                wall_pairs,
-                wall_history,
-            );
-            (pool, plan)
-        });
-        let out = forces::ForceOutputs {
-            force: &mut p.force,
-            torque: &mut p.torque,
-            peak: &mut peak,
-            pair_history,
-            in_contact,
-            wall_history,
-        };
-        let timed = clock.is_some();
-        let work = match blocks {
-            Some((pool, plan)) => pool.install(|| forces::parallel::<N, T>(&x, plan, out, timed)),
-            None => {
-                let walls = forces::serial::<N, T>(&x, out, timed, &mut self.scratch);
-                forces::ThreadWork { walls, ..Default::default() }
-            }
-        };
-        let mesh_clock = clock.map(|_| std::time::Instant::now());
-        let t = self.positions_time();
-        self.mesh_loads::<N, T>(quanta, advance_history, &mut peak, t);
+        self.sources.loads::<N, T>(&mut run);
+        let peak = run.peak;
         if quanta.exceeded_by(peak) {
             self.inexact_sums += 1;
         }
         self.load_peak = Some(peak);
-        if let (Some(c), Some(m), Some(t)) = (clock, mesh_clock, self.timing.as_mut()) {
-            let meshes = m.elapsed().as_secs_f64();
-            let total = c.elapsed().as_secs_f64() - meshes;
-            t.meshes += meshes;
-            t.walls += work.walls.min(total);
-            t.pairs += (total - work.walls).max(0.0);
-            t.threads_mean += work.mean;
-            t.threads_slowest += work.slowest;
+    }
+
+    /// The largest radius a particle of the run has or can be inserted with, m.
+    fn r_max(&self) -> f64 {
+        self.particles.max_radius().max(self.flow.max_radius())
+    }
+
+    /// What the contact sources read of the state, at the time `time` of the positions.
+    fn view(&self, time: f64) -> View<'_> {
+        View {
+            particles: &self.particles,
+            law: self.law,
+            coeffs: &self.coeffs,
+            periodic: self.periodic,
+            held: &self.held,
+            neighbors: &self.neighbors,
+            walls: &self.walls,
+            time,
+            r_max: self.r_max(),
         }
     }
 
+    /// Finds the mesh candidates of the current state if they are not current, so that the
+    /// contacts and diagnostics of a state not yet evaluated (a new or a restored simulation)
+    /// include its mesh contacts (see [`sources::Meshes::prepare`]).
+    pub(crate) fn prepare_mesh_candidates(&mut self) {
+        let (time, r_max) = (self.time(), self.r_max());
+        let v = View {
+            particles: &self.particles,
+            law: self.law,
+            coeffs: &self.coeffs,
+            periodic: self.periodic,
+            held: &self.held,
+            neighbors: &self.neighbors,
+            walls: &self.walls,
+            time,
+            r_max,
+        };
+        self.sources.meshes.prepare(&v);
+    }
+
     /// Every contact of the current state with its forces, as the next force evaluation would
-    /// see them without advancing the tangential springs (for output: force chains).
+    /// see them without advancing the tangential springs (for output: force chains): the
+    /// contact sources' in their order.
     pub fn contacts(&self) -> Vec<ContactInfo> {
-        let p = &self.particles;
-        let lever = self.law.lever;
-        let per = self.periodic;
-        let mut out = Vec::new();
-        let mut record =
-            |i: usize, other: ContactPartner, g: ContactGeometry, c: &ContactCoeffs, v_r: Vec3, h: Vec3| {
-                let mut h = h;
-                let f = contact_force_dyn(&self.law, c, &g, v_r, &mut h, 0.0);
-                out.push(ContactInfo {
-                    particle: i,
-                    other,
-                    point: p.position[i] + g.lever_i * g.normal,
-                    normal: g.normal,
-                    overlap: g.overlap,
-                    normal_force: f.normal.length(),
-                    tangential_force: f.tangential.length(),
-                });
-            };
-        let nl = &self.neighbors;
-        for (&[i, w], &h) in nl.wall_pairs().iter().zip(nl.wall_history()) {
-            let (i, wall) = (i as usize, &self.walls[w as usize]);
-            let c = &self.wall_coeffs(i, wall.material);
-            let (x, r) = (p.position[i], p.radius[i]);
-            if let Some(g) =
-                wall_geometry_in_contact(self.law.normal, x, r, wall, lever, c.pull_off, formed(h))
-            {
-                let c = scaled_damping(c, self.law.damping, p.mass[i]);
-                let v_r = relative_velocity(&g, p.velocity[i], Vec3::ZERO, p.omega[i], Vec3::ZERO);
-                record(i, ContactPartner::Wall(w as usize), g, &c, v_r, h);
-            }
-        }
-        for ([i, j], h) in nl.pairs().zip(nl.pair_histories()) {
-            // Seen from the particle with the lower id, whichever slot is lower: the contact
-            // then reads the same however the particles are stored.
-            let (i, j, h) = if p.id[i as usize] < p.id[j as usize] {
-                (i as usize, j as usize, h)
-            } else {
-                (j as usize, i as usize, -h)
-            };
-            let c = &self.pair_coeffs(i, j);
-            let (x, r) = (&p.position, &p.radius);
-            if let Some(g) =
-                pair_geometry_in_contact(self.law.normal, x, r, i, j, lever, &per, c.pull_off, formed(h))
-            {
-                let c = scaled_damping(c, self.law.damping, pair_mass(&p.mass, &self.held, i, j));
-                let v_r = relative_velocity(&g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
-                record(i, ContactPartner::Particle(j), g, &c, v_r, h);
-            }
-        }
-        self.mesh_contact_infos(&mut out);
-        out
+        self.sources.contact_infos(&self.view(self.time()))
     }
 
     /// [`contacts`](Self::contacts) and the particles, both in the order of the particles'
@@ -999,24 +933,6 @@ impl Simulation {
         (p.gathered(&order), contacts)
     }
 
-    /// The coefficients of the contact of slots `i` and `j`: their phases', formed for the
-    /// pair's own R* and effective mass where the table is per unit size (the pull-off
-    /// distance too).
-    fn pair_coeffs(&self, i: usize, j: usize) -> ContactCoeffs {
-        let p = &self.particles;
-        let c = self.coeffs.pair(p.phase[i] as usize, p.phase[j] as usize);
-        if !self.coeffs.sized() {
-            return *c;
-        }
-        let (ra, rb) = (p.radius[i], p.radius[j]);
-        let r_star = ra * rb / (ra + rb);
-        let mut sized =
-            contact_coeffs(&self.coeffs, &self.law, c, r_star, pair_mass(&p.mass, &self.held, i, j));
-        sized.pull_off =
-            crate::with_normal_submodel!(self.law.normal, |N| contact_reach::<N>(&self.coeffs, c, r_star));
-        sized
-    }
-
     /// Energies, contacts and overlaps of the current state.
     ///
     /// The sums do not depend on the order the particles are stored in
@@ -1031,50 +947,10 @@ impl Simulation {
         d.kinetic_rotational = per(&|i| 0.5 * p.inertia[i] * p.omega[i].length_squared());
         d.potential = per(&|i| -(p.mass[i] * self.gravity.dot(p.position[i])));
         let mut elastic = Vec::new();
-        let mut visit = |delta: f64, r_min: f64, energy: f64| {
+        self.sources.diagnose(&self.view(self.time()), &mut |(delta, r_min, energy)| {
             d.contacts += 1;
             elastic.push(energy);
             d.max_overlap_ratio = d.max_overlap_ratio.max(delta / r_min);
-        };
-        // A cohesive contact holds beyond the touch (see `contacts`).
-        let (normal, reaches, lever) = (self.law.normal, self.law.normal.reaches(), self.law.lever);
-        let nl = &self.neighbors;
-        for (&[i, w], &h) in nl.wall_pairs().iter().zip(nl.wall_history()) {
-            let (i, wall) = (i as usize, &self.walls[w as usize]);
-            let c = &self.wall_coeffs(i, wall.material);
-            let (x, r) = (p.position[i], p.radius[i]);
-            let g = if reaches {
-                wall_geometry_in_contact(normal, x, r, wall, lever, c.pull_off, formed(h))
-            } else {
-                wall_contact(x, r, wall.point, wall.normal)
-            };
-            if let Some(g) = g {
-                visit(g.overlap, p.radius[i], normal_spring_energy(self.law.normal, c, g.overlap));
-            }
-        }
-        for ([i, j], h) in nl.pairs().zip(nl.pair_histories()) {
-            let (i, j) = (i as usize, j as usize);
-            let c = &self.pair_coeffs(i, j);
-            let g = if reaches {
-                let (x, r, per) = (&p.position, &p.radius, &self.periodic);
-                pair_geometry_in_contact(normal, x, r, i, j, lever, per, c.pull_off, formed(h))
-            } else {
-                pair_contact_separation(
-                    self.periodic.min_image(p.position[j] - p.position[i]),
-                    p.radius[i],
-                    p.radius[j],
-                )
-            };
-            if let Some(g) = g {
-                visit(
-                    g.overlap,
-                    p.radius[i].min(p.radius[j]),
-                    normal_spring_energy(self.law.normal, c, g.overlap),
-                );
-            }
-        }
-        self.visit_mesh_contacts(|i, overlap, c| {
-            visit(overlap, p.radius[i], normal_spring_energy(self.law.normal, c, overlap));
         });
         d.elastic = order_free_sum(&elastic);
         d

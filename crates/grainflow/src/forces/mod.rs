@@ -51,6 +51,7 @@
 mod detect;
 mod lanes;
 mod plan;
+pub(crate) mod source;
 mod sum;
 
 use std::ops::Range;

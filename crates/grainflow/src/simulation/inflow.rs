@@ -648,8 +648,8 @@ impl Simulation {
     /// loaded), if any.
     fn region_mesh(&self, region: &Region) -> Option<usize> {
         let Region::Mesh(inside) = region else { return None };
-        (0..self.meshes.len()).find(|&m| {
-            let mesh = &self.meshes[m].mesh;
+        (0..self.sources.meshes.walls.len()).find(|&m| {
+            let mesh = &self.sources.meshes.walls[m].mesh;
             mesh.name() == inside.name()
                 && mesh.triangle_count() == inside.triangle_count()
                 && inside.corners().iter().enumerate().all(|(t, c)| mesh.corners(t as u32) == *c)
@@ -659,7 +659,7 @@ impl Simulation {
     /// The triangles of mesh wall `m` where it is now.
     fn mesh_corners_now(&self, m: usize) -> Vec<[Vec3; 3]> {
         let v = self.mesh_vertices(m);
-        self.meshes[m].mesh.triangles().iter().map(|t| t.map(|k| v[k as usize])).collect()
+        self.sources.meshes.walls[m].mesh.triangles().iter().map(|t| t.map(|k| v[k as usize])).collect()
     }
 
     /// The insides of the closed mesh walls that are obstacles to `region` (where they are
@@ -674,9 +674,9 @@ impl Simulation {
         margin: f64,
     ) -> Vec<std::sync::Arc<InsideMesh>> {
         if self.flow.solids.is_none() {
-            let solids = (0..self.meshes.len())
+            let solids = (0..self.sources.meshes.walls.len())
                 .map(|m| {
-                    let wall = &self.meshes[m];
+                    let wall = &self.sources.meshes.walls[m];
                     if !wall.mesh.edges().iter().all(|e| e.triangles().len() == 2) {
                         Solid::Open
                     } else if wall.motion.moves() {
@@ -704,7 +704,7 @@ impl Simulation {
                 Solid::Open => continue,
                 Solid::Fixed(inside) => inside.clone(),
                 Solid::Moving => std::sync::Arc::new(InsideMesh::of_corners(
-                    self.meshes[m].mesh.name(),
+                    self.sources.meshes.walls[m].mesh.name(),
                     self.mesh_corners_now(m),
                     None,
                 )),
@@ -770,8 +770,12 @@ impl Simulation {
         let diameters: Vec<f64> = drawn.iter().map(|d| d.1).collect();
         // The inside of a moving mesh moves with it: the region where the mesh is now.
         let own = self.region_mesh(&ins.region);
-        let moved = own.filter(|&m| self.meshes[m].motion.moves()).map(|m| {
-            let inside = InsideMesh::of_corners(self.meshes[m].mesh.name(), self.mesh_corners_now(m), None);
+        let moved = own.filter(|&m| self.sources.meshes.walls[m].motion.moves()).map(|m| {
+            let inside = InsideMesh::of_corners(
+                self.sources.meshes.walls[m].mesh.name(),
+                self.mesh_corners_now(m),
+                None,
+            );
             Region::Mesh(Box::new(inside))
         });
         let region = moved.as_ref().unwrap_or(&ins.region);
@@ -836,9 +840,9 @@ impl Simulation {
         let (lo, hi) = region.bounds();
         let (lo, hi) = (lo - Vec3::splat(margin), hi + Vec3::splat(margin));
         let mut out = Vec::new();
-        for m in 0..self.meshes.len() {
+        for m in 0..self.sources.meshes.walls.len() {
             let v = self.mesh_vertices(m);
-            for t in self.meshes[m].mesh.triangles() {
+            for t in self.sources.meshes.walls[m].mesh.triangles() {
                 let c = t.map(|k| v[k as usize]);
                 let (a, b) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
                 if a.cmple(hi).all() && b.cmpge(lo).all() {

@@ -74,27 +74,10 @@ impl Simulation {
                 "internal error: particles rearranged with a half kick pending".into(),
             ));
         }
-        // The neighbour list's pairs under the new slots (pairs of a removed particle go with
-        // it; `set_state` turns the pairs now stored the other way round, negating their
-        // histories, and puts the list in its order).
+        // Each contact source takes its part of the neighbour list's state (and its own) into
+        // the new slots.
         let mut state = self.neighbors.state();
-        let keep_pair = |a: u32, b: u32| new_of[a as usize] != GONE && new_of[b as usize] != GONE;
-        let (pairs, pair_history): (Vec<[u32; 2]>, Vec<Vec3>) = state
-            .pairs
-            .iter()
-            .zip(&state.pair_history)
-            .filter(|([a, b], _)| keep_pair(*a, *b))
-            .map(|(&[a, b], &h)| ([new_of[a as usize], new_of[b as usize]], h))
-            .unzip();
-        let (wall_pairs, wall_history): (Vec<[u32; 2]>, Vec<Vec3>) = state
-            .wall_pairs
-            .iter()
-            .zip(&state.wall_history)
-            .filter(|([i, _], _)| new_of[*i as usize] != GONE)
-            .map(|(&[i, w], &h)| ([new_of[i as usize], w], h))
-            .unzip();
-        (state.pairs, state.pair_history, state.wall_pairs, state.wall_history) =
-            (pairs, pair_history, wall_pairs, wall_history);
+        self.sources.rearrange(&new_of, &mut state);
         if state.reference.len() == n_old {
             state.reference = order.iter().map(|&i| state.reference[i]).collect();
         } else {
@@ -111,7 +94,6 @@ impl Simulation {
             r.slot = new_of[r.slot] as usize;
             r.leader = r.leader.map(|l| new_of[l] as usize);
         }
-        self.mesh_stage.remap(&new_of);
         self.derive_slot_facts();
         Ok(())
     }
@@ -127,7 +109,7 @@ impl Simulation {
         self.held = if held.iter().any(|&h| h) { held } else { Vec::new() };
         self.free = motion::free_runs(&self.motion, n);
         self.common = None;
-        self.plan = ForcePlan::default();
+        self.sources.pairs.plan = ForcePlan::default();
     }
 
     /// Adds particles between steps. Each needs an id no particle has, a phase of the case, a positive radius and
@@ -164,7 +146,7 @@ impl Simulation {
         }
         let n_old = self.particles.len();
         self.particles.append(&added);
-        self.mesh_stage.appended(n_old, self.particles.len());
+        self.sources.appended(n_old, self.particles.len());
         // The forces held are those of the particles before: evaluated again before they act.
         self.forces_current = false;
         self.derive_slot_facts();

@@ -21,16 +21,18 @@
 //! they were found (around the list's reference positions, which no particle has left by more
 //! than half the skin): so no contact is missed.
 
-use super::Simulation;
-use crate::contact::law::parts;
-use crate::contact::pair::{PairInput, contact_coeffs, contact_reach, wall_law};
+use super::{ContactSource, Diagnosed, LoadRun, View, wall_coeffs_of};
+use crate::contact::law::{normal_spring_energy, parts};
+use crate::contact::pair::{PairInput, wall_law};
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
-use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw, LeverArm};
+use crate::contact::{ContactCoeffs, ContactLaw, LeverArm};
 use crate::forces::{Peak, Quanta, Quantum, max_peak};
 use crate::math::Vec3;
 use crate::mesh::grid::NearScratch;
 use crate::mesh::motion::Anchor;
 use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, SurfaceMotion, TriangleGrid, sphere_contacts};
+use crate::neighbor::NeighborState;
+use crate::simulation::{ContactInfo, ContactPartner, Simulation};
 use crate::state::Particles;
 
 /// A contact's normal may turn this far (cosine) from one evaluation to the next and still
@@ -57,7 +59,7 @@ struct Candidate {
     distance: f64,
 }
 
-/// Where a slot's candidates are in [`MeshStage::candidates`]: `len` of them from `start`, in
+/// Where a slot's candidates are in [`Meshes::candidates`]: `len` of them from `start`, in
 /// room for `cap`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct Span {
@@ -72,9 +74,12 @@ impl Span {
     }
 }
 
-/// What the mesh stage keeps between evaluations.
+/// The mesh walls as a contact source: the meshes, and what their contacts keep between
+/// evaluations.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct MeshStage {
+pub(crate) struct Meshes {
+    /// The mesh walls.
+    pub walls: Vec<MeshWall>,
     grids: Vec<TriangleGrid>,
     /// Whether the candidates are current (false: found afresh at the next evaluation).
     built: bool,
@@ -111,6 +116,7 @@ type Rates = Option<(Vec3, Vec3, Vec3, SurfaceMotion)>;
 /// One mesh contact's load on its particle: the force, and the torque about the centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct MeshLoadPart {
+    slot: u32,
     mesh: u32,
     centre: Vec3,
     force: Vec3,
@@ -126,14 +132,14 @@ pub struct MeshLoad {
     pub torque: Vec3,
 }
 
-impl MeshStage {
-    /// The stage of a run that starts at `t0`, s.
-    pub(crate) fn new(t0: f64) -> MeshStage {
-        MeshStage { t0, ..Default::default() }
+impl Meshes {
+    /// The mesh walls `walls` of a run that starts at `t0`, s.
+    pub(crate) fn new(walls: Vec<MeshWall>, t0: f64) -> Meshes {
+        Meshes { walls, t0, ..Default::default() }
     }
 
-    /// Heap bytes of the stage.
-    pub(crate) fn heap_bytes(&self) -> usize {
+    /// Heap bytes of the candidates, histories and grids.
+    fn bytes(&self) -> usize {
         self.grids.iter().map(TriangleGrid::heap_bytes).sum::<usize>()
             + self.span.capacity() * std::mem::size_of::<Span>()
             + self.centres.capacity() * 24
@@ -224,7 +230,7 @@ impl MeshStage {
     /// Slots renumbered: slot `k` is now what slot `order[k]` was (`new_of[old]`, `u32::MAX`
     /// for a removed slot). Histories of removed slots go; the others' histories and
     /// candidates go with their particles.
-    pub(crate) fn remap(&mut self, new_of: &[u32]) {
+    fn remap(&mut self, new_of: &[u32]) {
         self.history.retain_mut(|h| {
             let k = new_of[h.slot as usize];
             h.slot = k;
@@ -257,7 +263,7 @@ impl MeshStage {
 
     /// Particles appended to the `n_old` slots, up to `n`: their candidates are found at the next evaluation
     /// (their centres are nowhere yet, so they are stale), the others' kept.
-    pub(crate) fn appended(&mut self, n_old: usize, n: usize) {
+    fn append(&mut self, n_old: usize, n: usize) {
         if !self.ready(n_old) || n_old == 0 {
             self.built = false;
             return;
@@ -271,24 +277,52 @@ impl MeshStage {
     }
 }
 
-impl Simulation {
-    /// The mesh-wall contacts' histories, by (slot, mesh, triangle).
-    pub(crate) fn mesh_histories(&self) -> &[MeshHistory] {
-        &self.mesh_stage.history
+/// What the mesh loads of a run of slots give: the stored histories, the loads on the
+/// particles (in the order of their slots, then meshes, then triangles) and their peak.
+#[derive(Debug, Default)]
+struct SlotLoads {
+    stored: Vec<MeshHistory>,
+    loads: Vec<MeshLoadPart>,
+    peak: Peak,
+}
+
+/// The settings of one evaluation's mesh loads.
+struct LoadSettings<'a> {
+    poses: &'a [Pose],
+    rates: &'a [Rates],
+    quanta: Quanta,
+    advance: bool,
+    /// Δt for the springs (0 when they are not advanced), s.
+    dt: f64,
+}
+
+impl Meshes {
+    /// The pose of mesh `m` at time `t`, s.
+    pub(crate) fn pose_at(&self, m: usize, t: f64) -> Pose {
+        let wall = &self.walls[m];
+        if !wall.motion.moves() {
+            return Pose::IDENTITY;
+        }
+        self.anchor(m).pose(&wall.motion, &wall.window, t - self.t0)
+    }
+
+    /// The poses of every mesh at time `t`, s.
+    fn poses_at(&self, t: f64) -> Vec<Pose> {
+        (0..self.walls.len()).map(|m| self.pose_at(m, t)).collect()
     }
 
     /// Restores the mesh-wall contacts' histories of a checkpoint: (particle id, mesh),
-    /// triangle, normal and history of each.
-    pub(crate) fn set_mesh_histories(
+    /// triangle, normal and history of each; `ids` are the particles' ids by slot.
+    pub(crate) fn set_histories(
         &mut self,
+        ids: &[u32],
         (owners, triangles, normals, h): (Vec<[u32; 2]>, Vec<u32>, Vec<Vec3>, Vec<Vec3>),
     ) -> Result<(), String> {
         let n = owners.len();
         if triangles.len() != n || normals.len() != n || h.len() != n {
             return Err("the mesh contacts' lists have different lengths".into());
         }
-        let mut by_id: Vec<(u32, u32)> =
-            self.particles.id.iter().enumerate().map(|(s, &id)| (id, s as u32)).collect();
+        let mut by_id: Vec<(u32, u32)> = ids.iter().enumerate().map(|(s, &id)| (id, s as u32)).collect();
         by_id.sort_unstable();
         let mut history = Vec::with_capacity(n);
         for k in 0..n {
@@ -298,7 +332,7 @@ impl Simulation {
                 .map(|j| by_id[j].1)
                 .map_err(|_| format!("a mesh contact names particle {id}, which the case does not have"))?;
             let fits = self
-                .meshes
+                .walls
                 .get(mesh as usize)
                 .is_some_and(|m| (triangles[k] as usize) < m.mesh.triangle_count());
             if !fits {
@@ -316,42 +350,15 @@ impl Simulation {
         {
             return Err("a mesh contact appears twice".into());
         }
-        self.mesh_stage.history = history;
+        self.history = history;
         Ok(())
     }
 
-    /// The pose of mesh `m` at time `t`, s.
-    pub(crate) fn mesh_pose_at(&self, m: usize, t: f64) -> Pose {
-        let wall = &self.meshes[m];
-        if !wall.motion.moves() {
-            return Pose::IDENTITY;
-        }
-        self.mesh_stage.anchor(m).pose(&wall.motion, &wall.window, t - self.mesh_stage.t0)
-    }
-
-    /// Where mesh `m` is now (its pose as loaded moved by its motion so far).
-    pub fn mesh_pose(&self, m: usize) -> Pose {
-        self.mesh_pose_at(m, self.time())
-    }
-
-    /// The vertices of mesh `m` where they are now, m (in the order of
-    /// [`Mesh::vertices`]).
-    pub fn mesh_vertices(&self, m: usize) -> Vec<Vec3> {
-        let pose = self.mesh_pose(m);
-        self.meshes[m].mesh.vertices().iter().map(|&y| pose.apply(y)).collect()
-    }
-
-    /// The mesh walls.
-    pub fn meshes(&self) -> &[MeshWall] {
-        &self.meshes
-    }
-
-    /// The load the particles exerted on mesh `m` at the last force evaluation (zero before
-    /// the first): the force, and the torque about `about`. The sums do not depend on the
-    /// particles' order; the force is exactly minus the sum of the particles' loads from it.
-    pub fn mesh_load(&self, m: usize, about: Vec3) -> MeshLoad {
+    /// The load the particles exerted on mesh `m` at the last force evaluation (see
+    /// [`Simulation::mesh_load`]).
+    fn load_on(&self, m: usize, about: Vec3) -> MeshLoad {
         use crate::observe::order_free_sum;
-        let parts: Vec<&MeshLoadPart> = self.mesh_stage.loads.iter().filter(|l| l.mesh == m as u32).collect();
+        let parts: Vec<&MeshLoadPart> = self.loads.iter().filter(|l| l.mesh == m as u32).collect();
         let sum = |f: &dyn Fn(&MeshLoadPart) -> Vec3| {
             let c =
                 |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
@@ -363,70 +370,56 @@ impl Simulation {
         }
     }
 
-    /// (anchor time since the start, s; anchor pose; pose now) of every mesh, for checkpoints.
-    pub(crate) fn mesh_motion_state(&self) -> Vec<(f64, Pose, Pose)> {
-        (0..self.meshes.len())
+    /// (anchor time since the start, s; anchor pose; pose at `t`) of every mesh.
+    fn motion_state(&self, t: f64) -> Vec<(f64, Pose, Pose)> {
+        (0..self.walls.len())
             .map(|m| {
-                let a = self.mesh_stage.anchor(m);
-                (a.tau, a.pose, self.mesh_pose(m))
+                let a = self.anchor(m);
+                (a.tau, a.pose, self.pose_at(m, t))
             })
             .collect()
     }
 
-    /// Restores what [`mesh_motion_state`](Self::mesh_motion_state) gave. A mesh whose motion
-    /// in this case puts it elsewhere than the checkpoint's pose (the case's motion changed)
-    /// continues from the checkpoint's pose, anchored at its time.
-    pub(crate) fn set_mesh_motion_state(&mut self, state: &[(f64, Pose, Pose)]) -> Result<(), String> {
-        if state.len() != self.meshes.len() {
+    /// Restores what [`motion_state`](Self::motion_state) gave, at time `t`.
+    fn set_motion_state(&mut self, state: &[(f64, Pose, Pose)], t: f64) -> Result<(), String> {
+        if state.len() != self.walls.len() {
             return Err(format!(
                 "the checkpoint has {} mesh walls, the case {}",
                 state.len(),
-                self.meshes.len()
+                self.walls.len()
             ));
         }
-        let tau = self.time() - self.mesh_stage.t0;
-        self.mesh_stage.anchors = state.iter().map(|&(tau, pose, _)| Anchor { tau, pose }).collect();
+        let tau = t - self.t0;
+        self.anchors = state.iter().map(|&(tau, pose, _)| Anchor { tau, pose }).collect();
         for (m, &(_, _, was)) in state.iter().enumerate() {
-            if self.mesh_pose(m) != was {
-                self.mesh_stage.anchors[m] = Anchor { tau, pose: was };
+            if self.pose_at(m, t) != was {
+                self.anchors[m] = Anchor { tau, pose: was };
             }
         }
-        if self.mesh_stage.anchors.iter().all(|a| *a == Anchor::START) {
-            self.mesh_stage.anchors.clear();
+        if self.anchors.iter().all(|a| *a == Anchor::START) {
+            self.anchors.clear();
         }
-        self.mesh_stage.built = false;
+        self.built = false;
         Ok(())
     }
 
-    /// Calls `visit(slot, overlap)` for every mesh-wall contact of the current state, with the
-    /// candidates of the last evaluation (none before the first), for diagnostics: as the next
-    /// evaluation would find them (a cohesive contact formed at the last evaluation holds to
-    /// its pull-off distance).
-    pub(super) fn visit_mesh_contacts(
-        &self,
-        mut visit: impl FnMut(usize, f64, &crate::contact::ContactCoeffs),
-    ) {
-        self.each_mesh_contact(|i, _, _, overlap, c| visit(i, overlap, c));
-    }
-
     /// Calls `visit(slot, mesh, contact, overlap, coefficients)` for every mesh-wall contact
-    /// of the current state, as [`visit_mesh_contacts`](Self::visit_mesh_contacts) finds them.
-    fn each_mesh_contact(
-        &self,
-        mut visit: impl FnMut(usize, usize, &MeshContact, f64, &crate::contact::ContactCoeffs),
-    ) {
-        let (st, p) = (&self.mesh_stage, &self.particles);
-        if self.meshes.is_empty() || !st.ready(p.len()) {
+    /// of the state `v`, with the candidates of the last evaluation (none before the first):
+    /// as the next evaluation would find them (a cohesive contact formed at the last
+    /// evaluation holds to its pull-off distance).
+    fn each_contact(&self, v: &View, mut visit: impl FnMut(usize, usize, &MeshContact, f64, &ContactCoeffs)) {
+        let p = v.particles;
+        if self.walls.is_empty() || !self.ready(p.len()) {
             return;
         }
-        let reaches = self.law.normal.reaches();
-        let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose(m)).collect();
+        let reaches = v.law.normal.reaches();
+        let poses = self.poses_at(v.time);
         let (mut contacts, mut triangles) = (Vec::new(), Vec::new());
-        for i in st.active() {
-            for (m, MeshWall { mesh, material, .. }) in self.meshes.iter().enumerate() {
-                let c = &self.wall_coeffs(i, *material);
+        for i in self.active() {
+            for (m, MeshWall { mesh, material, .. }) in self.walls.iter().enumerate() {
+                let c = &wall_coeffs_of(v.coeffs, &v.law, p, i, *material);
                 let reach = if reaches { c.pull_off } else { 0.0 };
-                st.contacts_of(
+                self.contacts_of(
                     i,
                     (m, mesh, &poses[m]),
                     p.position[i],
@@ -438,7 +431,7 @@ impl Simulation {
                 for k in &contacts {
                     let overlap = p.radius[i] - k.distance;
                     let formed = || {
-                        st.history
+                        self.history
                             .binary_search_by_key(&(i as u32, m as u32, k.triangle), |h| {
                                 (h.slot, h.mesh, h.triangle)
                             })
@@ -452,29 +445,24 @@ impl Simulation {
         }
     }
 
-    /// The mesh-wall contacts of the current state with their forces, for output (see
-    /// [`Simulation::contacts`]): as the next evaluation would see them, springs not advanced.
-    pub(super) fn mesh_contact_infos(&self, out: &mut Vec<super::ContactInfo>) {
-        crate::with_submodels!(self.law, |N, T| self.mesh_contact_infos_for::<N, T>(out))
-    }
-
-    fn mesh_contact_infos_for<N: NormalSubModel, T: TangentialSubModel>(
+    fn contact_infos_for<N: NormalSubModel, T: TangentialSubModel>(
         &self,
-        out: &mut Vec<super::ContactInfo>,
+        v: &View,
+        out: &mut Vec<ContactInfo>,
     ) {
-        let (st, law) = (&self.mesh_stage, self.law);
-        let rates = self.mesh_rates(self.time());
-        self.each_mesh_contact(|i, m, k, overlap, c| {
-            let h = st
+        let law = v.law;
+        let rates = self.rates(v.time);
+        self.each_contact(v, |i, m, k, overlap, c| {
+            let h = self
                 .history
                 .binary_search_by_key(&(i as u32, m as u32, k.triangle), |h| (h.slot, h.mesh, h.triangle))
-                .map_or(Vec3::ZERO, |j| st.history[j].h);
-            let input = self.mesh_input(i, k, overlap, c, h, rates[m]);
+                .map_or(Vec3::ZERO, |j| self.history[j].h);
+            let input = mesh_input(v.particles, &law, i, k, overlap, c, h, rates[m]);
             let (load, _, _) = wall_law::<N, T, { parts::ALL }>(&law, 0.0, &input);
             let f_n = load.f.dot(k.normal);
-            out.push(super::ContactInfo {
+            out.push(ContactInfo {
                 particle: i,
-                other: super::ContactPartner::Mesh { mesh: m, triangle: k.triangle as usize },
+                other: ContactPartner::Mesh { mesh: m, triangle: k.triangle as usize },
                 point: k.point,
                 normal: -k.normal,
                 overlap,
@@ -486,12 +474,12 @@ impl Simulation {
 
     /// Each mesh's motion rates (linear velocity, angular velocity, a point on the axis) at
     /// time `t`, once per evaluation; `None` for a mesh whose surface does not move.
-    fn mesh_rates(&self, t: f64) -> Vec<Rates> {
-        self.meshes
+    fn rates(&self, t: f64) -> Vec<Rates> {
+        self.walls
             .iter()
             .map(|w| {
                 w.moves().then(|| {
-                    let tau = t - self.mesh_stage.t0;
+                    let tau = t - self.t0;
                     let (v, o, x) = w.motion.rates_within(&w.window, tau);
                     (v, o, x, w.surface_at(tau))
                 })
@@ -499,61 +487,16 @@ impl Simulation {
             .collect()
     }
 
-    /// The coefficients of slot `i`'s contacts with wall material `material`: its phase's,
-    /// formed for its own radius and mass where the table is per unit size (the pull-off
-    /// distance too).
-    #[inline]
-    pub(super) fn wall_coeffs(&self, i: usize, material: usize) -> ContactCoeffs {
-        wall_coeffs_of(&self.coeffs, &self.law, &self.particles, i, material)
-    }
-
-    /// The wall law's input for slot `i`'s contact `k` (placed) with a mesh whose motion has
-    /// `rates`.
-    #[inline]
-    fn mesh_input(
-        &self,
-        i: usize,
-        k: &MeshContact,
-        overlap: f64,
-        c: &crate::contact::ContactCoeffs,
-        h: Vec3,
-        rates: Rates,
-    ) -> PairInput {
-        let p = &self.particles;
-        let lever = if self.law.lever == LeverArm::RadicalPlane { k.distance } else { p.radius[i] };
-        PairInput {
-            d: -k.normal,
-            ra: overlap,
-            rb: lever,
-            dv: p.velocity[i] - self.mesh_velocity(rates, k.point, k.normal),
-            wa: p.omega[i],
-            wb: Vec3::ZERO,
-            h,
-            c: *c,
-            m_eff: p.mass[i],
-        }
-    }
-
-    /// The velocity of a mesh's surface (its motion's and its surface's `rates`) at the point
-    /// `x` (normal `normal`).
-    #[inline]
-    fn mesh_velocity(&self, rates: Rates, x: Vec3, normal: Vec3) -> Vec3 {
-        match rates {
-            None => Vec3::ZERO,
-            Some((v, w, o, surface)) => v + w.cross(x - o) + surface.velocity(x, normal),
-        }
-    }
-
-    /// Finds the mesh candidates of the current state if they are not current, so that the
-    /// contacts and diagnostics of a state not yet evaluated (a new or a restored simulation)
-    /// include its mesh contacts. The next evaluation finds the same contacts with them as
-    /// with any other complete candidates: the results do not change.
-    pub(crate) fn prepare_mesh_candidates(&mut self) {
-        if self.meshes.is_empty() {
+    /// Finds the candidates of the state `v` if they are not current, so that the contacts
+    /// and diagnostics of a state not yet evaluated (a new or a restored simulation) include
+    /// its mesh contacts. The next evaluation finds the same contacts with them as with any
+    /// other complete candidates: the results do not change.
+    pub(crate) fn prepare(&mut self, v: &View) {
+        if self.walls.is_empty() {
             return;
         }
-        let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose(m)).collect();
-        self.update_mesh_candidates(&poses);
+        let poses = self.poses_at(v.time);
+        self.update_candidates(v, &poses);
     }
 
     /// Finds the candidates again where they may have become incomplete. A slot's candidates
@@ -563,29 +506,27 @@ impl Simulation {
     /// reach while the centre has moved relative to the mesh by at most S: a slot whose centre
     /// moved farther relative to a mesh (`poses`: the meshes now) is searched again, and all
     /// are when the slots changed. A particle turning with a drum keeps its candidates.
-    fn update_mesh_candidates(&mut self, poses: &[Pose]) {
-        let margin = self.neighbors.skin();
-        let n = self.particles.len();
-        let n_meshes = self.meshes.len();
-        let st = &self.mesh_stage;
-        let full = !st.ready(n) || st.centres.len() != n * n_meshes;
-        let mut x: &[Vec3] = &self.particles.position;
+    fn update_candidates(&mut self, v: &View, poses: &[Pose]) {
+        let margin = v.neighbors.skin();
+        let n = v.particles.len();
+        let n_meshes = self.walls.len();
+        let full = !self.ready(n) || self.centres.len() != n * n_meshes;
+        let mut x: &[Vec3] = &v.particles.position;
         // Within S, less the rounding of the moves (far below this).
         let mut limit = (margin * (1.0 - 1e-9)).powi(2);
-        let reference = self.neighbors.reference();
-        if !full && reference.len() == n && self.meshes.iter().all(|w| !w.motion.moves()) {
+        let reference = v.neighbors.reference();
+        if !full && reference.len() == n && self.walls.iter().all(|w| !w.motion.moves()) {
             // Fixed meshes: no particle moves half the skin from where the neighbour list was
             // last built (its reference positions), so a centre within S/2 of those holds until
             // the next build: the candidates need checking only once a build.
-            let build = self.neighbors.stats().builds;
-            if st.checked_build == Some(build) {
+            let build = v.neighbors.stats().builds;
+            if self.checked_build == Some(build) {
                 return;
             }
-            self.mesh_stage.checked_build = Some(build);
+            self.checked_build = Some(build);
             x = reference;
             limit *= 0.25;
         }
-        let st = &self.mesh_stage;
         // The meshes' poses taken back, as matrices (a point x is at R·(x − t) as loaded).
         let back: Vec<Option<(glam::DMat3, Vec3)>> = poses
             .iter()
@@ -599,40 +540,39 @@ impl Simulation {
         };
         let stale = |i: usize| {
             full || (0..n_meshes)
-                .any(|m| (relative(i, m) - st.centres[i * n_meshes + m]).length_squared() > limit)
+                .any(|m| (relative(i, m) - self.centres[i * n_meshes + m]).length_squared() > limit)
         };
         let stale: Vec<usize> = (0..n).filter(|&i| stale(i)).collect();
         if stale.is_empty() {
             return;
         }
-        if st.grids.len() != self.meshes.len() {
-            let cell = 2.0 * self.particles.max_radius().max(self.flow.max_radius()) + margin;
-            self.mesh_stage.grids = self.meshes.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
+        if self.grids.len() != self.walls.len() {
+            let cell = 2.0 * v.r_max + margin;
+            self.grids = self.walls.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
         }
-        let st = &mut self.mesh_stage;
         if full {
-            st.centres.clear();
-            st.centres.resize(n * n_meshes, Vec3::ZERO);
-            st.span.clear();
-            st.span.resize(n, Span::default());
-            st.candidates.clear();
-            st.garbage = 0;
+            self.centres.clear();
+            self.centres.resize(n * n_meshes, Vec3::ZERO);
+            self.span.clear();
+            self.span.resize(n, Span::default());
+            self.candidates.clear();
+            self.garbage = 0;
         }
-        st.marks.resize_with(self.meshes.len(), NearScratch::default);
-        let p = &self.particles;
+        self.marks.resize_with(self.walls.len(), NearScratch::default);
+        let p = v.particles;
         let (mut near, mut found) = (Vec::new(), Vec::new());
         for i in stale {
             found.clear();
-            for (m, (wall, grid)) in self.meshes.iter().zip(&st.grids).enumerate() {
+            for (m, (wall, grid)) in self.walls.iter().zip(&self.grids).enumerate() {
                 let pose = &poses[m];
                 let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
-                st.centres[i * n_meshes + m] = y;
-                let reach = wall_coeffs_of(&self.coeffs, &self.law, p, i, wall.material).pull_off;
+                self.centres[i * n_meshes + m] = y;
+                let reach = wall_coeffs_of(v.coeffs, &v.law, p, i, wall.material).pull_off;
                 grid.near_with_distances(
                     &wall.mesh,
                     y,
                     p.radius[i] + margin + reach,
-                    &mut st.marks[m],
+                    &mut self.marks[m],
                     &mut near,
                 );
                 found.extend(near.iter().map(|&(t, distance)| Candidate {
@@ -641,54 +581,43 @@ impl Simulation {
                     distance,
                 }));
             }
-            let span = &mut st.span[i];
+            let span = &mut self.span[i];
             let len = found.len() as u32;
             if len <= span.cap {
-                st.candidates[span.start as usize..][..found.len()].copy_from_slice(&found);
+                self.candidates[span.start as usize..][..found.len()].copy_from_slice(&found);
                 span.len = len;
             } else {
-                st.garbage += span.cap as usize;
+                self.garbage += span.cap as usize;
                 let cap = if full { len } else { len + len / 4 };
-                *span = Span { start: st.candidates.len() as u32, len, cap };
-                st.candidates.extend_from_slice(&found);
+                *span = Span { start: self.candidates.len() as u32, len, cap };
+                self.candidates.extend_from_slice(&found);
                 let pad = Candidate { mesh: u32::MAX, triangle: u32::MAX, distance: f64::INFINITY };
-                st.candidates.resize(st.candidates.len() + (cap - len) as usize, pad);
+                self.candidates.resize(self.candidates.len() + (cap - len) as usize, pad);
             }
         }
-        if st.garbage > st.candidates.len() / 2 {
-            st.compact();
+        if self.garbage > self.candidates.len() / 2 {
+            self.compact();
         }
-        st.built = true;
-        st.built_n = n;
+        self.built = true;
+        self.built_n = n;
     }
 
-    /// Adds every particle's mesh-contact loads, rounded to `quanta`, to the force and torque
-    /// accumulators, raising `peak`; with `advance`, advances and stores their histories. `t`
-    /// is the time of the particles' positions.
-    pub(super) fn mesh_loads<N: NormalSubModel, T: TangentialSubModel>(
-        &mut self,
-        quanta: Quanta,
-        advance: bool,
-        peak: &mut Peak,
-        t: f64,
+    /// The mesh loads of the slots `slots` of the state `v` into `out`: `old` holds the
+    /// histories of the evaluation before, by (slot, mesh, triangle).
+    fn slot_loads<N: NormalSubModel, T: TangentialSubModel>(
+        &self,
+        v: &View,
+        s: &LoadSettings,
+        slots: std::ops::Range<usize>,
+        old: &[MeshHistory],
+        out: &mut SlotLoads,
     ) {
-        if self.meshes.is_empty() {
-            return;
-        }
-        let poses: Vec<Pose> = (0..self.meshes.len()).map(|m| self.mesh_pose_at(m, t)).collect();
-        self.update_mesh_candidates(&poses);
-        let dt = if advance { self.time_step.dt } else { 0.0 };
-        let rates = self.mesh_rates(t);
-        let law = self.law;
-        let old = std::mem::take(&mut self.mesh_stage.history);
-        let mut loads = std::mem::take(&mut self.mesh_stage.loads);
-        loads.clear();
-        let mut stored = Vec::with_capacity(old.len());
+        let (p, law) = (v.particles, v.law);
         let (mut contacts, mut triangles): (Vec<MeshContact>, Vec<u32>) = (Vec::new(), Vec::new());
         let mut claimed: Vec<bool> = Vec::new();
-        let mut o = 0;
-        for i in 0..self.mesh_stage.span.len() {
-            if self.mesh_stage.span[i].len == 0 {
+        let mut o = old.partition_point(|h| (h.slot as usize) < slots.start);
+        for i in slots {
+            if self.span[i].len == 0 {
                 continue;
             }
             // Histories are kept only for contacts, which only slots with candidates have.
@@ -702,20 +631,12 @@ impl Simulation {
             let mine = &old[o0..o];
             claimed.clear();
             claimed.resize(mine.len(), false);
-            for (m, MeshWall { mesh, material, .. }) in self.meshes.iter().enumerate() {
-                let p = &self.particles;
-                let c = &self.wall_coeffs(i, *material);
+            for (m, MeshWall { mesh, material, .. }) in self.walls.iter().enumerate() {
+                let c = &wall_coeffs_of(v.coeffs, &law, p, i, *material);
                 let reach = if N::REACHES { c.pull_off } else { 0.0 };
                 let radius = p.radius[i];
-                self.mesh_stage.contacts_of(
-                    i,
-                    (m, mesh, &poses[m]),
-                    p.position[i],
-                    radius,
-                    reach,
-                    &mut triangles,
-                    &mut contacts,
-                );
+                let pose = (m, mesh, &s.poses[m]);
+                self.contacts_of(i, pose, p.position[i], radius, reach, &mut triangles, &mut contacts);
                 for k in contacts.iter() {
                     let overlap = radius - k.distance;
                     let own = mine.iter().position(|h| h.mesh == m as u32 && h.triangle == k.triangle);
@@ -727,38 +648,189 @@ impl Simulation {
                         claimed[j] = true;
                         mine[j].h
                     });
-                    let input = self.mesh_input(i, k, overlap, c, h, rates[m]);
-                    let (load, h_new, bound) = wall_law::<N, T, { parts::ALL }>(&law, dt, &input);
+                    let input = mesh_input(p, &law, i, k, overlap, c, h, s.rates[m]);
+                    let (load, h_new, bound) = wall_law::<N, T, { parts::ALL }>(&law, s.dt, &input);
                     let round = |q: Quantum, v: Vec3| Vec3::new(q.round(v.x), q.round(v.y), q.round(v.z));
-                    let (f, ta) = (round(quanta.force, load.f), round(quanta.torque, load.ta));
-                    self.particles.force[i] += f;
-                    self.particles.torque[i] += ta;
-                    loads.push(MeshLoadPart {
+                    let (f, ta) = (round(s.quanta.force, load.f), round(s.quanta.torque, load.ta));
+                    out.loads.push(MeshLoadPart {
+                        slot: i as u32,
                         mesh: m as u32,
-                        centre: self.particles.position[i],
+                        centre: p.position[i],
                         force: f,
                         torque: ta,
                     });
-                    *peak = max_peak(*peak, bound);
-                    stored.push(MeshHistory {
+                    out.peak = max_peak(out.peak, bound);
+                    out.stored.push(MeshHistory {
                         slot: i as u32,
                         mesh: m as u32,
                         triangle: k.triangle,
                         normal: k.normal,
-                        h: if advance { h_new } else { h },
+                        h: if s.advance { h_new } else { h },
                     });
                 }
             }
         }
+    }
+}
+
+impl ContactSource for Meshes {
+    /// Every particle's mesh-contact loads, after the candidates are brought up to date.
+    fn loads<N: NormalSubModel, T: TangentialSubModel>(&mut self, run: &mut LoadRun) {
+        if self.walls.is_empty() {
+            return;
+        }
+        let clock = run.times.is_some().then(std::time::Instant::now);
+        let poses = self.poses_at(run.time);
+        self.update_candidates(&run.view(), &poses);
+        let rates = self.rates(run.time);
+        let settings = LoadSettings {
+            poses: &poses,
+            rates: &rates,
+            quanta: run.quanta,
+            advance: run.advance,
+            dt: if run.advance { run.dt } else { 0.0 },
+        };
+        let old = std::mem::take(&mut self.history);
+        let mut out = SlotLoads {
+            stored: Vec::with_capacity(old.len()),
+            loads: std::mem::take(&mut self.loads),
+            peak: [0.0; 2],
+        };
+        out.loads.clear();
+        self.slot_loads::<N, T>(&run.view(), &settings, 0..self.span.len(), &old, &mut out);
+        let p = &mut *run.particles;
+        for l in &out.loads {
+            p.force[l.slot as usize] += l.force;
+            p.torque[l.slot as usize] += l.torque;
+        }
+        run.peak = max_peak(run.peak, out.peak);
         // Two contacts of a particle never share an owner (`sphere_contacts` merges them), so
         // the order is that of (slot, mesh, triangle) once sorted; slots and meshes come in
         // order already.
+        let mut stored = out.stored;
         if !stored.is_sorted_by_key(|h| (h.slot, h.mesh, h.triangle)) {
             stored.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
         }
-        let st = &mut self.mesh_stage;
-        st.loads = loads;
-        st.history = if advance { stored } else { old };
+        self.loads = out.loads;
+        self.history = if run.advance { stored } else { old };
+        if let (Some(c), Some(t)) = (clock, run.times.as_deref_mut()) {
+            t.meshes += c.elapsed().as_secs_f64();
+        }
+    }
+
+    fn contact_infos(&self, v: &View, out: &mut Vec<ContactInfo>) {
+        crate::with_submodels!(v.law, |N, T| self.contact_infos_for::<N, T>(v, out))
+    }
+
+    fn diagnose(&self, v: &View, visit: &mut dyn FnMut(Diagnosed)) {
+        let (p, normal) = (v.particles, v.law.normal);
+        self.each_contact(v, |i, _, _, overlap, c| {
+            visit((overlap, p.radius[i], normal_spring_energy(normal, c, overlap)));
+        });
+    }
+
+    fn rearrange(&mut self, new_of: &[u32], _list: &mut NeighborState) {
+        self.remap(new_of);
+    }
+
+    fn appended(&mut self, n_old: usize, n: usize) {
+        self.append(n_old, n);
+    }
+
+    fn heap_bytes(&self) -> usize {
+        self.bytes()
+    }
+}
+
+impl Simulation {
+    /// The mesh-wall contacts' histories, by (slot, mesh, triangle).
+    pub(crate) fn mesh_histories(&self) -> &[MeshHistory] {
+        &self.sources.meshes.history
+    }
+
+    /// Restores the mesh-wall contacts' histories of a checkpoint: (particle id, mesh),
+    /// triangle, normal and history of each.
+    pub(crate) fn set_mesh_histories(
+        &mut self,
+        lists: (Vec<[u32; 2]>, Vec<u32>, Vec<Vec3>, Vec<Vec3>),
+    ) -> Result<(), String> {
+        let ids = self.particles().id.clone();
+        self.sources.meshes.set_histories(&ids, lists)
+    }
+
+    /// Where mesh `m` is now (its pose as loaded moved by its motion so far).
+    pub fn mesh_pose(&self, m: usize) -> Pose {
+        self.sources.meshes.pose_at(m, self.time())
+    }
+
+    /// The vertices of mesh `m` where they are now, m (in the order of
+    /// [`Mesh::vertices`]).
+    pub fn mesh_vertices(&self, m: usize) -> Vec<Vec3> {
+        let pose = self.mesh_pose(m);
+        self.meshes()[m].mesh.vertices().iter().map(|&y| pose.apply(y)).collect()
+    }
+
+    /// The mesh walls.
+    pub fn meshes(&self) -> &[MeshWall] {
+        &self.sources.meshes.walls
+    }
+
+    /// The load the particles exerted on mesh `m` at the last force evaluation (zero before
+    /// the first): the force, and the torque about `about`. The sums do not depend on the
+    /// particles' order; the force is exactly minus the sum of the particles' loads from it.
+    pub fn mesh_load(&self, m: usize, about: Vec3) -> MeshLoad {
+        self.sources.meshes.load_on(m, about)
+    }
+
+    /// (anchor time since the start, s; anchor pose; pose now) of every mesh, for checkpoints.
+    pub(crate) fn mesh_motion_state(&self) -> Vec<(f64, Pose, Pose)> {
+        self.sources.meshes.motion_state(self.time())
+    }
+
+    /// Restores what [`mesh_motion_state`](Self::mesh_motion_state) gave. A mesh whose motion
+    /// in this case puts it elsewhere than the checkpoint's pose (the case's motion changed)
+    /// continues from the checkpoint's pose, anchored at its time.
+    pub(crate) fn set_mesh_motion_state(&mut self, state: &[(f64, Pose, Pose)]) -> Result<(), String> {
+        let t = self.time();
+        self.sources.meshes.set_motion_state(state, t)
+    }
+}
+
+/// The wall law's input for slot `i`'s contact `k` (placed) with a mesh whose motion has
+/// `rates`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn mesh_input(
+    p: &Particles,
+    law: &ContactLaw,
+    i: usize,
+    k: &MeshContact,
+    overlap: f64,
+    c: &ContactCoeffs,
+    h: Vec3,
+    rates: Rates,
+) -> PairInput {
+    let lever = if law.lever == LeverArm::RadicalPlane { k.distance } else { p.radius[i] };
+    PairInput {
+        d: -k.normal,
+        ra: overlap,
+        rb: lever,
+        dv: p.velocity[i] - mesh_velocity(rates, k.point, k.normal),
+        wa: p.omega[i],
+        wb: Vec3::ZERO,
+        h,
+        c: *c,
+        m_eff: p.mass[i],
+    }
+}
+
+/// The velocity of a mesh's surface (its motion's and its surface's `rates`) at the point `x`
+/// (normal `normal`).
+#[inline]
+fn mesh_velocity(rates: Rates, x: Vec3, normal: Vec3) -> Vec3 {
+    match rates {
+        None => Vec3::ZERO,
+        Some((v, w, o, surface)) => v + w.cross(x - o) + surface.velocity(x, normal),
     }
 }
 
@@ -773,25 +845,6 @@ fn carried(mine: &[MeshHistory], claimed: &[bool], mesh: u32, normal: Vec3) -> O
         }
     }
     best.map(|(j, _)| j)
-}
-
-/// [`Simulation::wall_coeffs`] from the table, law and particles.
-#[inline]
-fn wall_coeffs_of(
-    coeffs: &CoeffTable,
-    law: &ContactLaw,
-    p: &Particles,
-    i: usize,
-    material: usize,
-) -> ContactCoeffs {
-    let c = coeffs.wall(p.phase[i] as usize, material);
-    if !coeffs.sized() {
-        return *c;
-    }
-    let r = p.radius[i];
-    let mut sized = contact_coeffs(coeffs, law, c, r, p.mass[i]);
-    sized.pull_off = crate::with_normal_submodel!(law.normal, |N| contact_reach::<N>(coeffs, c, r));
-    sized
 }
 
 /// A mesh that comes, within the first `span` s of its motion ([`MeshWall::swept_bounds`]),
