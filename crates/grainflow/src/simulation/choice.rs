@@ -92,7 +92,7 @@ impl ThreadChoice {
                 (self.steps, self.seconds, self.n) = (0, 0.0, n);
             }
         }
-        if self.trial { self.windows.len() % 2 == 0 } else { self.on_pool }
+        if self.trial { self.windows.len().is_multiple_of(2) } else { self.on_pool }
     }
 
     /// Records that step `step` took `seconds` (`pool`: on the pool).
