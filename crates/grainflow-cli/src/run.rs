@@ -253,8 +253,9 @@ pub struct RunArgs {
     /// after fixing the time step of a failed run); particles must still match.
     #[arg(long, requires = "restart")]
     accept_changed_case: bool,
-    /// Threads of the force stage (default: every core). Results are bit-identical for any
-    /// count.
+    /// Threads of the force stage. Default: every core, each step on them only while the
+    /// engine measures that they pay (the summary says what it chose). Results are
+    /// bit-identical for any count.
     #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     threads: Option<u16>,
     /// TOML case files only: set a key as if the file said so, by its dotted path (e.g.
@@ -400,6 +401,8 @@ pub fn main(args: RunArgs) -> ExitCode {
                 .map(usize::from)
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
         ),
+        choose_threads: args.threads.is_none(),
+        parallel_from: None,
         last_good_in_memory: None,
     };
     let mut progress = Progress::new(args.quiet);
@@ -445,6 +448,9 @@ pub fn main(args: RunArgs) -> ExitCode {
                 s.threads,
                 if s.threads == 1 { "" } else { "s" }
             );
+            if let Some(line) = thread_choice_line(&s.thread_report) {
+                println!("{line}");
+            }
             println!(
                 "neighbour list: {} pairs ({:.2} per particle) at the end, rebuilt {} times in {} steps",
                 s.neighbor_pairs,
@@ -523,4 +529,28 @@ pub fn main(args: RunArgs) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// The summary's sentence on the engine's choice of threads, when it chose.
+fn thread_choice_line(r: &grainflow::ThreadReport) -> Option<String> {
+    if !r.automatic {
+        return None;
+    }
+    let steps = r.steps_on_pool + r.steps_on_one;
+    let share = |k: u64| if steps == 0 { 0.0 } else { 100.0 * k as f64 / steps as f64 };
+    let measured = match r.last_trial {
+        Some((one, pool)) => format!(
+            "; last measured {one:.3e} s a step on 1 thread, {pool:.3e} s on {} ({} trial{})",
+            r.pool_threads,
+            r.trials,
+            if r.trials == 1 { "" } else { "s" }
+        ),
+        None => String::from("; too few steps or particles to measure"),
+    };
+    Some(format!(
+        "threads chosen by measured work (-j N fixes them): {:.0} % of steps on {} threads, {:.0} % on 1{measured}",
+        share(r.steps_on_pool),
+        r.pool_threads,
+        share(r.steps_on_one)
+    ))
 }

@@ -63,6 +63,12 @@ pub struct RunOptions {
     pub stop: Option<Arc<AtomicBool>>,
     /// Threads of the force stage (None: one). The results do not depend on it.
     pub threads: Option<usize>,
+    /// Let the engine run a step on one thread instead when it measures that the threads do
+    /// not pay ([`grainflow::Simulation::choose_threads`]).
+    pub choose_threads: bool,
+    /// Run steps on the threads from this many particles (None: the engine's default,
+    /// [`grainflow::forces::MIN_PARALLEL_PARTICLES`]); for tests of the threads on small cases.
+    pub parallel_from: Option<usize>,
     /// Largest state (bytes) kept in memory as the last good state; larger ones are kept in
     /// a file (None: [`LAST_GOOD_IN_MEMORY`]).
     pub last_good_in_memory: Option<usize>,
@@ -112,6 +118,8 @@ pub struct RunSummary {
     pub particle_steps: f64,
     /// Threads of the force stage.
     pub threads: usize,
+    /// What the engine's choice of threads did ([`RunOptions::choose_threads`]).
+    pub thread_report: grainflow::ThreadReport,
     /// Heap bytes of the particles, the neighbour list and the threads' plan at the end.
     pub memory: grainflow::MemoryUse,
     /// True when the run was stopped by the `stop` flag before its end.
@@ -218,8 +226,13 @@ pub fn run_case(
     let mut folder = OutputFolder::claim(out, &intent, options.overwrite, &case_file, &hash)?;
     sim.set_run_id(folder.run_id());
     sim.enable_stage_timing();
-    if let Some(t) = options.threads {
-        sim.set_threads(t)?;
+    match options.threads {
+        Some(t) if options.choose_threads => sim.choose_threads(t)?,
+        Some(t) => sim.set_threads(t)?,
+        None => {}
+    }
+    if let Some(n) = options.parallel_from {
+        sim.set_parallel_from(n);
     }
     let info = RunInfo {
         options,
@@ -1169,6 +1182,7 @@ fn run_simulation(
         particles: (n_start, sim.particles().len()),
         particle_steps,
         threads: sim.threads(),
+        thread_report: sim.thread_report(),
         memory: sim.heap_bytes(),
         interrupted,
         checkpoint,

@@ -62,7 +62,7 @@ pub use motion::{MotionRule, PrescribedMotion};
 pub use observe::Diagnostics;
 pub use simulation::{
     ContactInfo, ContactPartner, FlowBooks, MemoryUse, MeshLoad, ResortRule, Simulation, SimulationConfig,
-    StageTimes, Tally,
+    StageTimes, Tally, ThreadReport,
 };
 pub use state::Particles;
 pub use timestep::{TimeStepChoice, TimeStepRule};

@@ -389,7 +389,7 @@ impl NeighborList {
         self.reference.extend_from_slice(&p.position);
         self.built = true;
         self.build_pairs(p, parallel);
-        self.build_walls(p, walls);
+        self.build_walls(p, walls, parallel);
     }
 
     fn build_pairs(&mut self, p: &Particles, parallel: bool) {
@@ -668,27 +668,49 @@ impl NeighborList {
         self.fresh.clear();
     }
 
-    fn build_walls(&mut self, p: &Particles, walls: &[Wall]) {
-        let mut fresh = Vec::new();
-        for i in 0..p.len() {
-            for (w, wall) in walls.iter().enumerate() {
-                self.stats.distance_checks += 1;
-                let d = wall.distance(p.position[i]);
-                if d < p.radius[i] + self.skin {
-                    fresh.push([i as u32, w as u32]);
+    /// The wall pairs found afresh, each with the history of the same pair in the old list
+    /// (zero if new); with `parallel`, runs of slots are searched on the current rayon pool and
+    /// joined in slot order (the list is the same).
+    fn build_walls(&mut self, p: &Particles, walls: &[Wall], parallel: bool) {
+        let n = p.len();
+        self.stats.distance_checks += (n * walls.len()) as u64;
+        let (old, old_history, skin) = (&self.wall_pairs, &self.wall_history, self.skin);
+        let find = |slots: Range<usize>| {
+            let mut fresh = Vec::new();
+            for i in slots {
+                for (w, wall) in walls.iter().enumerate() {
+                    if wall.distance(p.position[i]) < p.radius[i] + skin {
+                        fresh.push([i as u32, w as u32]);
+                    }
                 }
             }
-        }
-        // Both lists are in (slot, wall) order: one merge pass carries the histories over.
-        let mut history = Vec::with_capacity(fresh.len());
-        let mut k = 0;
-        for pair in &fresh {
-            while k < self.wall_pairs.len() && self.wall_pairs[k] < *pair {
-                k += 1;
+            // Both lists are in (slot, wall) order: one merge pass carries the histories over.
+            let mut history = Vec::with_capacity(fresh.len());
+            let mut k = fresh.first().map_or(0, |first| old.partition_point(|q| q < first));
+            for pair in &fresh {
+                while k < old.len() && old[k] < *pair {
+                    k += 1;
+                }
+                let same = k < old.len() && old[k] == *pair;
+                history.push(if same { old_history[k] } else { Vec3::ZERO });
             }
-            let same = k < self.wall_pairs.len() && self.wall_pairs[k] == *pair;
-            history.push(if same { self.wall_history[k] } else { Vec3::ZERO });
-        }
+            (fresh, history)
+        };
+        let (fresh, history) = if parallel && !walls.is_empty() {
+            use rayon::prelude::*;
+            let parts = 4 * rayon::current_num_threads();
+            let found: Vec<_> =
+                (0..parts).into_par_iter().map(|k| find(k * n / parts..(k + 1) * n / parts)).collect();
+            let mut fresh = Vec::with_capacity(found.iter().map(|f| f.0.len()).sum());
+            let mut history = Vec::with_capacity(fresh.capacity());
+            for (f, h) in found {
+                fresh.extend_from_slice(&f);
+                history.extend_from_slice(&h);
+            }
+            (fresh, history)
+        } else {
+            find(0..n)
+        };
         self.wall_pairs = fresh;
         self.wall_history = history;
     }

@@ -17,10 +17,12 @@ use crate::state::Particles;
 use crate::timestep::{self, TimeStepChoice, TimeStepRule};
 use crate::wall::Wall;
 
+mod choice;
 mod inflow;
 mod population;
 
 pub use crate::forces::source::{MeshLoad, periodic_mesh_message, periodic_mesh_reach};
+pub use choice::ThreadReport;
 pub use inflow::{FlowBooks, Tally};
 pub use population::ResortRule;
 
@@ -191,6 +193,8 @@ pub struct Simulation {
     timing: Option<StageTimes>,
     /// Threads of the force stage (None: the calling thread only).
     pool: Option<std::sync::Arc<rayon::ThreadPool>>,
+    /// Whether a step runs on the pool ([`choice`]).
+    choice: choice::ThreadChoice,
     /// The largest force and torque components of the last force evaluation's loads, from
     /// which the next takes the quanta of its order-free sums (`forces::sum`); `None` before
     /// the first.
@@ -365,6 +369,7 @@ impl Simulation {
             note: Vec::new(),
             timing: None,
             pool: None,
+            choice: Default::default(),
             load_peak: None,
             peak_floor,
             inexact_sums: 0,
@@ -559,6 +564,7 @@ impl Simulation {
                 .map_err(|e| EngineError::BadReference(format!("cannot start {threads} threads: {e}")))?;
             Some(std::sync::Arc::new(pool))
         };
+        self.choice = choice::ThreadChoice::new(false, threads).keeping(&self.choice);
         Ok(())
     }
 
@@ -589,7 +595,7 @@ impl Simulation {
 
     /// Advances one step: contact forces, integration, prescribed motion.
     pub fn step(&mut self) {
-        self.on_stages(|sim, par| sim.step_on(par, false));
+        self.on_stages(|sim, par| sim.step_chosen(par, false));
     }
 
     /// Takes up to `steps` steps (stopping at the end of the run). Between the steps of one
@@ -616,7 +622,7 @@ impl Simulation {
     /// `steps` steps (not beyond the end of the run); with `par`, on the current rayon pool.
     fn advance_on(&mut self, steps: u64, par: bool) {
         for i in 0..steps {
-            self.step_on(par, i + 1 < steps);
+            self.step_chosen(par, i + 1 < steps);
         }
         debug_assert!(!self.kick_pending);
     }
@@ -633,12 +639,27 @@ impl Simulation {
 
     /// True when the stages run on the thread pool.
     fn parallel(&self) -> bool {
-        self.pool.is_some() && self.particles.len() >= forces::MIN_PARALLEL_PARTICLES
+        self.pool.is_some() && self.particles.len() >= self.choice.parallel_from()
     }
 
     /// The periodic wrap, if any axis is periodic.
     fn wrap(&self) -> Option<Periodic> {
         self.periodic.any().then_some(self.periodic)
+    }
+
+    /// One step; with `par`, on the current rayon pool if the choice of threads says so
+    /// ([`choice`]), the step timed for it.
+    fn step_chosen(&mut self, par: bool, defer: bool) {
+        if !par {
+            if self.pool.is_some() {
+                self.choice.record_unpooled();
+            }
+            return self.step_on(false, defer);
+        }
+        let pool = self.choice.use_pool(self.step, self.particles.len());
+        let start = std::time::Instant::now();
+        self.step_on(pool, defer);
+        self.choice.record(pool, start.elapsed().as_secs_f64(), self.step);
     }
 
     /// One step; with `par`, the per-particle stages use the current rayon pool. With `defer`

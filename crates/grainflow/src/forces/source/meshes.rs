@@ -10,8 +10,12 @@
 //! on the same mesh whose normal is closest to its own (within 60°), so that the spring does
 //! not snap back at a seam.
 //!
-//! The loads are rounded to the sums' quanta like every other load (`forces::sum`), so adding
-//! them after the pair stage, on one thread, gives the same sums as adding them anywhere else.
+//! On threads, the slots are shared out in consecutive runs: each run's candidates are
+//! searched and its contacts' loads and histories computed on its own, and the runs' results
+//! are joined in slot order, so the candidates, the histories and the list of loads are those
+//! one thread finds, whatever the thread count. The loads are rounded to the sums' quanta like
+//! every other load (`forces::sum`), so adding them after the pair stage gives the same sums
+//! as adding them anywhere else.
 //!
 //! A moving mesh ([`crate::mesh::motion`]) stays binned in its pose as loaded: a particle's
 //! centre is taken into that pose to find its contacts, and the contacts' normals and points
@@ -90,8 +94,8 @@ pub(crate) struct Meshes {
     /// Where each slot's centre was, relative to each mesh (in the mesh's pose as loaded),
     /// when its candidates were found: slot i, mesh m at `centres[i * meshes + m]`, m.
     centres: Vec<Vec3>,
-    /// Marks of the triangles met by a query, per mesh.
-    marks: Vec<NearScratch>,
+    /// The working memory of each run of slots (one run off threads).
+    workers: Vec<Worker>,
     /// Slot i's candidates are `candidates[span[i].range()]`, by mesh. A
     /// slot whose candidates are found again keeps its room if they fit, else takes new room
     /// at the end (a quarter more than it needs); the room left behind (`garbage`, entries)
@@ -107,6 +111,44 @@ pub(crate) struct Meshes {
     pub t0: f64,
     /// The last evaluation's loads on the particles from the meshes, for the meshes' loads.
     loads: Vec<MeshLoadPart>,
+}
+
+/// What one run of slots works with: marks of the triangles met by a query (per mesh), the
+/// candidates it found (with their counts and the centres, per slot) and its loads.
+#[derive(Debug, Clone, Default)]
+struct Worker {
+    marks: Vec<NearScratch>,
+    near: Vec<(u32, f64)>,
+    found: Vec<Candidate>,
+    lens: Vec<u32>,
+    centres: Vec<Vec3>,
+    out: SlotLoads,
+}
+
+impl Worker {
+    fn heap_bytes(&self) -> usize {
+        self.marks.iter().map(|m| m.heap_bytes()).sum::<usize>()
+            + self.near.capacity() * 16
+            + self.found.capacity() * std::mem::size_of::<Candidate>()
+            + self.lens.capacity() * 4
+            + self.centres.capacity() * 24
+            + self.out.stored.capacity() * std::mem::size_of::<MeshHistory>()
+            + self.out.loads.capacity() * std::mem::size_of::<MeshLoadPart>()
+    }
+}
+
+/// Runs of slots a thread takes at a time, per thread: enough for the threads to even out
+/// runs with more contacts than others.
+const RUNS_PER_THREAD: usize = 4;
+
+/// Below this many slots to search or evaluate, the mesh stage stays on one thread (the
+/// results do not depend on it).
+const MIN_PARALLEL_SLOTS: usize = 256;
+
+/// `n` items in `parts` consecutive runs of nearly equal length.
+fn runs(n: usize, parts: usize) -> impl Iterator<Item = std::ops::Range<usize>> + Clone {
+    let parts = parts.clamp(1, n.max(1));
+    (0..parts).map(move |k| k * n / parts..(k + 1) * n / parts)
 }
 
 /// A mesh's motion rates at an evaluation: (linear velocity, angular velocity, a point on the
@@ -143,7 +185,7 @@ impl Meshes {
         self.grids.iter().map(TriangleGrid::heap_bytes).sum::<usize>()
             + self.span.capacity() * std::mem::size_of::<Span>()
             + self.centres.capacity() * 24
-            + self.marks.iter().map(|m| m.heap_bytes()).sum::<usize>()
+            + self.workers.iter().map(Worker::heap_bytes).sum::<usize>()
             + self.candidates.capacity() * std::mem::size_of::<Candidate>()
             + self.history.capacity() * std::mem::size_of::<MeshHistory>()
             + self.loads.capacity() * std::mem::size_of::<MeshLoadPart>()
@@ -279,7 +321,7 @@ impl Meshes {
 
 /// What the mesh loads of a run of slots give: the stored histories, the loads on the
 /// particles (in the order of their slots, then meshes, then triangles) and their peak.
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 struct SlotLoads {
     stored: Vec<MeshHistory>,
     loads: Vec<MeshLoadPart>,
@@ -496,7 +538,7 @@ impl Meshes {
             return;
         }
         let poses = self.poses_at(v.time);
-        self.update_candidates(v, &poses);
+        self.update_candidates(v, &poses, None);
     }
 
     /// Finds the candidates again where they may have become incomplete. A slot's candidates
@@ -506,7 +548,7 @@ impl Meshes {
     /// reach while the centre has moved relative to the mesh by at most S: a slot whose centre
     /// moved farther relative to a mesh (`poses`: the meshes now) is searched again, and all
     /// are when the slots changed. A particle turning with a drum keeps its candidates.
-    fn update_candidates(&mut self, v: &View, poses: &[Pose]) {
+    fn update_candidates(&mut self, v: &View, poses: &[Pose], pool: Option<&rayon::ThreadPool>) {
         let margin = v.neighbors.skin();
         let n = v.particles.len();
         let n_meshes = self.walls.len();
@@ -542,7 +584,14 @@ impl Meshes {
             full || (0..n_meshes)
                 .any(|m| (relative(i, m) - self.centres[i * n_meshes + m]).length_squared() > limit)
         };
-        let stale: Vec<usize> = (0..n).filter(|&i| stale(i)).collect();
+        let pool = pool.filter(|_| n >= MIN_PARALLEL_SLOTS);
+        let stale: Vec<usize> = match pool {
+            Some(pool) => {
+                use rayon::prelude::*;
+                pool.install(|| (0..n).into_par_iter().filter(|&i| stale(i)).collect())
+            }
+            None => (0..n).filter(|&i| stale(i)).collect(),
+        };
         if stale.is_empty() {
             return;
         }
@@ -558,48 +607,87 @@ impl Meshes {
             self.candidates.clear();
             self.garbage = 0;
         }
-        self.marks.resize_with(self.walls.len(), NearScratch::default);
-        let p = v.particles;
-        let (mut near, mut found) = (Vec::new(), Vec::new());
-        for i in stale {
-            found.clear();
-            for (m, (wall, grid)) in self.walls.iter().zip(&self.grids).enumerate() {
-                let pose = &poses[m];
-                let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
-                self.centres[i * n_meshes + m] = y;
-                let reach = wall_coeffs_of(v.coeffs, &v.law, p, i, wall.material).pull_off;
-                grid.near_with_distances(
-                    &wall.mesh,
-                    y,
-                    p.radius[i] + margin + reach,
-                    &mut self.marks[m],
-                    &mut near,
-                );
-                found.extend(near.iter().map(|&(t, distance)| Candidate {
-                    mesh: m as u32,
-                    triangle: t,
-                    distance,
-                }));
+        // Each run of the stale slots is searched on its own; the runs' finds are then placed
+        // in slot order, as one search of them all would place them.
+        let parts = match pool {
+            Some(pool) if stale.len() >= MIN_PARALLEL_SLOTS => RUNS_PER_THREAD * pool.current_num_threads(),
+            _ => 1,
+        };
+        let mut workers = std::mem::take(&mut self.workers);
+        if workers.len() < parts {
+            workers.resize_with(parts, Worker::default);
+        }
+        let search = |w: &mut Worker, slots: &[usize]| self.search(v, poses, margin, slots, w);
+        match pool.filter(|_| parts > 1) {
+            Some(pool) => {
+                use rayon::prelude::*;
+                let runs: Vec<_> = runs(stale.len(), parts).map(|r| &stale[r]).collect();
+                pool.install(|| workers[..parts].par_iter_mut().zip(runs).for_each(|(w, s)| search(w, s)));
             }
-            let span = &mut self.span[i];
-            let len = found.len() as u32;
-            if len <= span.cap {
-                self.candidates[span.start as usize..][..found.len()].copy_from_slice(&found);
-                span.len = len;
-            } else {
-                self.garbage += span.cap as usize;
-                let cap = if full { len } else { len + len / 4 };
-                *span = Span { start: self.candidates.len() as u32, len, cap };
-                self.candidates.extend_from_slice(&found);
-                let pad = Candidate { mesh: u32::MAX, triangle: u32::MAX, distance: f64::INFINITY };
-                self.candidates.resize(self.candidates.len() + (cap - len) as usize, pad);
+            None => search(&mut workers[0], &stale),
+        }
+        let pad = Candidate { mesh: u32::MAX, triangle: u32::MAX, distance: f64::INFINITY };
+        for (w, r) in workers.iter().zip(runs(stale.len(), parts)) {
+            let mut at = 0;
+            for (k, &i) in stale[r].iter().enumerate() {
+                self.centres[i * n_meshes..(i + 1) * n_meshes]
+                    .copy_from_slice(&w.centres[k * n_meshes..(k + 1) * n_meshes]);
+                let found = &w.found[at..at + w.lens[k] as usize];
+                at += found.len();
+                let span = &mut self.span[i];
+                let len = found.len() as u32;
+                if len <= span.cap {
+                    self.candidates[span.start as usize..][..found.len()].copy_from_slice(found);
+                    span.len = len;
+                } else {
+                    self.garbage += span.cap as usize;
+                    let cap = if full { len } else { len + len / 4 };
+                    *span = Span { start: self.candidates.len() as u32, len, cap };
+                    self.candidates.extend_from_slice(found);
+                    self.candidates.resize(self.candidates.len() + (cap - len) as usize, pad);
+                }
             }
         }
+        self.workers = workers;
         if self.garbage > self.candidates.len() / 2 {
             self.compact();
         }
         self.built = true;
         self.built_n = n;
+    }
+
+    /// Searches the meshes for the candidates of `slots` (their centres taken into each mesh's
+    /// pose as loaded, from `poses`; within radius + `margin` + pull-off distance): `w.found`
+    /// holds them slot after slot, `w.lens` their count per slot and `w.centres` the centres,
+    /// mesh after mesh.
+    fn search(&self, v: &View, poses: &[Pose], margin: f64, slots: &[usize], w: &mut Worker) {
+        let p = v.particles;
+        w.marks.resize_with(self.walls.len(), NearScratch::default);
+        w.found.clear();
+        w.lens.clear();
+        w.centres.clear();
+        for &i in slots {
+            let before = w.found.len();
+            for (m, (wall, grid)) in self.walls.iter().zip(&self.grids).enumerate() {
+                let pose = &poses[m];
+                let y = if pose.is_identity() { p.position[i] } else { pose.unapply(p.position[i]) };
+                w.centres.push(y);
+                let reach = wall_coeffs_of(v.coeffs, &v.law, p, i, wall.material).pull_off;
+                grid.near_with_distances(
+                    &wall.mesh,
+                    y,
+                    p.radius[i] + margin + reach,
+                    &mut w.marks[m],
+                    &mut w.near,
+                );
+                w.found.extend(w.near.iter().map(|&(t, distance)| Candidate {
+                    mesh: m as u32,
+                    triangle: t,
+                    distance,
+                }));
+            }
+            w.lens.push((w.found.len() - before) as u32);
+        }
     }
 
     /// The mesh loads of the slots `slots` of the state `v` into `out`: `old` holds the
@@ -681,7 +769,7 @@ impl ContactSource for Meshes {
         }
         let clock = run.times.is_some().then(std::time::Instant::now);
         let poses = self.poses_at(run.time);
-        self.update_candidates(&run.view(), &poses);
+        self.update_candidates(&run.view(), &poses, run.pool);
         let rates = self.rates(run.time);
         let settings = LoadSettings {
             poses: &poses,
@@ -691,27 +779,56 @@ impl ContactSource for Meshes {
             dt: if run.advance { run.dt } else { 0.0 },
         };
         let old = std::mem::take(&mut self.history);
-        let mut out = SlotLoads {
-            stored: Vec::with_capacity(old.len()),
-            loads: std::mem::take(&mut self.loads),
-            peak: [0.0; 2],
-        };
-        out.loads.clear();
-        self.slot_loads::<N, T>(&run.view(), &settings, 0..self.span.len(), &old, &mut out);
-        let p = &mut *run.particles;
-        for l in &out.loads {
-            p.force[l.slot as usize] += l.force;
-            p.torque[l.slot as usize] += l.torque;
+        let n = self.span.len();
+        let pool = run.pool.filter(|_| n >= MIN_PARALLEL_SLOTS);
+        let parts = pool.map_or(1, |pool| RUNS_PER_THREAD * pool.current_num_threads());
+        let mut workers = std::mem::take(&mut self.workers);
+        if workers.len() < parts {
+            workers.resize_with(parts, Worker::default);
         }
-        run.peak = max_peak(run.peak, out.peak);
+        {
+            let view = run.view();
+            let work = |w: &mut Worker, slots: std::ops::Range<usize>| {
+                w.out.stored.clear();
+                w.out.loads.clear();
+                w.out.peak = [0.0; 2];
+                self.slot_loads::<N, T>(&view, &settings, slots, &old, &mut w.out);
+            };
+            match pool {
+                Some(pool) => {
+                    use rayon::prelude::*;
+                    pool.install(|| {
+                        workers[..parts]
+                            .par_iter_mut()
+                            .zip(runs(n, parts).collect::<Vec<_>>())
+                            .for_each(|(w, r)| work(w, r))
+                    });
+                }
+                None => work(&mut workers[0], 0..n),
+            }
+        }
+        let workers_used = &workers[..parts.min(n.max(1))];
+        let p = &mut *run.particles;
+        let mut loads = std::mem::take(&mut self.loads);
+        loads.clear();
+        let mut stored = Vec::with_capacity(workers_used.iter().map(|w| w.out.stored.len()).sum());
+        for w in workers_used {
+            for l in &w.out.loads {
+                p.force[l.slot as usize] += l.force;
+                p.torque[l.slot as usize] += l.torque;
+            }
+            loads.extend_from_slice(&w.out.loads);
+            stored.extend_from_slice(&w.out.stored);
+            run.peak = max_peak(run.peak, w.out.peak);
+        }
         // Two contacts of a particle never share an owner (`sphere_contacts` merges them), so
         // the order is that of (slot, mesh, triangle) once sorted; slots and meshes come in
         // order already.
-        let mut stored = out.stored;
         if !stored.is_sorted_by_key(|h| (h.slot, h.mesh, h.triangle)) {
             stored.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
         }
-        self.loads = out.loads;
+        self.workers = workers;
+        self.loads = loads;
         self.history = if run.advance { stored } else { old };
         if let (Some(c), Some(t)) = (clock, run.times.as_deref_mut()) {
             t.meshes += c.elapsed().as_secs_f64();
