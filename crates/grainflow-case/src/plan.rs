@@ -318,6 +318,16 @@ pub struct Plan {
     pub warnings: Vec<String>,
 }
 
+/// Steps between outputs for an interval: the interval rounded to whole steps (at least 1);
+/// no interval gives about 100 outputs over the run. The run loop (`grainflow-run`) writes
+/// at these steps; the plan counts them.
+pub fn output_every(interval: Option<f64>, dt: f64, total_steps: u64) -> u64 {
+    match interval {
+        Some(iv) => ((iv / dt).round() as u64).max(1),
+        None => total_steps.div_ceil(100).max(1),
+    }
+}
+
 /// Outputs of a run of `steps` steps every `every` steps: steps 0, every, 2·every, … and the
 /// last step.
 fn outputs(steps: u64, every: u64) -> u64 {
@@ -423,10 +433,10 @@ pub fn plan(case: &Case, limit: MemoryLimit) -> Result<Plan, CaseError> {
             ));
         }
     }
-    let every = crate::run::output_every(case.output.interval, dt, steps);
+    let every = output_every(case.output.interval, dt, steps);
     let rows = outputs(steps, every);
     let vtk = case.output.vtk_interval.map(|iv| {
-        let k = crate::run::output_every(Some(iv), dt, steps);
+        let k = output_every(Some(iv), dt, steps);
         (outputs(steps, k), k)
     });
     let n0 = case.particles.len() as f64;

@@ -227,7 +227,7 @@ fn the_plan_counts_what_the_run_does() {
     let mut sim = grainflow::Simulation::new(case.config, case.particles).expect("set-up");
     assert_eq!(plan.dt, sim.dt());
     assert_eq!(plan.steps, sim.total_steps());
-    let every = grainflow_case::run::output_every(None, sim.dt(), sim.total_steps());
+    let every = grainflow_case::plan::output_every(None, sim.dt(), sim.total_steps());
     assert_eq!(plan.output_every, every);
     // Rows at steps 0, every, 2·every, … and at the last step.
     let rows = (0..=sim.total_steps()).filter(|s| s % every == 0 || *s == sim.total_steps()).count();

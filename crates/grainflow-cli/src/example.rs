@@ -130,7 +130,7 @@ fn write(example: &Example, dir: &Path) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     for (file, text) in example.files {
         let path = dir.join(file);
-        grainflow_case::output::write_atomic(&path, text.as_bytes())
+        grainflow_run::output::write_atomic(&path, text.as_bytes())
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
     Ok(())

@@ -4,7 +4,7 @@ use crate::EXIT_BAD_INPUT;
 use clap::Args;
 use grainflow::Simulation;
 use grainflow_case::CaseError;
-use grainflow_case::run::{CheckpointEvery, Provenance, RunError, RunOptions, run_case};
+use grainflow_run::run::{CheckpointEvery, Provenance, RunError, RunOptions, run_case};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::Path;

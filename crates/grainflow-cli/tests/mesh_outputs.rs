@@ -382,13 +382,13 @@ fn a_restart_continues_the_mesh_outputs_and_the_manifest_lists_them() {
     // Checkpoints every 3000 steps, the run stopped (as by SIGINT) at step 9000, an output
     // step (every 10 steps) and a VTK frame's (every 1000), whose checkpoint it writes.
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let options = grainflow_case::run::RunOptions {
-        checkpoint_every: Some(grainflow_case::run::CheckpointEvery::Steps(3000)),
+    let options = grainflow_run::run::RunOptions {
+        checkpoint_every: Some(grainflow_run::run::CheckpointEvery::Steps(3000)),
         stop: Some(stop.clone()),
         ..Default::default()
     };
     let stopped =
-        grainflow_case::run::run_case(grainflow_case::load(&case).expect("case"), &part, &options, |sim| {
+        grainflow_run::run::run_case(grainflow_case::load(&case).expect("case"), &part, &options, |sim| {
             if sim.step_index() >= 9000 {
                 stop.store(true, std::sync::atomic::Ordering::SeqCst);
             }

@@ -14,7 +14,7 @@ use crate::report::{CaseOutcome, SuiteOptions};
 use grainflow::state::ParticleInit;
 use grainflow::{Integrator, LeverArm, Particles, Simulation, TimeStepRule, Vec3};
 use grainflow_case::Case;
-use grainflow_case::output::write_atomic;
+use grainflow_run::output::write_atomic;
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -7,7 +7,7 @@ use crate::check::{Check, CheckKind};
 use crate::error::{VerifyError, io_at};
 use grainflow::Integrator;
 use grainflow_case::Case;
-use grainflow_case::output::write_atomic;
+use grainflow_run::output::write_atomic;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

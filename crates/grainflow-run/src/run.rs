@@ -17,7 +17,6 @@
 //! - **interruption**: when the `stop` flag is raised (SIGINT/SIGTERM in the program) the step
 //!   in progress finishes, a checkpoint is written and the outputs are closed properly.
 
-use crate::case::{Case, OutputSettings};
 use crate::outdir::{FolderError, Intent, OutputFolder, RUN_INFO_FILE, TIMESERIES_FILE};
 use crate::output::{
     ResumeError, SeriesRecord, TimeSeriesWriter, Value, mesh_columns, rotation_axis, snapshot_csv,
@@ -25,6 +24,8 @@ use crate::output::{
 };
 use crate::vtk::{FIXED_MESHES_FILE, MeshShape, VtkSeries};
 use grainflow::{Diagnostics, Simulation, Vec3};
+use grainflow_case::plan::output_every;
+use grainflow_case::{Case, OutputSettings};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -184,15 +185,6 @@ pub enum RunError {
         /// Where it was saved.
         saved: PathBuf,
     },
-}
-
-/// Steps between outputs for an interval: the interval rounded to whole steps (at least 1);
-/// no interval gives about 100 outputs over the run.
-pub fn output_every(interval: Option<f64>, dt: f64, total_steps: u64) -> u64 {
-    match interval {
-        Some(iv) => ((iv / dt).round() as u64).max(1),
-        None => total_steps.div_ceil(100).max(1),
-    }
 }
 
 /// Runs `case` to its end (or until `options.stop` is raised), writing into the folder `out`

@@ -2,7 +2,7 @@
 //! in memory (small states) or in a file (large states, so that the copy does not add to the
 //! run's memory): the same state to the bit, and it restarts. A healthy run leaves no copy behind.
 
-use grainflow_case::run::{LAST_GOOD_FILE, RunError, RunOptions, run_case};
+use grainflow_run::run::{LAST_GOOD_FILE, RunError, RunOptions, run_case};
 use std::path::Path;
 
 /// The settling-bed example, shortened; with `unstable`, its time step forced 30× above the

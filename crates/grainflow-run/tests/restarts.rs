@@ -4,7 +4,7 @@
 //! where it is, its last periodic checkpoint and the rows written since are left), during an
 //! insertion and during a discharge through an outlet.
 
-use grainflow_case::run::{CheckpointEvery, RunOptions, run_case};
+use grainflow_run::run::{CheckpointEvery, RunOptions, run_case};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -231,7 +231,7 @@ fn a_restart_refuses_an_edited_cut_or_missing_time_series() {
         );
         let e = r.err().unwrap_or_else(|| panic!("{what}: the restart went on"));
         let msg = e.to_string();
-        assert!(matches!(e, grainflow_case::run::RunError::Restart { .. }), "{what}: {msg}");
+        assert!(matches!(e, grainflow_run::run::RunError::Restart { .. }), "{what}: {msg}");
         assert!(msg.contains(&ts.display().to_string()) && msg.contains(want), "{what}: {msg}");
         assert!(before == outputs(&part), "{what}: a refused restart changed the folder");
     }

@@ -5,7 +5,7 @@
 //! neighbour list and its history merge, insertions and outlets all run on the threads there.
 //! A nudge of one ulp in gravity changes the bytes, so the comparison can fail.
 
-use grainflow_case::run::{RunOptions, run_case};
+use grainflow_run::run::{RunOptions, run_case};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 

@@ -2,7 +2,7 @@
 //! the case run from its start does: `format2/checkpoint-v2.gfc` is `format2/case.toml` at step
 //! 6000, written by the build before format 3.
 
-use grainflow_case::run::{RunOptions, run_case};
+use grainflow_run::run::{RunOptions, run_case};
 use std::path::Path;
 
 #[test]
