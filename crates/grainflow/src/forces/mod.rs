@@ -203,26 +203,30 @@ pub(crate) fn parallel<N: NormalSubModel, T: TangentialSubModel>(
         Incoming::Crossing { start: &plan.incoming_start, index: &plan.incoming, loads: &plan.loads };
     let crossing_start = &plan.crossing_start;
     let loads = &plan.loads;
-    let parts = force.into_iter().zip(torque).zip(hist).zip(flags).zip(whist);
-    let block_times = crate::threads::pinned(parts, |t, ((((force, torque), hist), flags), whist)| {
-        let rows = blocks[t].clone();
-        let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
-        let t0 = clock.then(std::time::Instant::now);
-        let (walls, peak) = block::<N, T>(
-            &mut Scratch::fresh(),
-            clock,
-            x,
-            rows,
-            Accumulators { force, torque, peak: [0.0; 2] },
-            hist,
-            flags,
-            whist,
-            w0,
-            incoming,
-            &loads[crossing_start[t]..crossing_start[t + 1]],
-        );
-        (walls, since(t0), peak)
-    });
+    if plan.scratch.len() != blocks.len() {
+        plan.scratch.resize_with(blocks.len(), Scratch::fresh);
+    }
+    let parts = force.into_iter().zip(torque).zip(hist).zip(flags).zip(whist).zip(plan.scratch.iter_mut());
+    let block_times =
+        crate::threads::pinned(parts, |t, (((((force, torque), hist), flags), whist), scratch)| {
+            let rows = blocks[t].clone();
+            let w0 = if t == 0 { 0 } else { wall_ends[t - 1] };
+            let t0 = clock.then(std::time::Instant::now);
+            let (walls, peak) = block::<N, T>(
+                scratch,
+                clock,
+                x,
+                rows,
+                Accumulators { force, torque, peak: [0.0; 2] },
+                hist,
+                flags,
+                whist,
+                w0,
+                incoming,
+                &loads[crossing_start[t]..crossing_start[t + 1]],
+            );
+            (walls, since(t0), peak)
+        });
     // The peaks are maxima: the same whichever thread found them.
     *out.peak =
         block_times.iter().map(|b| b.2).chain(crossing_busy.iter().map(|c| c.1)).fold([0.0; 2], max_peak);
@@ -252,8 +256,7 @@ pub(crate) struct Scratch {
 }
 
 impl Scratch {
-    /// A cleared scratch, where it is made (a thread's block takes one on its stack: no
-    /// allocation in a step).
+    /// A cleared scratch.
     fn fresh() -> Scratch {
         Scratch { lanes: Lanes::new(), found: [Found::default(); FOUND], found_walls: [0; FOUND] }
     }

@@ -41,6 +41,8 @@ pub(crate) struct ForcePlan {
     pub(super) loads: Vec<CrossingLoad>,
     /// Made before any contact was known: to be made again.
     provisional: bool,
+    /// Each block's working memory, kept from one evaluation to the next.
+    pub(super) scratch: Vec<super::Scratch>,
 }
 
 /// The work of a touching pair (gathering its inputs, the law, adding its load) in units of a
@@ -68,6 +70,7 @@ impl ForcePlan {
             + (self.wall_ends.capacity() + self.crossing_start.capacity()) * size_of::<usize>()
             + (self.incoming_start.capacity() + self.incoming.capacity()) * 4
             + self.loads.capacity() * size_of::<CrossingLoad>()
+            + self.scratch.capacity() * size_of::<super::Scratch>()
     }
 
     /// Cuts `n` slots into `n_blocks` blocks of about equal work, unless it was done for this
