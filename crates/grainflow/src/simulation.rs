@@ -195,6 +195,8 @@ pub struct Simulation {
     pool: Option<std::sync::Arc<rayon::ThreadPool>>,
     /// Whether a step runs on the pool ([`choice`]).
     choice: choice::ThreadChoice,
+    /// The step under way runs on one thread although the pool could take it.
+    one_thread_now: bool,
     /// The largest force and torque components of the last force evaluation's loads, from
     /// which the next takes the quanta of its order-free sums (`forces::sum`); `None` before
     /// the first.
@@ -370,6 +372,7 @@ impl Simulation {
             timing: None,
             pool: None,
             choice: Default::default(),
+            one_thread_now: false,
             load_peak: None,
             peak_floor,
             inexact_sums: 0,
@@ -614,7 +617,7 @@ impl Simulation {
     /// Runs `f` on the thread pool if the stages run in parallel (telling it so), else here.
     fn on_stages(&mut self, f: impl FnOnce(&mut Simulation, bool) + Send) {
         match self.pool.clone() {
-            Some(pool) if self.parallel() => pool.install(|| f(self, true)),
+            Some(pool) if self.may_use_pool() => pool.install(|| f(self, true)),
             _ => f(self, false),
         }
     }
@@ -637,9 +640,15 @@ impl Simulation {
         }
     }
 
-    /// True when the stages run on the thread pool.
-    fn parallel(&self) -> bool {
+    /// True when the stages may run on the thread pool: it has one, and particles enough.
+    fn may_use_pool(&self) -> bool {
         self.pool.is_some() && self.particles.len() >= self.choice.parallel_from()
+    }
+
+    /// True when the stages of this step run on the thread pool (see
+    /// [`step_chosen`](Self::step_chosen)).
+    fn parallel(&self) -> bool {
+        self.may_use_pool() && !self.one_thread_now
     }
 
     /// The periodic wrap, if any axis is periodic.
@@ -658,7 +667,9 @@ impl Simulation {
         }
         let pool = self.choice.use_pool(self.step, self.particles.len());
         let start = std::time::Instant::now();
+        self.one_thread_now = !pool;
         self.step_on(pool, defer);
+        self.one_thread_now = false;
         self.choice.record(pool, start.elapsed().as_secs_f64(), self.step);
     }
 
