@@ -629,6 +629,7 @@ pub fn health_problem(sim: &Simulation, health: Health, checked: Checked) -> Opt
                     grainflow::ContactPartner::Mesh { mesh, triangle } => {
                         format!("mesh '{}' (triangle {triangle})", sim.meshes()[mesh].mesh.name())
                     }
+                    grainflow::ContactPartner::Cylinder(m) => format!("cylinder '{}'", sim.cylinders()[m].name),
                 };
                 (format!(" (particle {} and {other})", p.id[c.particle]), cause.of(c.particle, Some(c.other)))
             }

@@ -137,10 +137,10 @@ pub fn particles_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
 }
 
 /// Contacts as line cells: particle centre to particle centre, or particle centre to the
-/// contact point on a wall or mesh. Cell data: `normal_force`, `tangential_force` (N),
-/// `overlap` (m), `particle` (the id of the particle the line starts at), `partner_kind` (0
-/// another particle, 1 a plane wall, 2 a mesh wall), `partner` (that particle's id, the
-/// wall's index or the mesh's index, 0-based in the case's order) and `triangle` (the mesh
+/// contact point on a wall, mesh or cylinder. Cell data: `normal_force`, `tangential_force`
+/// (N), `overlap` (m), `particle` (the id of the particle the line starts at), `partner_kind`
+/// (0 another particle, 1 a plane wall, 2 a mesh wall, 3 a cylinder wall), `partner` (that
+/// particle's id, or the wall's, mesh's or cylinder's index, 0-based in the case's order) and `triangle` (the mesh
 /// triangle that owns the contact, −1 for the others).
 pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
     let mut points = Vec::with_capacity(2 * contacts.len());
@@ -148,7 +148,7 @@ pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
         points.push(p.position[c.particle]);
         points.push(match c.other {
             ContactPartner::Particle(j) => p.position[j],
-            ContactPartner::Wall(_) | ContactPartner::Mesh { .. } => c.point,
+            ContactPartner::Wall(_) | ContactPartner::Mesh { .. } | ContactPartner::Cylinder(_) => c.point,
         });
     }
     let conn: Vec<i64> = (0..points.len() as i64).collect();
@@ -163,6 +163,7 @@ pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
             ContactPartner::Particle(j) => (0, i64::from(p.id[j]), -1),
             ContactPartner::Wall(w) => (1, w as i64, -1),
             ContactPartner::Mesh { mesh, triangle } => (2, mesh as i64, triangle as i64),
+            ContactPartner::Cylinder(m) => (3, m as i64, -1),
         };
         kind.push(k);
         partner.push(other);
