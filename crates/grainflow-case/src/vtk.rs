@@ -309,6 +309,58 @@ pub fn walls_vtp(walls: &[Wall], lo: Vec3, hi: Vec3) -> String {
     )
 }
 
+/// Facets round a cylinder's tube in [`cylinders_vtp`] (display only: the contact is exact).
+const TUBE_FACETS: usize = 64;
+
+/// Cylinder walls as faceted tubes (display only; the contact is exact) of finite length: the
+/// stretch of the axis the domain box [lo, hi] spans. Cell data: `cylinder` (index, 0-based in
+/// the case's order), `material`.
+pub fn cylinders_vtp(cylinders: &[grainflow::Cylinder], lo: Vec3, hi: Vec3) -> String {
+    let (mut points, mut conn, mut index, mut material) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (k, c) in cylinders.iter().enumerate() {
+        let corners = (0..8).map(|j| {
+            Vec3::new(
+                if j & 1 == 0 { lo.x } else { hi.x },
+                if j & 2 == 0 { lo.y } else { hi.y },
+                if j & 4 == 0 { lo.z } else { hi.z },
+            )
+        });
+        let t: Vec<f64> = corners.map(|x| (x - c.origin).dot(c.axis)).collect();
+        let (t0, t1) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        let u = c.axis.any_orthonormal_vector();
+        let w = c.axis.cross(u);
+        let base = points.len() as i64;
+        for j in 0..TUBE_FACETS {
+            let phi = std::f64::consts::TAU * j as f64 / TUBE_FACETS as f64;
+            let r = (u * phi.cos() + w * phi.sin()) * c.radius;
+            points.push(c.origin + c.axis * t0 + r);
+            points.push(c.origin + c.axis * t1 + r);
+        }
+        let n = TUBE_FACETS as i64;
+        for j in 0..n {
+            let next = (j + 1) % n;
+            conn.extend([base + 2 * j, base + 2 * next, base + 2 * next + 1, base + 2 * j + 1]);
+            index.push(k as i32);
+            material.push(c.material as i32);
+        }
+    }
+    let offsets: Vec<i64> = (1..=index.len() as i64).map(|k| 4 * k).collect();
+    polydata(
+        &points,
+        "Polys",
+        &conn,
+        &offsets,
+        &[],
+        &[
+            Array { name: "cylinder", components: 1, values: Values::I32(&index) },
+            Array { name: "material", components: 1, values: Values::I32(&material) },
+        ],
+    )
+}
+
+/// File of the cylinder walls, written once.
+pub const CYLINDERS_FILE: &str = "cylinders.vtp";
+
 /// Significant digits of a frame time in a `.pvd` file: a time is step·Δt with rounding
 /// error in the last digits (0.6 arrives as 0.6000000000000001); 12 digits drop that error
 /// and still tell apart frames up to 10¹¹ steps apart in the same run.
@@ -382,6 +434,11 @@ impl VtkSeries {
             contacts: Vec::new(),
             meshes: Vec::new(),
         })
+    }
+
+    /// Writes the cylinder walls once, in [`CYLINDERS_FILE`] (see [`cylinders_vtp`]).
+    pub fn write_cylinders(&self, cylinders: &[grainflow::Cylinder], lo: Vec3, hi: Vec3) -> io::Result<()> {
+        write_atomic(&self.dir.join(CYLINDERS_FILE), cylinders_vtp(cylinders, lo, hi).as_bytes())
     }
 
     /// Continues a series from an earlier run in `dir`: frames before `step` are kept in the
