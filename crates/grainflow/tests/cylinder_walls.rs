@@ -210,7 +210,7 @@ fn a_drum_cylinder_equals_a_fine_mesh_drum() {
         assert!((ga - gb).abs() <= 1e-3 * gain, "{name}: {ga:e} vs {gb:e} m/s");
         // It rolls from 2U/(7μg) = 1.9 ms on, at 2U/7 (its spin 5μg t/(2r) then makes up the
         // rest of U). By 4 ms the spring's ringing at the stick is damped out and gravity,
-        // tilted by θ ≤ 3e-3 rad, has slowed it by (5/7) g θ · 2 ms ≤ 0.4 %: 1 % bounds it.
+        // tilted by θ ≤ 3e-3 rad, has slowed it by (5/7) g θ · 2 ms, about 0.5 %: 1 % bounds it.
         a.advance(2000 - t1);
         b.advance(2000 - t1);
         let rolling = 2.0 / 7.0 * omega * R_DRUM;
