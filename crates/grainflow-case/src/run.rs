@@ -20,8 +20,8 @@
 use crate::case::{Case, OutputSettings};
 use crate::outdir::{FolderError, Intent, OutputFolder, RUN_INFO_FILE, TIMESERIES_FILE};
 use crate::output::{
-    ResumeError, SeriesRecord, TimeSeriesWriter, Value, cylinder_columns, mesh_columns, rotation_axis, snapshot_csv,
-    write_atomic, write_atomic_with,
+    ResumeError, SeriesRecord, TimeSeriesWriter, Value, cylinder_columns, mesh_columns, rotation_axis,
+    snapshot_csv, write_atomic, write_atomic_with,
 };
 use crate::vtk::{CYLINDERS_FILE, FIXED_MESHES_FILE, MeshShape, VtkSeries};
 use grainflow::{Diagnostics, Simulation, Vec3};
@@ -629,7 +629,9 @@ pub fn health_problem(sim: &Simulation, health: Health, checked: Checked) -> Opt
                     grainflow::ContactPartner::Mesh { mesh, triangle } => {
                         format!("mesh '{}' (triangle {triangle})", sim.meshes()[mesh].mesh.name())
                     }
-                    grainflow::ContactPartner::Cylinder(m) => format!("cylinder '{}'", sim.cylinders()[m].name),
+                    grainflow::ContactPartner::Cylinder(m) => {
+                        format!("cylinder '{}'", sim.cylinders()[m].name)
+                    }
                 };
                 (format!(" (particle {} and {other})", p.id[c.particle]), cause.of(c.particle, Some(c.other)))
             }
@@ -1223,7 +1225,8 @@ fn open_vtk(
             // A series of another run is not continued (its frames were removed).
             let from = if folder.continues() { start_step } else { 0 };
             let (lo, hi) = health.domain;
-            let series = VtkSeries::resume(vtk_dir, sim.walls(), lo, hi, &fixed, from).map_err(io_err(vtk_dir))?;
+            let series =
+                VtkSeries::resume(vtk_dir, sim.walls(), lo, hi, &fixed, from).map_err(io_err(vtk_dir))?;
             if !sim.cylinders().is_empty() {
                 series.write_cylinders(sim.cylinders(), lo, hi).map_err(io_err(vtk_dir))?;
             }

@@ -110,7 +110,7 @@ impl Cylinder {
     pub fn locate(&self, x: Vec3) -> Option<CylinderContact> {
         let d = self.radial(x);
         let rho = d.length();
-        if !(rho > 0.0) {
+        if rho.is_nan() || rho <= 0.0 {
             return None;
         }
         let out = d / rho;

@@ -74,7 +74,10 @@ fn static_overlap(law: ContactLaw) -> f64 {
 }
 
 fn laws() -> [(&'static str, ContactLaw); 2] {
-    [("lsd", ContactLaw::mfix(NormalModel::LinearSpringDashpot)), ("hertz", ContactLaw::mfix(NormalModel::Hertz))]
+    [
+        ("lsd", ContactLaw::mfix(NormalModel::LinearSpringDashpot)),
+        ("hertz", ContactLaw::mfix(NormalModel::Hertz)),
+    ]
 }
 
 /// Steps to settle: 0.04 s, 250 periods of the LSD contact (the slowest, 1.6e-4 s); with
@@ -93,7 +96,8 @@ fn axis_distance(s: &Simulation) -> f64 {
 fn a_bead_settles_at_the_bottom_of_a_drum() {
     for (name, law) in laws() {
         let c = cylinder(R_DRUM, CylinderSide::Inside, 0.0);
-        let mut s = simulation(setup(law, vec![c], vec![]), &[bead_at(Vec3::new(0.0, 0.0, -(R_DRUM - R_BEAD)))]);
+        let mut s =
+            simulation(setup(law, vec![c], vec![]), &[bead_at(Vec3::new(0.0, 0.0, -(R_DRUM - R_BEAD)))]);
         s.advance(SETTLE);
         let delta = static_overlap(law);
         let want = R_DRUM - R_BEAD + delta;
@@ -101,7 +105,10 @@ fn a_bead_settles_at_the_bottom_of_a_drum() {
         // position (1e-18 m), of the loads to their quanta (2⁻⁴¹ of the weight, 5e-13 of δ).
         // 1e-6 of δ holds all of it and is 1e-4 of the sagitta the mesh test below resolves.
         let got = axis_distance(&s);
-        assert!((got - want).abs() <= 1e-6 * delta, "{name}: at {got:e} m from the axis, want {want:e} (δ = {delta:e})");
+        assert!(
+            (got - want).abs() <= 1e-6 * delta,
+            "{name}: at {got:e} m from the axis, want {want:e} (δ = {delta:e})"
+        );
         assert_eq!(s.particles().position[0].y, 0.0, "{name}: the bead left the bottom line");
         let load = s.cylinder_load(0, Vec3::ZERO);
         // The drum carries the bead's weight (the bead's acceleration is gone to the same 1e-6).
@@ -126,7 +133,10 @@ fn a_bead_settles_on_top_of_a_rod() {
         let want = R_ROD + R_BEAD - delta;
         // As for the drum.
         let got = axis_distance(&s);
-        assert!((got - want).abs() <= 1e-6 * delta, "{name}: at {got:e} m from the axis, want {want:e} (δ = {delta:e})");
+        assert!(
+            (got - want).abs() <= 1e-6 * delta,
+            "{name}: at {got:e} m from the axis, want {want:e} (δ = {delta:e})"
+        );
         let c = s.contacts();
         assert_eq!(c.len(), 1, "{name}");
         assert!(matches!(c[0].other, grainflow::ContactPartner::Cylinder(0)), "{name}: {:?}", c[0]);
@@ -170,7 +180,10 @@ fn a_drum_cylinder_equals_a_fine_mesh_drum() {
     };
     for (name, law) in laws() {
         let start = Vec3::new(0.0, 0.0, -(R_DRUM * (PI / n as f64).cos() - R_BEAD));
-        let mut a = simulation(setup(law, vec![cylinder(R_DRUM, CylinderSide::Inside, 0.0)], vec![]), &[bead_at(start)]);
+        let mut a = simulation(
+            setup(law, vec![cylinder(R_DRUM, CylinderSide::Inside, 0.0)], vec![]),
+            &[bead_at(start)],
+        );
         let mut b = simulation(setup(law, vec![], vec![MeshWall::fixed(mesh(), 0)]), &[bead_at(start)]);
         a.advance(SETTLE);
         b.advance(SETTLE);
@@ -196,7 +209,8 @@ fn a_drum_cylinder_equals_a_fine_mesh_drum() {
             setup(law, vec![cylinder(R_DRUM, CylinderSide::Inside, omega)], vec![]),
             &[bead_at(start)],
         );
-        let mut b = simulation(setup(law, vec![], vec![turning]), &[bead_at(start + Vec3::new(0.0, 0.0, sagitta))]);
+        let mut b =
+            simulation(setup(law, vec![], vec![turning]), &[bead_at(start + Vec3::new(0.0, 0.0, sagitta))]);
         let (t0, t1) = (250, 750);
         a.advance(t0);
         b.advance(t0);
@@ -205,8 +219,14 @@ fn a_drum_cylinder_equals_a_fine_mesh_drum() {
         b.advance(t1 - t0);
         let gain = 0.3 * G * (t1 - t0) as f64 * DT;
         let (ga, gb) = (a.particles().velocity[0].y - va, b.particles().velocity[0].y - vb);
-        assert!((ga - gain).abs() <= 1e-3 * gain, "{name}: the drum's bead gained {ga:e} m/s, μ g Δt = {gain:e}");
-        assert!((gb - gain).abs() <= 1e-3 * gain, "{name}: the mesh's bead gained {gb:e} m/s, μ g Δt = {gain:e}");
+        assert!(
+            (ga - gain).abs() <= 1e-3 * gain,
+            "{name}: the drum's bead gained {ga:e} m/s, μ g Δt = {gain:e}"
+        );
+        assert!(
+            (gb - gain).abs() <= 1e-3 * gain,
+            "{name}: the mesh's bead gained {gb:e} m/s, μ g Δt = {gain:e}"
+        );
         assert!((ga - gb).abs() <= 1e-3 * gain, "{name}: {ga:e} vs {gb:e} m/s");
         // It rolls from 2U/(7μg) = 1.9 ms on, at 2U/7 (its spin 5μg t/(2r) then makes up the
         // rest of U). By 4 ms the spring's ringing at the stick is damped out and gravity,
@@ -216,7 +236,10 @@ fn a_drum_cylinder_equals_a_fine_mesh_drum() {
         let rolling = 2.0 / 7.0 * omega * R_DRUM;
         for (what, s) in [("drum", &a), ("mesh", &b)] {
             let v = s.particles().velocity[0].y;
-            assert!((v - rolling).abs() <= 0.01 * rolling, "{name}: the {what}'s bead rolls at {v:e} m/s, 2U/7 = {rolling:e}");
+            assert!(
+                (v - rolling).abs() <= 0.01 * rolling,
+                "{name}: the {what}'s bead rolls at {v:e} m/s, 2U/7 = {rolling:e}"
+            );
         }
     }
 }

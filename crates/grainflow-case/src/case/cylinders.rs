@@ -7,14 +7,27 @@ use crate::raw::RawCylinder;
 use grainflow::{Cylinder, CylinderSide, Particles, Periodic, WallMaterial};
 
 /// The `[[cylinders]]` tables, in the order of the case file.
-pub(super) fn cylinders(raw: &[RawCylinder], wall_materials: &[WallMaterial]) -> Result<Vec<Cylinder>, CaseError> {
+pub(super) fn cylinders(
+    raw: &[RawCylinder],
+    wall_materials: &[WallMaterial],
+) -> Result<Vec<Cylinder>, CaseError> {
     let mut out: Vec<Cylinder> = Vec::with_capacity(raw.len());
     for (k, c) in raw.iter().enumerate() {
         let table = format!("[[cylinders]] #{}", k + 1);
-        let name = require(c.name.clone(), &table, "name", "a unique cylinder name, for messages and the time series")?;
+        let name = require(
+            c.name.clone(),
+            &table,
+            "name",
+            "a unique cylinder name, for messages and the time series",
+        )?;
         let table = format!("[[cylinders]] '{name}'");
         if out.iter().any(|o| o.name == name) {
-            return Err(CaseError::invalid(&table, "name", format!("\"{name}\""), "cylinder names must be unique"));
+            return Err(CaseError::invalid(
+                &table,
+                "name",
+                format!("\"{name}\""),
+                "cylinder names must be unique",
+            ));
         }
         let origin = vec3(require(c.origin, &table, "origin", "a point on the axis, m")?, &table, "origin")?;
         let a = require(c.axis, &table, "axis", "the direction of the axis, e.g. [0, 1, 0]")?;
@@ -24,7 +37,12 @@ pub(super) fn cylinders(raw: &[RawCylinder], wall_materials: &[WallMaterial]) ->
         }
         let radius = require(c.radius, &table, "radius", "the radius, m")?;
         if !(radius.is_finite() && radius > 0.0) {
-            return Err(CaseError::invalid(&table, "radius", radius, "must be a positive, finite length, in m"));
+            return Err(CaseError::invalid(
+                &table,
+                "radius",
+                radius,
+                "must be a positive, finite length, in m",
+            ));
         }
         if c.side.is_none() {
             return Err(CaseError::missing(
@@ -83,8 +101,7 @@ pub(super) fn check(
             if d < 0.0 {
                 return Err(CaseError::Geometry(format!(
                     "{table}: {at} is not {side} the cylinder (radius {:e} m): its centre is {:.3e} m on the far side of the surface",
-                    c.radius,
-                    -d
+                    c.radius, -d
                 )));
             }
             let overlap = p.radius[i] - d;

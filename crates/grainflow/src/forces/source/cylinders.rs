@@ -152,7 +152,8 @@ impl Cylinders {
         use crate::observe::order_free_sum;
         let parts: Vec<&LoadPart> = self.loads.iter().filter(|l| l.cylinder == m as u32).collect();
         let sum = |f: &dyn Fn(&LoadPart) -> Vec3| {
-            let c = |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
+            let c =
+                |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
             Vec3::new(c(0), c(1), c(2))
         };
         MeshLoad {
@@ -229,7 +230,11 @@ impl ContactSource for Cylinders {
                 loads.push(LoadPart { cylinder: m as u32, centre: p.position[i], force: f, torque: ta });
                 slots.push(i);
                 peak = max_peak(peak, bound);
-                stored.push(CylinderHistory { slot: i as u32, cylinder: m as u32, h: if advance { h_new } else { h } });
+                stored.push(CylinderHistory {
+                    slot: i as u32,
+                    cylinder: m as u32,
+                    h: if advance { h_new } else { h },
+                });
             }
         }
         let p = &mut *run.particles;
@@ -311,7 +316,10 @@ impl Simulation {
 pub(crate) fn check_cylinder(c: &Cylinder, materials: usize) -> Result<(), String> {
     let name = &c.name;
     if c.material >= materials {
-        return Err(format!("cylinder '{name}' uses wall material {} but only {materials} are defined", c.material));
+        return Err(format!(
+            "cylinder '{name}' uses wall material {} but only {materials} are defined",
+            c.material
+        ));
     }
     let unit = c.axis.is_finite() && (c.axis.length() - 1.0).abs() <= 1e-12;
     if !(c.origin.is_finite() && unit && c.radius.is_finite() && c.radius > 0.0 && c.omega.is_finite()) {
