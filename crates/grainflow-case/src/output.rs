@@ -463,6 +463,24 @@ pub fn snapshot_csv(p: &Particles) -> String {
 mod tests {
     use super::*;
 
+    /// A cylinder's columns: seven each, the axial torque always among them, named as a
+    /// mesh's are.
+    #[test]
+    fn cylinder_columns_follow_the_meshes_pattern() {
+        let names: Vec<String> = ["drum 1", "drum_1"].map(String::from).into();
+        let c = cylinder_columns(&names);
+        let want: Vec<String> = ["fx", "fy", "fz", "tx", "ty", "tz", "t_axis"]
+            .iter()
+            .map(|s| format!("cylinder_drum_1_{s}"))
+            .chain(
+                ["fx", "fy", "fz", "tx", "ty", "tz", "t_axis"]
+                    .iter()
+                    .map(|s| format!("cylinder_drum_1_2_{s}")),
+            )
+            .collect();
+        assert_eq!(c, want);
+    }
+
     /// Names with separators, quotes or other characters become safe column prefixes, and two
     /// that come out the same are told apart.
     #[test]
