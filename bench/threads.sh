@@ -93,7 +93,8 @@ if [[ " $PARTS " == *" mesh "* ]]; then
     for i in $(seq "$RUNS"); do
       for j in 1 2 d; do
         flag=(-j "$j"); [ "$j" = d ] && flag=()
-        $GF run $c.timed.toml "${flag[@]}" -q --overwrite --restart gf.$c.warm/checkpoint.gfc --accept-changed-case --out gf.$c.t > m.$c.log$j
+        rm -rf gf.$c.t
+        $GF run $c.timed.toml "${flag[@]}" -q --restart gf.$c.warm/checkpoint.gfc --accept-changed-case --out gf.$c.t > m.$c.log$j
         speed m.$c.log$j >> m.$c.$j
       done
     done

@@ -31,6 +31,9 @@ pub struct RawCase {
     /// Triangle-mesh walls read from STL or OBJ files.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub meshes: Vec<RawMesh>,
+    /// Infinite cylinder walls (drums, pipes, rods), exact.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cylinders: Vec<RawCylinder>,
     /// The contact model and its parameters. Required.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact: Option<RawContact>,
@@ -205,6 +208,38 @@ pub struct RawMesh {
     /// `origin` of a rotating mesh (or turning surface), else [0, 0, 0].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub torque_about: Option<[f64; 3]>,
+}
+
+/// `[[cylinders]]`: an infinite circular cylinder wall, exact (no facets), its surface at
+/// rest or turning about its axis (a drum's shell).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCylinder {
+    /// Name for messages and the time series. Required, unique among the cylinders.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// A point on the axis, m. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin: Option<[f64; 3]>,
+    /// The axis's direction (normalised; not zero). Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    /// The radius, m, > 0. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// Where the particles are: "inside" (a drum or pipe) or "outside" (a rod). Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub side: Option<String>,
+    /// Wall material name. Required.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    /// The surface's angular velocity about `axis` (right-handed), rad/s. Default 0; not
+    /// with `rpm`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub omega: Option<f64>,
+    /// The same in revolutions per minute. Not with `omega`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rpm: Option<f64>,
 }
 
 /// `[meshes.motion]`: how a mesh moves, timed from the run's start time.

@@ -36,6 +36,7 @@ fn every_case_file_key_is_documented_and_every_documented_key_exists() {
         "wall_materials",
         "walls",
         "meshes",
+        "cylinders",
         "surface",
         "contact",
         "particle",

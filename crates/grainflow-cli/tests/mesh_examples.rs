@@ -204,8 +204,7 @@ fn the_default_thread_choice_is_reported_and_changes_no_byte() {
         let line = line.unwrap_or_else(|| panic!("no line on the choice: {chosen}"));
         assert!(line.contains("last measured") && line.contains("(1 trial)"), "{line}");
         // The two shares of the steps add up to all of them (each rounded to a whole percent).
-        let shares: Vec<f64> =
-            line.split(" % ").filter_map(|s| s.rsplit(' ').next()?.parse().ok()).collect();
+        let shares: Vec<f64> = line.split(" % ").filter_map(|s| s.rsplit(' ').next()?.parse().ok()).collect();
         assert_eq!(shares.len(), 2, "{line}");
         assert!((shares[0] + shares[1] - 100.0).abs() <= 1.0, "{line}");
     }

@@ -42,7 +42,7 @@ fn temp_path(path: &Path) -> PathBuf {
 }
 
 /// Header of the time-series CSV: its first columns, which every run writes (a case with mesh
-/// walls adds its [`mesh_columns`] after them).
+/// walls adds its [`mesh_columns`] after them, one with cylinders its [`cylinder_columns`]).
 pub const TIMESERIES_HEADER: &str =
     "step,time,kinetic_translational,kinetic_rotational,potential,elastic,contacts,max_overlap_ratio";
 
@@ -69,9 +69,22 @@ pub fn column_name(name: &str) -> String {
 /// two meshes' names come out the same, the later one gets `_2` (`_3`, …) appended until its
 /// prefix is unique.
 pub fn mesh_columns(names: &[String], rotating: &[bool]) -> Vec<String> {
+    load_columns("mesh", names, rotating)
+}
+
+/// The time series' columns of the cylinder walls, cylinder after cylinder, after the
+/// meshes': `cylinder_<name>_fx`, `_fy`, `_fz` (N), `_tx`, `_ty`, `_tz` (N·m, about the
+/// cylinder's `origin`) and `_t_axis` (N·m, the torque's component along its axis), named as
+/// [`mesh_columns`] names them.
+pub fn cylinder_columns(names: &[String]) -> Vec<String> {
+    load_columns("cylinder", names, &vec![true; names.len()])
+}
+
+/// [`mesh_columns`] for the walls of `kind` ("mesh", "cylinder").
+fn load_columns(kind: &str, names: &[String], rotating: &[bool]) -> Vec<String> {
     let mut prefixes: Vec<String> = Vec::with_capacity(names.len());
     for name in names {
-        let base = format!("mesh_{}", column_name(name));
+        let base = format!("{kind}_{}", column_name(name));
         let mut prefix = base.clone();
         let mut k = 2;
         while prefixes.contains(&prefix) {
@@ -449,6 +462,24 @@ pub fn snapshot_csv(p: &Particles) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A cylinder's columns: seven each, the axial torque always among them, named as a
+    /// mesh's are.
+    #[test]
+    fn cylinder_columns_follow_the_meshes_pattern() {
+        let names: Vec<String> = ["drum 1", "drum_1"].map(String::from).into();
+        let c = cylinder_columns(&names);
+        let want: Vec<String> = ["fx", "fy", "fz", "tx", "ty", "tz", "t_axis"]
+            .iter()
+            .map(|s| format!("cylinder_drum_1_{s}"))
+            .chain(
+                ["fx", "fy", "fz", "tx", "ty", "tz", "t_axis"]
+                    .iter()
+                    .map(|s| format!("cylinder_drum_1_2_{s}")),
+            )
+            .collect();
+        assert_eq!(c, want);
+    }
 
     /// Names with separators, quotes or other characters become safe column prefixes, and two
     /// that come out the same are told apart.

@@ -19,10 +19,10 @@
 
 use crate::outdir::{FolderError, Intent, OutputFolder, RUN_INFO_FILE, TIMESERIES_FILE};
 use crate::output::{
-    ResumeError, SeriesRecord, TimeSeriesWriter, Value, mesh_columns, rotation_axis, snapshot_csv,
-    write_atomic, write_atomic_with,
+    ResumeError, SeriesRecord, TimeSeriesWriter, Value, cylinder_columns, mesh_columns, rotation_axis,
+    snapshot_csv, write_atomic, write_atomic_with,
 };
-use crate::vtk::{FIXED_MESHES_FILE, MeshShape, VtkSeries};
+use crate::vtk::{CYLINDERS_FILE, FIXED_MESHES_FILE, MeshShape, VtkSeries};
 use grainflow::{Diagnostics, Simulation, Vec3};
 use grainflow_case::plan::output_every;
 use grainflow_case::{Case, OutputSettings};
@@ -643,6 +643,9 @@ pub fn health_problem(sim: &Simulation, health: Health, checked: Checked) -> Opt
                     grainflow::ContactPartner::Mesh { mesh, triangle } => {
                         format!("mesh '{}' (triangle {triangle})", sim.meshes()[mesh].mesh.name())
                     }
+                    grainflow::ContactPartner::Cylinder(m) => {
+                        format!("cylinder '{}'", sim.cylinders()[m].name)
+                    }
                 };
                 (format!(" (particle {} and {other})", p.id[c.particle]), cause.of(c.particle, Some(c.other)))
             }
@@ -874,6 +877,8 @@ impl MeshLoads {
         let axes: Vec<_> = case.config.meshes.iter().map(rotation_axis).collect();
         let rotating: Vec<bool> = axes.iter().map(Option::is_some).collect();
         let mut columns = mesh_columns(&case.mesh_names, &rotating);
+        let cylinders: Vec<String> = case.config.cylinders.iter().map(|c| c.name.clone()).collect();
+        columns.extend(cylinder_columns(&cylinders));
         let flow = !(case.config.insertions.is_empty() && case.config.outlets.is_empty());
         if flow {
             columns.extend(FLOW_COLUMNS.iter().map(|c| c.to_string()));
@@ -904,7 +909,8 @@ impl MeshLoads {
 
     /// The row's values, mesh after mesh: the force the particles exert on it at the last
     /// force evaluation, its torque about the mesh's point, and for a mesh with an axis that
-    /// torque's component along the axis (about a point of the axis: τ_o = τ_a + (a − o) × F).
+    /// torque's component along the axis (about a point of the axis: τ_o = τ_a + (a − o) × F);
+    /// then cylinder after cylinder, the same about its origin.
     /// A row on the output schedule (`scheduled`) is the one the next counts from; the extra
     /// row of an interrupted run is not (a restart drops it).
     fn values(&self, sim: &Simulation, scheduled: bool) -> Vec<Value> {
@@ -916,6 +922,12 @@ impl MeshLoads {
             if let Some((origin, direction)) = axis {
                 v.push(Value::Real(direction.dot(load.torque + (about - *origin).cross(load.force))));
             }
+        }
+        for (m, c) in sim.cylinders().iter().enumerate() {
+            let load = sim.cylinder_load(m, c.origin);
+            v.extend(load.force.to_array().map(Value::Real));
+            v.extend(load.torque.to_array().map(Value::Real));
+            v.push(Value::Real(c.axis.dot(load.torque)));
         }
         if let Some(marks) = &self.flow {
             let b = sim.flow_books();
@@ -1221,16 +1233,19 @@ fn open_vtk(
             let mut files = vec!["walls.vtp", "particles.pvd", "contacts.pvd"];
             files.extend(fixed.first().map(|_| FIXED_MESHES_FILE));
             files.extend(moving.then_some("meshes.pvd"));
+            files.extend((!sim.cylinders().is_empty()).then_some(CYLINDERS_FILE));
             for f in files {
                 folder.record(&Path::new("vtk").join(f))?;
             }
             // A series of another run is not continued (its frames were removed).
             let from = if folder.continues() { start_step } else { 0 };
-            Some((
-                VtkSeries::resume(vtk_dir, sim.walls(), health.domain.0, health.domain.1, &fixed, from)
-                    .map_err(io_err(vtk_dir))?,
-                output_every(Some(iv), sim.dt(), sim.total_steps()),
-            ))
+            let (lo, hi) = health.domain;
+            let series =
+                VtkSeries::resume(vtk_dir, sim.walls(), lo, hi, &fixed, from).map_err(io_err(vtk_dir))?;
+            if !sim.cylinders().is_empty() {
+                series.write_cylinders(sim.cylinders(), lo, hi).map_err(io_err(vtk_dir))?;
+            }
+            Some((series, output_every(Some(iv), sim.dt(), sim.total_steps())))
         }
         None => None,
     })
@@ -1246,5 +1261,8 @@ fn push_vtk_files(sim: &Simulation, vtk_dir: &Path, files: &mut Vec<PathBuf>) {
     }
     if sim.meshes().iter().any(|w| w.motion.moves()) {
         files.push(vtk_dir.join("meshes.pvd"));
+    }
+    if !sim.cylinders().is_empty() {
+        files.push(vtk_dir.join(CYLINDERS_FILE));
     }
 }

@@ -137,10 +137,10 @@ pub fn particles_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
 }
 
 /// Contacts as line cells: particle centre to particle centre, or particle centre to the
-/// contact point on a wall or mesh. Cell data: `normal_force`, `tangential_force` (N),
-/// `overlap` (m), `particle` (the id of the particle the line starts at), `partner_kind` (0
-/// another particle, 1 a plane wall, 2 a mesh wall), `partner` (that particle's id, the
-/// wall's index or the mesh's index, 0-based in the case's order) and `triangle` (the mesh
+/// contact point on a wall, mesh or cylinder. Cell data: `normal_force`, `tangential_force`
+/// (N), `overlap` (m), `particle` (the id of the particle the line starts at), `partner_kind`
+/// (0 another particle, 1 a plane wall, 2 a mesh wall, 3 a cylinder wall), `partner` (that
+/// particle's id, or the wall's, mesh's or cylinder's index, 0-based in the case's order) and `triangle` (the mesh
 /// triangle that owns the contact, −1 for the others).
 pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
     let mut points = Vec::with_capacity(2 * contacts.len());
@@ -148,7 +148,7 @@ pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
         points.push(p.position[c.particle]);
         points.push(match c.other {
             ContactPartner::Particle(j) => p.position[j],
-            ContactPartner::Wall(_) | ContactPartner::Mesh { .. } => c.point,
+            ContactPartner::Wall(_) | ContactPartner::Mesh { .. } | ContactPartner::Cylinder(_) => c.point,
         });
     }
     let conn: Vec<i64> = (0..points.len() as i64).collect();
@@ -163,6 +163,7 @@ pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
             ContactPartner::Particle(j) => (0, i64::from(p.id[j]), -1),
             ContactPartner::Wall(w) => (1, w as i64, -1),
             ContactPartner::Mesh { mesh, triangle } => (2, mesh as i64, triangle as i64),
+            ContactPartner::Cylinder(m) => (3, m as i64, -1),
         };
         kind.push(k);
         partner.push(other);
@@ -308,6 +309,58 @@ pub fn walls_vtp(walls: &[Wall], lo: Vec3, hi: Vec3) -> String {
     )
 }
 
+/// Facets round a cylinder's tube in [`cylinders_vtp`] (display only: the contact is exact).
+const TUBE_FACETS: usize = 64;
+
+/// Cylinder walls as faceted tubes (display only; the contact is exact) of finite length: the
+/// stretch of the axis the domain box [lo, hi] spans. Cell data: `cylinder` (index, 0-based in
+/// the case's order), `material`.
+pub fn cylinders_vtp(cylinders: &[grainflow::Cylinder], lo: Vec3, hi: Vec3) -> String {
+    let (mut points, mut conn, mut index, mut material) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (k, c) in cylinders.iter().enumerate() {
+        let corners = (0..8).map(|j| {
+            Vec3::new(
+                if j & 1 == 0 { lo.x } else { hi.x },
+                if j & 2 == 0 { lo.y } else { hi.y },
+                if j & 4 == 0 { lo.z } else { hi.z },
+            )
+        });
+        let t: Vec<f64> = corners.map(|x| (x - c.origin).dot(c.axis)).collect();
+        let (t0, t1) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        let u = c.axis.any_orthonormal_vector();
+        let w = c.axis.cross(u);
+        let base = points.len() as i64;
+        for j in 0..TUBE_FACETS {
+            let phi = std::f64::consts::TAU * j as f64 / TUBE_FACETS as f64;
+            let r = (u * phi.cos() + w * phi.sin()) * c.radius;
+            points.push(c.origin + c.axis * t0 + r);
+            points.push(c.origin + c.axis * t1 + r);
+        }
+        let n = TUBE_FACETS as i64;
+        for j in 0..n {
+            let next = (j + 1) % n;
+            conn.extend([base + 2 * j, base + 2 * next, base + 2 * next + 1, base + 2 * j + 1]);
+            index.push(k as i32);
+            material.push(c.material as i32);
+        }
+    }
+    let offsets: Vec<i64> = (1..=index.len() as i64).map(|k| 4 * k).collect();
+    polydata(
+        &points,
+        "Polys",
+        &conn,
+        &offsets,
+        &[],
+        &[
+            Array { name: "cylinder", components: 1, values: Values::I32(&index) },
+            Array { name: "material", components: 1, values: Values::I32(&material) },
+        ],
+    )
+}
+
+/// File of the cylinder walls, written once.
+pub const CYLINDERS_FILE: &str = "cylinders.vtp";
+
 /// Significant digits of a frame time in a `.pvd` file: a time is step·Δt with rounding
 /// error in the last digits (0.6 arrives as 0.6000000000000001); 12 digits drop that error
 /// and still tell apart frames up to 10¹¹ steps apart in the same run.
@@ -381,6 +434,11 @@ impl VtkSeries {
             contacts: Vec::new(),
             meshes: Vec::new(),
         })
+    }
+
+    /// Writes the cylinder walls once, in [`CYLINDERS_FILE`] (see [`cylinders_vtp`]).
+    pub fn write_cylinders(&self, cylinders: &[grainflow::Cylinder], lo: Vec3, hi: Vec3) -> io::Result<()> {
+        write_atomic(&self.dir.join(CYLINDERS_FILE), cylinders_vtp(cylinders, lo, hi).as_bytes())
     }
 
     /// Continues a series from an earlier run in `dir`: frames before `step` are kept in the

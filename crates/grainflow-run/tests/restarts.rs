@@ -383,3 +383,79 @@ fn a_pour_that_misses_continues_its_missed_column_to_the_same_bytes() {
     let missed: u64 = column(&series, "missed").iter().map(|v| v.parse::<u64>().expect("a count")).sum();
     assert!(missed > 0, "no batch missed, so the test tests nothing:\n{series}");
 }
+
+/// Beads poured into a turning drum made of a `[[cylinders]]` wall (its ends the box's faces),
+/// stopped and continued: the cylinder contacts' springs are in the checkpoints, so the files
+/// (the drum's load columns and its VTK tube among them) are the uninterrupted run's.
+#[test]
+fn a_drum_of_a_cylinder_stopped_at_any_moment_continues_to_the_same_bytes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let case = dir.path().join("drum.toml");
+    std::fs::write(
+        &case,
+        r#"version = 1
+title = "Beads poured into a turning drum"
+[domain]
+min = [-0.03, -0.03, -0.008]
+max = [0.03, 0.03, 0.008]
+[physics]
+gravity = [0.0, -9.80665, 0.0]
+[[phases]]
+name = "glass"
+diameter = 0.003
+density = 2500.0
+youngs_modulus = 5.0e6
+poisson_ratio = 0.3
+[[wall_materials]]
+name = "steel"
+youngs_modulus = 5.0e6
+poisson_ratio = 0.3
+[[cylinders]]
+name = "drum"
+origin = [0.0, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+radius = 0.025
+side = "inside"
+material = "steel"
+rpm = 20.0
+[contact]
+model = "hertz"
+[contact.particle]
+en = 0.7
+et = 0.7
+mu = 0.5
+[contact.wall]
+en = 0.7
+et = 0.7
+mu = 0.5
+[time]
+t_stop = 0.2
+integrator = "velocity_verlet"
+[output]
+interval = 0.01
+vtk_interval = 0.04
+[[insertions]]
+name = "fill"
+rate = 3000.0
+every = 0.02
+count = 150
+[insertions.region]
+kind = "box"
+min = [-0.012, -0.005, -0.006]
+max = [0.012, 0.012, 0.006]
+[[insertions.phases]]
+phase = "glass"
+"#,
+    )
+    .expect("write case");
+    // 5 448 steps; batches at steps 0, 545 and 1 090; checkpoints every 700 steps.
+    let stops = [(600, Stop::Request), (1700, Stop::Crash), (4500, Stop::Request)];
+    stopped_and_continued(&case, dir.path(), &stops);
+    let series = std::fs::read_to_string(dir.path().join("part/timeseries.csv")).expect("series");
+    let header = series.lines().next().expect("header");
+    assert!(header.contains(",cylinder_drum_fx,") && header.contains(",cylinder_drum_t_axis,"), "{header}");
+    // The beads lie on the drum by the end: it carries their weight (a load along −y).
+    let fy: f64 = column(&series, "cylinder_drum_fy").last().expect("a row").parse().expect("a number");
+    assert!(fy < 0.0, "the drum carries no weight at the end: {fy}");
+    assert!(dir.path().join("part/vtk/cylinders.vtp").exists());
+}

@@ -24,10 +24,11 @@ use thiserror::Error;
 /// next takes the quanta of its sums, and the count of evaluations with inexact sums, after
 /// the flags; 5: the mesh-wall contacts' histories, at the end; 6: each mesh wall's motion
 /// state — its anchor and its pose — after them; 7: the insertions' and outlets' state; 8: the
-/// caller's note ([`Simulation::checkpoint_note`]), last). A checkpoint of format 2 or 3
+/// caller's note ([`Simulation::checkpoint_note`]), last; 9: the cylinder-wall contacts'
+/// histories, before the note). A checkpoint of format 2 or 3
 /// continues with the quanta of its first evaluation taken afresh: not bit for bit as the run
 /// that wrote it would have gone on.
-pub const FORMAT_VERSION: u32 = 8;
+pub const FORMAT_VERSION: u32 = 9;
 /// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
@@ -280,6 +281,8 @@ struct Payload {
     mesh_motion: Option<Vec<(f64, Pose, Pose)>>,
     /// The insertions' and outlets' state (None before format 7).
     flow: Option<Vec<u64>>,
+    /// The cylinder-wall contacts: (particle id, cylinder), history (none before format 9).
+    cylinder_contacts: (Vec<[u32; 2]>, Vec<Vec3>),
     /// The caller's note (empty before format 8).
     note: Vec<u8>,
 }
@@ -378,6 +381,11 @@ impl Payload {
         } else {
             None
         };
+        let cylinder_contacts = if version >= 9 {
+            (d.pairs("cylinder contacts")?, d.vec3s("cylinder contact histories")?)
+        } else {
+            Default::default()
+        };
         let note = if version >= 8 { d.bytes("note")? } else { Vec::new() };
         let mut neighbors = neighbors;
         if version >= 3 {
@@ -397,6 +405,7 @@ impl Payload {
             mesh_contacts,
             mesh_motion,
             flow,
+            cylinder_contacts,
             note,
         })
     }
@@ -447,6 +456,8 @@ impl Simulation {
             + (8 + 8 + 8 + 8 + (8 + 4 + 24 + 24) * self.mesh_histories().len())
             + (8 + 8 * MOTION_F64S * self.meshes().len())
             + (8 + 8 * self.flow_words().len())
+            + (8 + 8 * self.cylinder_histories().len())
+            + (8 + 24 * self.cylinder_histories().len())
             + (8 + self.checkpoint_note().len())
     }
 
@@ -506,6 +517,9 @@ impl Simulation {
             .collect();
         e.f64s(&motion)?;
         e.bytes(&self.flow_words().iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>())?;
+        let cyl = self.cylinder_histories();
+        e.pairs(cyl.len(), cyl.iter().map(|h| [id(h.slot), h.cylinder]))?;
+        e.vec3s_from(cyl.iter().map(|h| h.h))?;
         e.bytes(self.checkpoint_note())?;
         // The header announced the payload's length before it was written.
         if e.written != payload {
@@ -609,6 +623,7 @@ impl Simulation {
             mesh_contacts,
             mesh_motion,
             flow,
+            cylinder_contacts,
             note,
             ..
         } = payload;
@@ -619,6 +634,7 @@ impl Simulation {
         sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
             .map_err(CheckpointError::Mismatch)?;
         sim.set_mesh_histories(mesh_contacts).map_err(CheckpointError::Mismatch)?;
+        sim.set_cylinder_histories(cylinder_contacts).map_err(CheckpointError::Mismatch)?;
         if let Some(motion) = mesh_motion {
             sim.set_mesh_motion_state(&motion).map_err(CheckpointError::Mismatch)?;
         }

@@ -20,7 +20,8 @@
 //! 2. [`contact`] — fine phase and contact laws: geometry, normal and tangential forces, Coulomb
 //!    cap, torques ([`contact::law`]), coefficients derived from the inputs
 //!    ([`contact::coefficients`]).
-//! 3. [`wall`] — planes (the six faces of the domain box, or any infinite plane).
+//! 3. [`wall`] — planes (the six faces of the domain box, or any infinite plane) and infinite
+//!    cylinders (drums, pipes, rods; [`SimulationConfig::cylinders`], after the meshes).
 //! 4. [`integrate`] — MFIX's Euler and Adams–Bashforth steps, and velocity Verlet.
 //! 5. [`motion`] — prescribed particle motion applied after every step; user hooks run through
 //!    [`Simulation::run_with`].
@@ -66,4 +67,4 @@ pub use simulation::{
 };
 pub use state::Particles;
 pub use timestep::{TimeStepChoice, TimeStepRule};
-pub use wall::Wall;
+pub use wall::{Cylinder, CylinderSide, Wall};

@@ -21,7 +21,9 @@ mod choice;
 mod inflow;
 mod population;
 
-pub use crate::forces::source::{MeshLoad, periodic_mesh_message, periodic_mesh_reach};
+pub use crate::forces::source::{
+    MeshLoad, periodic_cylinder_message, periodic_cylinder_reach, periodic_mesh_message, periodic_mesh_reach,
+};
 pub use choice::ThreadReport;
 pub use inflow::{FlowBooks, Tally};
 pub use population::ResortRule;
@@ -112,6 +114,8 @@ pub struct SimulationConfig {
     pub walls: Vec<Wall>,
     /// Triangle-mesh walls.
     pub meshes: Vec<MeshWall>,
+    /// Cylinder walls (exact, infinite).
+    pub cylinders: Vec<crate::wall::Cylinder>,
     /// The contact law.
     pub law: ContactLaw,
     /// Contact inputs per phase pair, in MFIX's upper-triangle order (1-1, 1-2, …, 2-2, …).
@@ -261,6 +265,9 @@ impl Simulation {
         if config.meshes.len() > u32::MAX as usize {
             return Err(EngineError::BadReference("too many meshes".into()));
         }
+        for c in &config.cylinders {
+            sources::check_cylinder(c, config.wall_materials.len()).map_err(EngineError::BadReference)?;
+        }
         for w in &config.walls {
             if w.material >= config.wall_materials.len() {
                 return Err(EngineError::BadReference(format!(
@@ -333,6 +340,13 @@ impl Simulation {
                 r_max,
             )));
         }
+        if let Some((c, axis)) = sources::periodic_cylinder_reach(&config.cylinders, &periodic, r_max) {
+            return Err(EngineError::BadReference(sources::periodic_cylinder_message(
+                &config.cylinders[c],
+                axis,
+                r_max,
+            )));
+        }
         let mut neighbors = NeighborList::with_periodic(skin, periodic);
         let held = motion::held(&motion, particles.len());
         neighbors.exclude_pairs_among(held.clone());
@@ -346,6 +360,7 @@ impl Simulation {
                 planes: sources::Planes,
                 pairs: sources::Pairs::default(),
                 meshes: sources::Meshes::new(config.meshes, config.t_start),
+                cylinders: sources::Cylinders::new(config.cylinders),
             },
             flow,
             law: config.law,
@@ -959,7 +974,8 @@ impl Simulation {
         let key = |c: &ContactInfo| match c.other {
             ContactPartner::Wall(w) => (c.particle, 0, w, 0),
             ContactPartner::Mesh { mesh, triangle } => (c.particle, 1, mesh, triangle),
-            ContactPartner::Particle(j) => (c.particle, 2, j, 0),
+            ContactPartner::Cylinder(m) => (c.particle, 2, m, 0),
+            ContactPartner::Particle(j) => (c.particle, 3, j, 0),
         };
         contacts.sort_unstable_by_key(key);
         (p.gathered(&order), contacts)
@@ -1025,7 +1041,7 @@ fn check_mesh_motion(m: &MeshWall) -> Result<(), EngineError> {
 pub struct StageTimes {
     /// Neighbour search (rebuild checks and rebuilds).
     pub neighbor: f64,
-    /// Particle–wall contacts.
+    /// Particle–wall contacts (plane and cylinder walls).
     pub walls: f64,
     /// Particle–particle contacts.
     pub pairs: f64,
@@ -1064,6 +1080,8 @@ pub enum ContactPartner {
     Wall(usize),
     /// A mesh wall's index and the triangle that owns the contact.
     Mesh { mesh: usize, triangle: usize },
+    /// A cylinder wall's index.
+    Cylinder(usize),
 }
 
 /// One contact of the current state, for output.

@@ -453,6 +453,7 @@ fn place_case(case: &Case, seed: u64) -> Vec<Option<Vec3>> {
         positions: &case.positions,
         radii: &case.radii,
         walls: &case.walls,
+        cylinders: &[],
         triangles: &case.triangles,
         solids: &[],
         periodic: case.periodic.any().then_some(case.periodic),
@@ -612,4 +613,26 @@ fn dilute_spheres_crowded_in_a_small_mesh_are_all_placed() {
     assert_eq!(case.diameters.len(), 77);
     let n = check(&case, &placed).expect("no overlap");
     assert_eq!(n, 77);
+}
+
+/// Placement keeps clear of cylinder walls: in a box around a drum (particles inside, R = 8
+/// mm) and a rod through it (particles outside, R = 3 mm), every centre is at least its radius
+/// inside the drum and outside the rod (to the rounding [`TOL`] allows), and the annulus
+/// between them (its centres 0.35 of the box) takes a dilute request (4 % solid) whole.
+#[test]
+fn placement_keeps_clear_of_cylinders() {
+    use grainflow::{Cylinder, CylinderSide};
+    let drum = Cylinder::new("drum", Vec3::ZERO, Vec3::Z, 0.008, CylinderSide::Inside, 0, 0.0);
+    let rod = Cylinder::new("rod", Vec3::ZERO, Vec3::Z, 0.003, CylinderSide::Outside, 0, 0.0);
+    let cylinders = [drum, rod];
+    let region = Region::Box { lo: Vec3::splat(-0.01), hi: Vec3::splat(0.01) };
+    let diameters = vec![1e-3; 200];
+    let obstacles = Obstacles { cylinders: &cylinders, ..Obstacles::NONE };
+    let placed = place(&region, &diameters, &obstacles, &mut InsertRng::seed_from_u64(3));
+    let s = 0.02;
+    for x in placed.iter().map(|x| x.expect("a dilute request fits")) {
+        let rho = (x.x * x.x + x.y * x.y).sqrt();
+        assert!(rho <= 0.008 - 5e-4 + TOL * s, "centre {x:?} {rho:e} m from the axis, outside the drum");
+        assert!(rho >= 0.003 + 5e-4 - TOL * s, "centre {x:?} {rho:e} m from the axis, inside the rod");
+    }
 }

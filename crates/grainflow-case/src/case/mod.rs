@@ -5,6 +5,7 @@
 //! module on the field helpers of `fields`; the first mistake found is the one reported.
 
 mod contact;
+mod cylinders;
 mod domain;
 pub(crate) mod fields;
 pub(crate) mod flow;
@@ -260,7 +261,8 @@ fn validate<'h>(
             read_bytes,
             &mut warnings,
         )?;
-    let has_walls = !walls.is_empty() || !meshes.is_empty();
+    let cylinders = cylinders::cylinders(&raw.cylinders, &wall_materials)?;
+    let has_walls = !walls.is_empty() || !meshes.is_empty() || !cylinders.is_empty();
     let contact::Tables { law, pair_params, wall_params } =
         contact::contact(raw.contact, &phases, &mut wall_materials, has_walls, &mut warnings)?;
     let time = time::time(raw.time, &law, &phases)?;
@@ -302,6 +304,13 @@ fn validate<'h>(
         (time.t_start, time.t_stop),
         &mut warnings,
     )?;
+    // The largest radius any particle has or is inserted with.
+    let r_max = insertions
+        .iter()
+        .flat_map(|ins| &ins.mixture.parts)
+        .map(|part| 0.5 * part.sizes.max_diameter())
+        .fold(particles.max_radius(), f64::max);
+    cylinders::check(&particles, &cylinders, max_overlap, periodic.as_ref().map(|p| (p, r_max)))?;
     let time_step = time::step(
         &time,
         &law,
@@ -322,6 +331,7 @@ fn validate<'h>(
         wall_materials,
         walls,
         meshes,
+        cylinders,
         law,
         pair_params,
         wall_params,

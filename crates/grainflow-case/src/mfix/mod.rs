@@ -527,6 +527,7 @@ impl Translator<'_> {
             wall_materials,
             walls: Vec::new(),
             meshes,
+            cylinders: Vec::new(),
             contact: Some(contact.0),
             time: Some(time),
             neighbor,

@@ -65,7 +65,7 @@ use super::region::{InsideMesh, Region, cylinder_clearance};
 use crate::boundary::Periodic;
 use crate::math::Vec3;
 use crate::mesh::closest_point_on_triangle;
-use crate::wall::Wall;
+use crate::wall::{Cylinder, CylinderSide, Wall};
 use rand::Rng;
 use std::f64::consts::{PI, SQRT_2};
 
@@ -98,6 +98,9 @@ pub struct Obstacles<'a> {
     /// Plane walls: a new sphere's centre must be at least its radius from each, on its
     /// particle side ([`Wall::distance`] ≥ r).
     pub walls: &'a [Wall],
+    /// Cylinder walls: a new sphere's centre must be at least its radius from each surface, on
+    /// its particles' side.
+    pub cylinders: &'a [Cylinder],
     /// Mesh walls' triangles in world coordinates (all of them; those far from the region
     /// are passed over). They must not be degenerate (as a loaded mesh's are not).
     pub triangles: &'a [[Vec3; 3]],
@@ -113,8 +116,15 @@ pub struct Obstacles<'a> {
 
 impl Obstacles<'static> {
     /// Nothing in the way.
-    pub const NONE: Obstacles<'static> =
-        Obstacles { positions: &[], radii: &[], walls: &[], triangles: &[], solids: &[], periodic: None };
+    pub const NONE: Obstacles<'static> = Obstacles {
+        positions: &[],
+        radii: &[],
+        walls: &[],
+        cylinders: &[],
+        triangles: &[],
+        solids: &[],
+        periodic: None,
+    };
 }
 
 /// A centre for each of `diameters` (m), in their order, inside `region` and clear of
@@ -678,6 +688,7 @@ struct Scene<'a> {
     qlo: [f64; 3],
     qhi: [f64; 3],
     walls: &'a [Wall],
+    cylinders: &'a [Cylinder],
     solids: &'a [&'a InsideMesh],
     triangles: TriangleBins,
     present: Vec<StaticBins>,
@@ -802,6 +813,7 @@ impl<'a> Scene<'a> {
             qlo,
             qhi,
             walls: obstacles.walls,
+            cylinders: obstacles.cylinders,
             solids: obstacles.solids,
             triangles,
             present,
@@ -862,6 +874,9 @@ impl<'a> Scene<'a> {
         }
         for w in self.walls {
             c = c.min(w.distance(x));
+        }
+        for cyl in self.cylinders {
+            c = c.min(cylinder_wall_clearance(cyl, x));
         }
         if c < need {
             return c;
@@ -1209,4 +1224,11 @@ impl TriangleBins {
         });
         c
     }
+}
+
+/// The distance from `x` to the surface of `cyl` on its particles' side (negative on the other
+/// side), m; on the axis, a radius inside or outside.
+fn cylinder_wall_clearance(cyl: &Cylinder, x: Vec3) -> f64 {
+    let on_axis = if cyl.side == CylinderSide::Inside { cyl.radius } else { -cyl.radius };
+    cyl.locate(x).map_or(on_axis, |k| k.distance)
 }

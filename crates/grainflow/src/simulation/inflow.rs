@@ -790,6 +790,7 @@ impl Simulation {
             positions: &p.position,
             radii,
             walls: &self.walls,
+            cylinders: &self.sources.cylinders.walls,
             triangles: &triangles,
             solids: &solids,
             periodic,

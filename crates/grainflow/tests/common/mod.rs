@@ -61,6 +61,7 @@ pub fn config(
         wall_materials,
         walls,
         meshes: Vec::new(),
+        cylinders: Vec::new(),
         law,
         pair_params,
         wall_params,

@@ -1,11 +1,12 @@
 //! Contact sources: everything a particle touches, one kind per file — particle pairs
-//! ([`Pairs`]), plane walls ([`Planes`]) and triangle meshes ([`Meshes`]).
+//! ([`Pairs`]), plane walls ([`Planes`]), triangle meshes ([`Meshes`]) and cylinder walls
+//! ([`Cylinders`]).
 //!
 //! A source keeps what its contacts need between evaluations (candidates, histories, working
 //! memory) and answers for them: their loads in a force evaluation, the contacts of the state
 //! for output, their part of the diagnostics, and what becomes of their histories when the
 //! particles move to other slots. The simulation holds the sources in one [`Sources`] in a
-//! fixed order (planes, pairs, meshes) and loops over them with `each_source!`; adding a
+//! fixed order (planes, pairs, meshes, cylinders) and loops over them with `each_source!`; adding a
 //! kind of contact is one file here, a field of `Sources` and its name in `each_source!`.
 //!
 //! The plane walls' and the particle pairs' candidates are found by the neighbour list in one
@@ -17,10 +18,13 @@
 //! Every load is rounded to the evaluation's quanta before it is added (`forces::sum`), so the
 //! particles' sums are the same whichever source adds its loads first.
 
+mod cylinders;
 mod meshes;
 mod pairs;
 mod planes;
 
+pub(crate) use cylinders::{Cylinders, check_cylinder};
+pub use cylinders::{periodic_cylinder_message, periodic_cylinder_reach};
 pub(crate) use meshes::Meshes;
 pub use meshes::{MeshLoad, periodic_mesh_message, periodic_mesh_reach};
 pub(crate) use pairs::Pairs;
@@ -141,6 +145,7 @@ pub(crate) struct Sources {
     pub planes: Planes,
     pub pairs: Pairs,
     pub meshes: Meshes,
+    pub cylinders: Cylinders,
 }
 
 /// Runs `$body` with `$s` bound to each source of `$sources` (a `Sources`, by reference or
@@ -160,6 +165,10 @@ macro_rules! each_source {
             let $s = &mut sources.meshes;
             $body;
         }
+        {
+            let $s = &mut sources.cylinders;
+            $body;
+        }
     }};
     (ref $sources:expr, |$s:ident| $body:expr) => {{
         let sources = $sources;
@@ -173,6 +182,10 @@ macro_rules! each_source {
         }
         {
             let $s = &sources.meshes;
+            $body;
+        }
+        {
+            let $s = &sources.cylinders;
             $body;
         }
     }};
