@@ -25,10 +25,11 @@ use thiserror::Error;
 /// the flags; 5: the mesh-wall contacts' histories, at the end; 6: each mesh wall's motion
 /// state — its anchor and its pose — after them; 7: the insertions' and outlets' state; 8: the
 /// caller's note ([`Simulation::checkpoint_note`]), last; 9: the cylinder-wall contacts'
-/// histories, before the note). A checkpoint of format 2 or 3
+/// histories, before the note; 10: each contact source's section, in the sources' order,
+/// after the motion anchors). A checkpoint of format 2 or 3
 /// continues with the quanta of its first evaluation taken afresh: not bit for bit as the run
 /// that wrote it would have gone on.
-pub const FORMAT_VERSION: u32 = 9;
+pub const FORMAT_VERSION: u32 = 10;
 /// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
@@ -88,7 +89,7 @@ fn fnv1a_update(mut h: u64, bytes: &[u8]) -> u64 {
 }
 
 /// Writes the payload to `w`, keeping its checksum and length.
-struct Enc<W: Write> {
+pub(crate) struct Enc<W: Write> {
     w: W,
     sum: u64,
     written: usize,
@@ -100,39 +101,39 @@ impl<W: Write> Enc<W> {
         self.written += b.len();
         self.w.write_all(b)
     }
-    fn u64(&mut self, v: u64) -> io::Result<()> {
+    pub(crate) fn u64(&mut self, v: u64) -> io::Result<()> {
         self.put(&v.to_le_bytes())
     }
-    fn f64(&mut self, v: f64) -> io::Result<()> {
+    pub(crate) fn f64(&mut self, v: f64) -> io::Result<()> {
         self.put(&v.to_le_bytes())
     }
-    fn bytes(&mut self, b: &[u8]) -> io::Result<()> {
+    pub(crate) fn bytes(&mut self, b: &[u8]) -> io::Result<()> {
         self.u64(b.len() as u64)?;
         self.put(b)
     }
-    fn u32s(&mut self, v: &[u32]) -> io::Result<()> {
+    pub(crate) fn u32s(&mut self, v: &[u32]) -> io::Result<()> {
         self.u64(v.len() as u64)?;
         v.iter().try_for_each(|x| self.put(&x.to_le_bytes()))
     }
-    fn f64s(&mut self, v: &[f64]) -> io::Result<()> {
+    pub(crate) fn f64s(&mut self, v: &[f64]) -> io::Result<()> {
         self.u64(v.len() as u64)?;
         v.iter().try_for_each(|x| self.f64(*x))
     }
-    fn vec3s(&mut self, v: &[Vec3]) -> io::Result<()> {
+    pub(crate) fn vec3s(&mut self, v: &[Vec3]) -> io::Result<()> {
         self.vec3s_from(v.iter().copied())
     }
-    fn vec3s_from(&mut self, v: impl ExactSizeIterator<Item = Vec3>) -> io::Result<()> {
+    pub(crate) fn vec3s_from(&mut self, v: impl ExactSizeIterator<Item = Vec3>) -> io::Result<()> {
         self.u64(v.len() as u64)?;
         v.flat_map(|x| x.to_array()).try_for_each(|c| self.f64(c))
     }
-    fn pairs(&mut self, count: usize, v: impl Iterator<Item = [u32; 2]>) -> io::Result<()> {
+    pub(crate) fn pairs(&mut self, count: usize, v: impl Iterator<Item = [u32; 2]>) -> io::Result<()> {
         self.u64(2 * count as u64)?;
         v.flatten().try_for_each(|x| self.put(&x.to_le_bytes()))
     }
 }
 
 /// Reads the payload from a stream, keeping its checksum and the bytes left of it.
-struct Dec<R: Read> {
+pub(crate) struct Dec<R: Read> {
     r: R,
     left: u64,
     sum: u64,
@@ -164,11 +165,11 @@ impl<R: Read> Dec<R> {
         self.left -= n as u64;
         Ok(&self.scratch)
     }
-    fn u64(&mut self, what: &'static str) -> Result<u64, CheckpointError> {
+    pub(crate) fn u64(&mut self, what: &'static str) -> Result<u64, CheckpointError> {
         let b = self.fill(8, what)?;
         Ok(u64::from_le_bytes(std::array::from_fn(|i| b[i])))
     }
-    fn f64(&mut self, what: &'static str) -> Result<f64, CheckpointError> {
+    pub(crate) fn f64(&mut self, what: &'static str) -> Result<f64, CheckpointError> {
         Ok(f64::from_bits(self.u64(what)?))
     }
     /// A count of elements of `elem` bytes each. A count the rest of the payload cannot hold
@@ -196,23 +197,23 @@ impl<R: Read> Dec<R> {
         }
         Ok(out)
     }
-    fn bytes(&mut self, what: &'static str) -> Result<Vec<u8>, CheckpointError> {
+    pub(crate) fn bytes(&mut self, what: &'static str) -> Result<Vec<u8>, CheckpointError> {
         let n = self.len(1, what)?;
         self.elements(n, 1, what, |c| c[0])
     }
-    fn u32s(&mut self, what: &'static str) -> Result<Vec<u32>, CheckpointError> {
+    pub(crate) fn u32s(&mut self, what: &'static str) -> Result<Vec<u32>, CheckpointError> {
         let n = self.len(4, what)?;
         self.elements(n, 4, what, le_u32)
     }
-    fn f64s(&mut self, what: &'static str) -> Result<Vec<f64>, CheckpointError> {
+    pub(crate) fn f64s(&mut self, what: &'static str) -> Result<Vec<f64>, CheckpointError> {
         let n = self.len(8, what)?;
         self.elements(n, 8, what, le_f64)
     }
-    fn vec3s(&mut self, what: &'static str) -> Result<Vec<Vec3>, CheckpointError> {
+    pub(crate) fn vec3s(&mut self, what: &'static str) -> Result<Vec<Vec3>, CheckpointError> {
         let n = self.len(24, what)?;
         self.elements(n, 24, what, |c| Vec3::new(le_f64(&c[..8]), le_f64(&c[8..16]), le_f64(&c[16..])))
     }
-    fn pairs(&mut self, what: &'static str) -> Result<Vec<[u32; 2]>, CheckpointError> {
+    pub(crate) fn pairs(&mut self, what: &'static str) -> Result<Vec<[u32; 2]>, CheckpointError> {
         let flat = self.len(4, what)?;
         if flat % 2 != 0 {
             return Err(CheckpointError::Mismatch(format!("{what}: odd length")));
@@ -275,23 +276,54 @@ struct Payload {
     particles: Particles,
     neighbors: NeighborState,
     anchors: Vec<Vec3>,
-    /// The mesh-wall contacts: (particle id, mesh), triangle, normal, history.
-    mesh_contacts: (Vec<[u32; 2]>, Vec<u32>, Vec<Vec3>, Vec<Vec3>),
-    /// Each mesh's motion: anchor time, anchor pose, pose (None before format 6).
-    mesh_motion: Option<Vec<(f64, Pose, Pose)>>,
+    /// What the contact sources carry (the pairs' and plane walls' histories are in
+    /// `neighbors`).
+    sources: SourceState,
     /// The insertions' and outlets' state (None before format 7).
     flow: Option<Vec<u64>>,
-    /// The cylinder-wall contacts: (particle id, cylinder), history (none before format 9).
-    cylinder_contacts: (Vec<[u32; 2]>, Vec<Vec3>),
     /// The caller's note (empty before format 8).
     note: Vec<u8>,
 }
 
+/// What the contact sources carry across a restart, as a checkpoint holds it (particles by
+/// id), before it is handed back to the sources.
+#[derive(Debug, Default)]
+pub(crate) struct SourceState {
+    /// Particle pairs (ids) and their histories.
+    pub pairs: Vec<[u32; 2]>,
+    pub pair_history: Vec<Vec3>,
+    /// Particle–plane-wall pairs (id, wall) and their histories.
+    pub wall_pairs: Vec<[u32; 2]>,
+    pub wall_history: Vec<Vec3>,
+    /// The mesh-wall contacts: (particle id, mesh), triangle, normal, history.
+    pub mesh_contacts: (Vec<[u32; 2]>, Vec<u32>, Vec<Vec3>, Vec<Vec3>),
+    /// Each mesh's motion: anchor time, anchor pose, pose (None before format 6).
+    pub mesh_motion: Option<Vec<(f64, Pose, Pose)>>,
+    /// The cylinder-wall contacts: (particle id, cylinder), history (none before format 9).
+    pub cylinder_contacts: (Vec<[u32; 2]>, Vec<Vec3>),
+}
+
+/// A contact source's section of a checkpoint (format 10 on): what it carries across a restart,
+/// written and read in the sources' order (`forces::source::each_source_type!`).
+pub(crate) trait Saved {
+    /// Writes the section for the state of `sim`, naming particles by id.
+    fn save<W: Write>(&self, sim: &Simulation, e: &mut Enc<W>) -> io::Result<()>;
+    /// The bytes [`save`](Self::save) writes.
+    fn saved_bytes(&self, sim: &Simulation) -> usize;
+    /// Reads the section into `state`.
+    fn load<R: Read>(d: &mut Dec<R>, state: &mut SourceState) -> Result<(), CheckpointError>;
+}
+
+/// The bytes of a list of `n` pairs and of `n` vectors, as [`Enc`] writes them.
+pub(crate) fn pairs_bytes(n: usize) -> usize {
+    (8 + 8 * n) + (8 + 24 * n)
+}
+
 /// f64s per mesh of the motion state: τ, then two poses of a quaternion and a translation.
-const MOTION_F64S: usize = 15;
+pub(crate) const MOTION_F64S: usize = 15;
 
 /// A pose from 7 numbers (quaternion x, y, z, w; translation).
-fn pose_of(v: &[f64]) -> Pose {
+pub(crate) fn pose_of(v: &[f64]) -> Pose {
     Pose {
         rotation: glam::DQuat::from_xyzw(v[0], v[1], v[2], v[3]),
         translation: Vec3::new(v[4], v[5], v[6]),
@@ -299,9 +331,27 @@ fn pose_of(v: &[f64]) -> Pose {
 }
 
 /// The 7 numbers of a pose.
-fn pose_numbers(p: &Pose) -> [f64; 7] {
+pub(crate) fn pose_numbers(p: &Pose) -> [f64; 7] {
     let (q, t) = (p.rotation, p.translation);
     [q.x, q.y, q.z, q.w, t.x, t.y, t.z]
+}
+
+/// Each mesh's motion state (anchor time, anchor pose, pose), as [`MOTION_F64S`] numbers a mesh.
+pub(crate) fn mesh_motion(d: &mut Dec<impl Read>) -> Result<Vec<(f64, Pose, Pose)>, CheckpointError> {
+    let v = d.f64s("mesh motion")?;
+    if v.len() % MOTION_F64S != 0 {
+        return Err(CheckpointError::Truncated("mesh motion"));
+    }
+    Ok(v.chunks_exact(MOTION_F64S).map(|c| (c[0], pose_of(&c[1..8]), pose_of(&c[8..15]))).collect())
+}
+
+/// The insertions' and outlets' state, in 64-bit words.
+fn flow_words(d: &mut Dec<impl Read>) -> Result<Vec<u64>, CheckpointError> {
+    let b = d.bytes("insertions and outlets")?;
+    if b.len() % 8 != 0 {
+        return Err(CheckpointError::Truncated("insertions and outlets"));
+    }
+    Ok(b.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect())
 }
 
 impl Payload {
@@ -343,48 +393,44 @@ impl Payload {
         ] {
             *v = d.vec3s("particle vectors")?;
         }
+        let (skin, built) = (d.f64("skin")?, d.u64("flags")? != 0);
+        let mut sources = SourceState::default();
+        let (reference, anchors, flow);
+        if version >= 10 {
+            reference = d.vec3s("reference positions")?;
+            anchors = d.vec3s("motion anchors")?;
+            crate::forces::source::each_source_type!(|S| S::load(d, &mut sources)?);
+            flow = Some(flow_words(d)?);
+        } else {
+            // The sections in the order of formats 2–9.
+            crate::forces::source::Pairs::load(d, &mut sources)?;
+            crate::forces::source::Planes::load(d, &mut sources)?;
+            reference = d.vec3s("reference positions")?;
+            anchors = d.vec3s("motion anchors")?;
+            if version >= 5 {
+                sources.mesh_contacts = (
+                    d.pairs("mesh contacts")?,
+                    d.u32s("mesh contact triangles")?,
+                    d.vec3s("mesh contact normals")?,
+                    d.vec3s("mesh contact histories")?,
+                );
+            }
+            if version >= 6 {
+                sources.mesh_motion = Some(mesh_motion(d)?);
+            }
+            flow = if version >= 7 { Some(flow_words(d)?) } else { None };
+            if version >= 9 {
+                crate::forces::source::Cylinders::load(d, &mut sources)?;
+            }
+        }
         let neighbors = NeighborState {
-            skin: d.f64("skin")?,
-            built: d.u64("flags")? != 0,
-            pairs: d.pairs("pairs")?,
-            pair_history: d.vec3s("pair history")?,
-            wall_pairs: d.pairs("wall pairs")?,
-            wall_history: d.vec3s("wall history")?,
-            reference: d.vec3s("reference positions")?,
-        };
-        let anchors = d.vec3s("motion anchors")?;
-        let mesh_contacts = if version >= 5 {
-            (
-                d.pairs("mesh contacts")?,
-                d.u32s("mesh contact triangles")?,
-                d.vec3s("mesh contact normals")?,
-                d.vec3s("mesh contact histories")?,
-            )
-        } else {
-            Default::default()
-        };
-        let mesh_motion = if version >= 6 {
-            let v = d.f64s("mesh motion")?;
-            if v.len() % MOTION_F64S != 0 {
-                return Err(CheckpointError::Truncated("mesh motion"));
-            }
-            Some(v.chunks_exact(MOTION_F64S).map(|c| (c[0], pose_of(&c[1..8]), pose_of(&c[8..15]))).collect())
-        } else {
-            None
-        };
-        let flow = if version >= 7 {
-            let b = d.bytes("insertions and outlets")?;
-            if b.len() % 8 != 0 {
-                return Err(CheckpointError::Truncated("insertions and outlets"));
-            }
-            Some(b.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect())
-        } else {
-            None
-        };
-        let cylinder_contacts = if version >= 9 {
-            (d.pairs("cylinder contacts")?, d.vec3s("cylinder contact histories")?)
-        } else {
-            Default::default()
+            skin,
+            built,
+            pairs: std::mem::take(&mut sources.pairs),
+            pair_history: std::mem::take(&mut sources.pair_history),
+            wall_pairs: std::mem::take(&mut sources.wall_pairs),
+            wall_history: std::mem::take(&mut sources.wall_history),
+            reference,
         };
         let note = if version >= 8 { d.bytes("note")? } else { Vec::new() };
         let mut neighbors = neighbors;
@@ -402,10 +448,8 @@ impl Payload {
             particles: p,
             neighbors,
             anchors,
-            mesh_contacts,
-            mesh_motion,
+            sources,
             flow,
-            cylinder_contacts,
             note,
         })
     }
@@ -436,7 +480,7 @@ impl Simulation {
     fn payload_size(&self, case_hash: &str) -> usize {
         let p = self.particles();
         let nl = self.neighbors();
-        let (n, pairs, walls) = (p.len(), nl.pair_count(), nl.wall_pairs().len());
+        let n = p.len();
         8 + case_hash.len()
             + 8
             + self.run_id().len()
@@ -447,17 +491,10 @@ impl Simulation {
             + 5 * (8 + 24 * n)
             + 2 * (8 + 24 * p.accel_prev.len())
             + 16
-            + (8 + 8 * pairs)
-            + (8 + 24 * pairs)
-            + (8 + 8 * walls)
-            + (8 + 24 * walls)
             + (8 + 24 * nl.reference().len())
             + (8 + 24 * self.motion_anchors().len())
-            + (8 + 8 + 8 + 8 + (8 + 4 + 24 + 24) * self.mesh_histories().len())
-            + (8 + 8 * MOTION_F64S * self.meshes().len())
+            + self.sources.saved_bytes(self)
             + (8 + 8 * self.flow_words().len())
-            + (8 + 8 * self.cylinder_histories().len())
-            + (8 + 24 * self.cylinder_histories().len())
             + (8 + self.checkpoint_note().len())
     }
 
@@ -496,30 +533,10 @@ impl Simulation {
         }
         e.f64(nl.skin())?;
         e.u64(nl.is_built() as u64)?;
-        let id = |slot: u32| p.id[slot as usize];
-        e.pairs(nl.pair_count(), nl.pairs().map(|[a, b]| [id(a), id(b)]))?;
-        e.vec3s_from(nl.pair_histories())?;
-        e.pairs(nl.wall_pairs().len(), nl.wall_pairs().iter().map(|&[i, w]| [id(i), w]))?;
-        e.vec3s(nl.wall_history())?;
         e.vec3s(nl.reference())?;
         e.vec3s(&self.motion_anchors())?;
-        let mesh = self.mesh_histories();
-        e.pairs(mesh.len(), mesh.iter().map(|h| [id(h.slot), h.mesh]))?;
-        e.u32s(&mesh.iter().map(|h| h.triangle).collect::<Vec<_>>())?;
-        e.vec3s_from(mesh.iter().map(|h| h.normal))?;
-        e.vec3s_from(mesh.iter().map(|h| h.h))?;
-        let motion: Vec<f64> = self
-            .mesh_motion_state()
-            .iter()
-            .flat_map(|(tau, anchor, now)| {
-                std::iter::once(*tau).chain(pose_numbers(anchor)).chain(pose_numbers(now))
-            })
-            .collect();
-        e.f64s(&motion)?;
+        self.sources.save(self, &mut e)?;
         e.bytes(&self.flow_words().iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>())?;
-        let cyl = self.cylinder_histories();
-        e.pairs(cyl.len(), cyl.iter().map(|h| [id(h.slot), h.cylinder]))?;
-        e.vec3s_from(cyl.iter().map(|h| h.h))?;
         e.bytes(self.checkpoint_note())?;
         // The header announced the payload's length before it was written.
         if e.written != payload {
@@ -620,10 +637,8 @@ impl Simulation {
             anchors,
             run_id,
             sums,
-            mesh_contacts,
-            mesh_motion,
+            sources,
             flow,
-            cylinder_contacts,
             note,
             ..
         } = payload;
@@ -633,9 +648,9 @@ impl Simulation {
         sim.set_sums_state(sums.0, sums.1);
         sim.restore_dynamic_state(timing, step, history_started, forces_current, neighbors, &anchors)
             .map_err(CheckpointError::Mismatch)?;
-        sim.set_mesh_histories(mesh_contacts).map_err(CheckpointError::Mismatch)?;
-        sim.set_cylinder_histories(cylinder_contacts).map_err(CheckpointError::Mismatch)?;
-        if let Some(motion) = mesh_motion {
+        sim.set_mesh_histories(sources.mesh_contacts).map_err(CheckpointError::Mismatch)?;
+        sim.set_cylinder_histories(sources.cylinder_contacts).map_err(CheckpointError::Mismatch)?;
+        if let Some(motion) = sources.mesh_motion {
             sim.set_mesh_motion_state(&motion).map_err(CheckpointError::Mismatch)?;
         }
         if let Some(flow) = flow {

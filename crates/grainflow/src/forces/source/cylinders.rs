@@ -361,11 +361,6 @@ impl Simulation {
         self.sources.cylinders.load_on(m, about)
     }
 
-    /// The cylinder contacts' histories, by (slot, cylinder).
-    pub(crate) fn cylinder_histories(&self) -> &[CylinderHistory] {
-        &self.sources.cylinders.history
-    }
-
     /// Restores the cylinder contacts' histories of a checkpoint: (particle id, cylinder) and
     /// history of each.
     pub(crate) fn set_cylinder_histories(&mut self, lists: (Vec<[u32; 2]>, Vec<Vec3>)) -> Result<(), String> {
@@ -425,4 +420,30 @@ pub fn periodic_cylinder_message(c: &Cylinder, axis: usize, max_radius: f64) -> 
         c.name,
         c.axis.to_array()
     )
+}
+
+/// The cylinder-wall contacts ((particle id, cylinder), history).
+impl crate::checkpoint::Saved for Cylinders {
+    fn save<W: std::io::Write>(
+        &self,
+        sim: &Simulation,
+        e: &mut crate::checkpoint::Enc<W>,
+    ) -> std::io::Result<()> {
+        let id = &sim.particles().id;
+        let h = &self.history;
+        e.pairs(h.len(), h.iter().map(|h| [id[h.slot as usize], h.cylinder]))?;
+        e.vec3s_from(h.iter().map(|h| h.h))
+    }
+
+    fn saved_bytes(&self, _sim: &Simulation) -> usize {
+        crate::checkpoint::pairs_bytes(self.history.len())
+    }
+
+    fn load<R: std::io::Read>(
+        d: &mut crate::checkpoint::Dec<R>,
+        state: &mut crate::checkpoint::SourceState,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        state.cylinder_contacts = (d.pairs("cylinder contacts")?, d.vec3s("cylinder contact histories")?);
+        Ok(())
+    }
 }

@@ -860,11 +860,6 @@ impl ContactSource for Meshes {
 }
 
 impl Simulation {
-    /// The mesh-wall contacts' histories, by (slot, mesh, triangle).
-    pub(crate) fn mesh_histories(&self) -> &[MeshHistory] {
-        &self.sources.meshes.history
-    }
-
     /// Restores the mesh-wall contacts' histories of a checkpoint: (particle id, mesh),
     /// triangle, normal and history of each.
     pub(crate) fn set_mesh_histories(
@@ -899,12 +894,8 @@ impl Simulation {
         self.sources.meshes.load_on(m, about)
     }
 
-    /// (anchor time since the start, s; anchor pose; pose now) of every mesh, for checkpoints.
-    pub(crate) fn mesh_motion_state(&self) -> Vec<(f64, Pose, Pose)> {
-        self.sources.meshes.motion_state(self.time())
-    }
-
-    /// Restores what [`mesh_motion_state`](Self::mesh_motion_state) gave. A mesh whose motion
+    /// Restores each mesh's motion state of a checkpoint (anchor time since the start, s;
+    /// anchor pose; pose then). A mesh whose motion
     /// in this case puts it elsewhere than the checkpoint's pose (the case's motion changed)
     /// continues from the checkpoint's pose, anchored at its time.
     pub(crate) fn set_mesh_motion_state(&mut self, state: &[(f64, Pose, Pose)]) -> Result<(), String> {
@@ -996,4 +987,47 @@ pub fn periodic_mesh_message(
     format!(
         "mesh '{name}' reaches across or within {max_radius:e} m (the largest particle radius) of the periodic faces {x} = {lo:e} and {x} = {hi:e} m (it spans {x} from {from:e} to {to:e} m over the run): meshes have no periodic images, so a particle across the face would meet it on one side only; keep the mesh more than {max_radius:e} m inside the faces of the periodic axis {x}, or make the axis non-periodic (for a flat floor along a periodic axis, use a [[walls]] plane)"
     )
+}
+
+/// The mesh-wall contacts ((particle id, mesh), owning triangle, normal, history), then each
+/// mesh's motion state (anchor time, anchor pose, pose now).
+impl crate::checkpoint::Saved for Meshes {
+    fn save<W: std::io::Write>(
+        &self,
+        sim: &Simulation,
+        e: &mut crate::checkpoint::Enc<W>,
+    ) -> std::io::Result<()> {
+        let id = &sim.particles().id;
+        let h = &self.history;
+        e.pairs(h.len(), h.iter().map(|h| [id[h.slot as usize], h.mesh]))?;
+        e.u32s(&h.iter().map(|h| h.triangle).collect::<Vec<_>>())?;
+        e.vec3s_from(h.iter().map(|h| h.normal))?;
+        e.vec3s_from(h.iter().map(|h| h.h))?;
+        let numbers = crate::checkpoint::pose_numbers;
+        let motion: Vec<f64> = self
+            .motion_state(sim.time())
+            .iter()
+            .flat_map(|(tau, anchor, now)| std::iter::once(*tau).chain(numbers(anchor)).chain(numbers(now)))
+            .collect();
+        e.f64s(&motion)
+    }
+
+    fn saved_bytes(&self, _sim: &Simulation) -> usize {
+        (8 + 8 + 8 + 8 + (8 + 4 + 24 + 24) * self.history.len())
+            + (8 + 8 * crate::checkpoint::MOTION_F64S * self.walls.len())
+    }
+
+    fn load<R: std::io::Read>(
+        d: &mut crate::checkpoint::Dec<R>,
+        state: &mut crate::checkpoint::SourceState,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        state.mesh_contacts = (
+            d.pairs("mesh contacts")?,
+            d.u32s("mesh contact triangles")?,
+            d.vec3s("mesh contact normals")?,
+            d.vec3s("mesh contact histories")?,
+        );
+        state.mesh_motion = Some(crate::checkpoint::mesh_motion(d)?);
+        Ok(())
+    }
 }

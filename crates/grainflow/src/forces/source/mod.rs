@@ -191,6 +191,29 @@ macro_rules! each_source {
     }};
 }
 
+/// Runs `$body` with the type `$t` standing for each source's type, in the sources' order.
+macro_rules! each_source_type {
+    (|$t:ident| $body:expr) => {{
+        {
+            type $t = $crate::forces::source::Planes;
+            $body;
+        }
+        {
+            type $t = $crate::forces::source::Pairs;
+            $body;
+        }
+        {
+            type $t = $crate::forces::source::Meshes;
+            $body;
+        }
+        {
+            type $t = $crate::forces::source::Cylinders;
+            $body;
+        }
+    }};
+}
+pub(crate) use each_source_type;
+
 impl Sources {
     /// Every source's loads (see [`ContactSource::loads`]).
     pub(crate) fn loads<N: NormalSubModel, T: TangentialSubModel>(&mut self, run: &mut LoadRun) {
@@ -217,6 +240,26 @@ impl Sources {
     /// See [`ContactSource::appended`].
     pub(crate) fn appended(&mut self, n_old: usize, n: usize) {
         each_source!(self, |s| s.appended(n_old, n));
+    }
+
+    /// Every source's section of a checkpoint, in the sources' order (see
+    /// [`crate::checkpoint::Saved`]).
+    pub(crate) fn save<W: std::io::Write>(
+        &self,
+        sim: &crate::Simulation,
+        e: &mut crate::checkpoint::Enc<W>,
+    ) -> std::io::Result<()> {
+        use crate::checkpoint::Saved;
+        each_source!(ref self, |s| s.save(sim, e)?);
+        Ok(())
+    }
+
+    /// The bytes of [`save`](Self::save).
+    pub(crate) fn saved_bytes(&self, sim: &crate::Simulation) -> usize {
+        use crate::checkpoint::Saved;
+        let mut bytes = 0;
+        each_source!(ref self, |s| bytes += s.saved_bytes(sim));
+        bytes
     }
 
     /// See [`ContactSource::heap_bytes`].

@@ -195,3 +195,29 @@ fn pair_coeffs(v: &View, i: usize, j: usize) -> ContactCoeffs {
     sized.pull_off = crate::with_normal_submodel!(v.law.normal, |N| contact_reach::<N>(v.coeffs, c, r_star));
     sized
 }
+
+/// The particle pairs (ids) and their histories, from the neighbour list.
+impl crate::checkpoint::Saved for Pairs {
+    fn save<W: std::io::Write>(
+        &self,
+        sim: &crate::Simulation,
+        e: &mut crate::checkpoint::Enc<W>,
+    ) -> std::io::Result<()> {
+        let (id, nl) = (&sim.particles().id, sim.neighbors());
+        e.pairs(nl.pair_count(), nl.pairs().map(|[a, b]| [id[a as usize], id[b as usize]]))?;
+        e.vec3s_from(nl.pair_histories())
+    }
+
+    fn saved_bytes(&self, sim: &crate::Simulation) -> usize {
+        crate::checkpoint::pairs_bytes(sim.neighbors().pair_count())
+    }
+
+    fn load<R: std::io::Read>(
+        d: &mut crate::checkpoint::Dec<R>,
+        state: &mut crate::checkpoint::SourceState,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        state.pairs = d.pairs("pairs")?;
+        state.pair_history = d.vec3s("pair history")?;
+        Ok(())
+    }
+}

@@ -78,3 +78,29 @@ impl ContactSource for Planes {
         (list.wall_pairs, list.wall_history) = (wall_pairs, wall_history);
     }
 }
+
+/// The plane-wall pairs (particle id, wall) and their histories, from the neighbour list.
+impl crate::checkpoint::Saved for Planes {
+    fn save<W: std::io::Write>(
+        &self,
+        sim: &crate::Simulation,
+        e: &mut crate::checkpoint::Enc<W>,
+    ) -> std::io::Result<()> {
+        let (id, nl) = (&sim.particles().id, sim.neighbors());
+        e.pairs(nl.wall_pairs().len(), nl.wall_pairs().iter().map(|&[i, w]| [id[i as usize], w]))?;
+        e.vec3s(nl.wall_history())
+    }
+
+    fn saved_bytes(&self, sim: &crate::Simulation) -> usize {
+        crate::checkpoint::pairs_bytes(sim.neighbors().wall_pairs().len())
+    }
+
+    fn load<R: std::io::Read>(
+        d: &mut crate::checkpoint::Dec<R>,
+        state: &mut crate::checkpoint::SourceState,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        state.wall_pairs = d.pairs("wall pairs")?;
+        state.wall_history = d.vec3s("wall history")?;
+        Ok(())
+    }
+}
