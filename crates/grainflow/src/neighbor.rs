@@ -84,6 +84,9 @@ pub struct NeighborState {
 /// bytes a pair — partner, history, contact flag, sort key — a list that long takes 80 GB.)
 pub(crate) const MAX_PAIRS: usize = (1 << 31) - 1;
 
+/// Rows whose persisting contacts a rebuild on one thread finds at a time.
+const SERIAL_MERGE_ROWS: usize = 4096;
+
 /// On threads, the pairs a thread has found are added to the list's keys once it holds this
 /// many (512 KiB).
 const HAND_OVER_KEYS: usize = 1 << 16;
@@ -619,45 +622,32 @@ impl NeighborList {
         );
         let mut persists = vec![0u64; self.fresh.len().div_ceil(64)];
         let mut kept = 0usize;
+        // The persisting pairs, found a run of rows at a time (a pair's old entry lies in its
+        // row) as (fresh index, old index) in list order, then their histories packed in that
+        // order: on the current rayon pool all runs at once, else one after the other (so that
+        // only one run's list is held).
+        let mut pack = |found: Vec<(u32, u32)>, hist: &mut Vec<Vec3>| {
+            for (f, k) in found {
+                hist[kept] = hist[k as usize];
+                kept += 1;
+                persists[f as usize / 64] |= 1 << (f % 64);
+            }
+        };
+        let mut history = std::mem::take(&mut self.pair_history);
         if parallel && n > 0 {
-            // The persisting pairs found on the current rayon pool, runs of rows at a time (a
-            // pair's old entry lies in its row), as (fresh index, old index) in list order;
-            // their histories are then packed in that order, as one pass would.
             use rayon::prelude::*;
             let parts = 4 * rayon::current_num_threads();
             let found: Vec<Vec<(u32, u32)>> = (0..parts)
                 .into_par_iter()
                 .map(|c| self.persisting(c * n / parts..(c + 1) * n / parts))
                 .collect();
-            for (f, k) in found.into_iter().flatten() {
-                self.pair_history[kept] = self.pair_history[k as usize];
-                kept += 1;
-                persists[f as usize / 64] |= 1 << (f % 64);
-            }
+            found.into_iter().for_each(|f| pack(f, &mut history));
         } else {
-            let (mut a_old, mut k) = (0usize, 0usize);
-            for (f, &key) in self.fresh.iter().enumerate() {
-                while k < self.partners.len() {
-                    while self.offsets[a_old + 1] <= k {
-                        a_old += 1;
-                    }
-                    let old_key = pair_key(a_old as u32, self.partners[k]);
-                    if old_key < key {
-                        k += 1;
-                        continue;
-                    }
-                    if old_key == key {
-                        if self.in_contact[k] {
-                            self.pair_history[kept] = self.pair_history[k];
-                            kept += 1;
-                            persists[f / 64] |= 1 << (f % 64);
-                        }
-                        k += 1;
-                    }
-                    break;
-                }
+            for a in (0..n).step_by(SERIAL_MERGE_ROWS) {
+                pack(self.persisting(a..(a + SERIAL_MERGE_ROWS).min(n)), &mut history);
             }
         }
+        self.pair_history = history;
         let len = self.fresh.len();
         // Exact growth: an amortised doubling would leave up to twice the history allocated.
         self.pair_history.reserve_exact(len.saturating_sub(self.pair_history.len()));

@@ -149,17 +149,13 @@ impl Cylinders {
     /// The load the particles exerted on cylinder `m` at the last force evaluation: the
     /// force, and the torque about `about`.
     fn load_on(&self, m: usize, about: Vec3) -> MeshLoad {
-        use crate::observe::order_free_sum;
-        let parts: Vec<&LoadPart> = self.loads.iter().filter(|l| l.cylinder == m as u32).collect();
-        let sum = |f: &dyn Fn(&LoadPart) -> Vec3| {
-            let c =
-                |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
-            Vec3::new(c(0), c(1), c(2))
-        };
-        MeshLoad {
-            force: -sum(&|l| l.force),
-            torque: -sum(&|l| (l.centre - about).cross(l.force) + l.torque),
-        }
+        let parts: Vec<_> = self
+            .loads
+            .iter()
+            .filter(|l| l.cylinder == m as u32)
+            .map(|l| (l.centre, l.force, l.torque))
+            .collect();
+        super::wall_load(&parts, about)
     }
 
     /// Restores the cylinder contacts' histories of a checkpoint: (particle id, cylinder) and

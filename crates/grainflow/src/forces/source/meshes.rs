@@ -399,17 +399,9 @@ impl Meshes {
     /// The load the particles exerted on mesh `m` at the last force evaluation (see
     /// [`Simulation::mesh_load`]).
     fn load_on(&self, m: usize, about: Vec3) -> MeshLoad {
-        use crate::observe::order_free_sum;
-        let parts: Vec<&MeshLoadPart> = self.loads.iter().filter(|l| l.mesh == m as u32).collect();
-        let sum = |f: &dyn Fn(&MeshLoadPart) -> Vec3| {
-            let c =
-                |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
-            Vec3::new(c(0), c(1), c(2))
-        };
-        MeshLoad {
-            force: -sum(&|l| l.force),
-            torque: -sum(&|l| (l.centre - about).cross(l.force) + l.torque),
-        }
+        let parts: Vec<_> =
+            self.loads.iter().filter(|l| l.mesh == m as u32).map(|l| (l.centre, l.force, l.torque)).collect();
+        super::wall_load(&parts, about)
     }
 
     /// (anchor time since the start, s; anchor pose; pose at `t`) of every mesh.

@@ -270,6 +270,22 @@ impl Sources {
     }
 }
 
+/// The load a wall takes from its contacts' loads on the particles, each (the particle's
+/// centre, the force and the torque about the centre on it): minus their sums, the torque about
+/// `about`. The sums do not depend on the contacts' order.
+pub(crate) fn wall_load(
+    parts: &[(crate::math::Vec3, crate::math::Vec3, crate::math::Vec3)],
+    about: crate::math::Vec3,
+) -> MeshLoad {
+    use crate::math::Vec3;
+    use crate::observe::order_free_sum;
+    let sum = |f: &dyn Fn(&(Vec3, Vec3, Vec3)) -> Vec3| {
+        let c = |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
+        Vec3::new(c(0), c(1), c(2))
+    };
+    MeshLoad { force: -sum(&|&(_, f, _)| f), torque: -sum(&|&(x, f, t)| (x - about).cross(f) + t) }
+}
+
 /// The coefficients of slot `i`'s contacts with wall material `material`: its phase's,
 /// formed for its own radius and mass where the table is per unit size (the pull-off distance
 /// too).
