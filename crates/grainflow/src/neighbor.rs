@@ -635,12 +635,7 @@ impl NeighborList {
         };
         let mut history = std::mem::take(&mut self.pair_history);
         if parallel && n > 0 {
-            use rayon::prelude::*;
-            let parts = 4 * rayon::current_num_threads();
-            let found: Vec<Vec<(u32, u32)>> = (0..parts)
-                .into_par_iter()
-                .map(|c| self.persisting(c * n / parts..(c + 1) * n / parts))
-                .collect();
+            let found = crate::threads::in_runs(n, |rows| self.persisting(rows));
             found.into_iter().for_each(|f| pack(f, &mut history));
         } else {
             for a in (0..n).step_by(SERIAL_MERGE_ROWS) {
@@ -739,10 +734,7 @@ impl NeighborList {
             (fresh, history)
         };
         let (fresh, history) = if parallel && !walls.is_empty() {
-            use rayon::prelude::*;
-            let parts = 4 * rayon::current_num_threads();
-            let found: Vec<_> =
-                (0..parts).into_par_iter().map(|k| find(k * n / parts..(k + 1) * n / parts)).collect();
+            let found = crate::threads::in_runs(n, find);
             let mut fresh = Vec::with_capacity(found.iter().map(|f| f.0.len()).sum());
             let mut history = Vec::with_capacity(fresh.capacity());
             for (f, h) in found {

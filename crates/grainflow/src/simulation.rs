@@ -199,8 +199,8 @@ pub struct Simulation {
     pool: Option<std::sync::Arc<rayon::ThreadPool>>,
     /// Whether a step runs on the pool ([`choice`]).
     choice: choice::ThreadChoice,
-    /// The step under way runs on one thread although the pool could take it.
-    one_thread_now: bool,
+    /// Steps run on the pool only from this many particles.
+    parallel_from: usize,
     /// The largest force and torque components of the last force evaluation's loads, from
     /// which the next takes the quanta of its order-free sums (`forces::sum`); `None` before
     /// the first.
@@ -387,7 +387,7 @@ impl Simulation {
             timing: None,
             pool: None,
             choice: Default::default(),
-            one_thread_now: false,
+            parallel_from: forces::MIN_PARALLEL_PARTICLES,
             load_peak: None,
             peak_floor,
             inexact_sums: 0,
@@ -582,7 +582,7 @@ impl Simulation {
                 .map_err(|e| EngineError::BadReference(format!("cannot start {threads} threads: {e}")))?;
             Some(std::sync::Arc::new(pool))
         };
-        self.choice = choice::ThreadChoice::new(false, threads).keeping(&self.choice);
+        self.choice = choice::ThreadChoice::new(false, threads);
         Ok(())
     }
 
@@ -632,7 +632,7 @@ impl Simulation {
     /// Runs `f` on the thread pool if the stages run in parallel (telling it so), else here.
     fn on_stages(&mut self, f: impl FnOnce(&mut Simulation, bool) + Send) {
         match self.pool.clone() {
-            Some(pool) if self.may_use_pool() => pool.install(|| f(self, true)),
+            Some(pool) if self.parallel() => pool.install(|| f(self, true)),
             _ => f(self, false),
         }
     }
@@ -655,15 +655,10 @@ impl Simulation {
         }
     }
 
-    /// True when the stages may run on the thread pool: it has one, and particles enough.
-    fn may_use_pool(&self) -> bool {
-        self.pool.is_some() && self.particles.len() >= self.choice.parallel_from()
-    }
-
-    /// True when the stages of this step run on the thread pool (see
-    /// [`step_chosen`](Self::step_chosen)).
+    /// True when the stages may run on the thread pool: it has one, and particles enough
+    /// (a step then asks [`choice`] whether they do).
     fn parallel(&self) -> bool {
-        self.may_use_pool() && !self.one_thread_now
+        self.pool.is_some() && self.particles.len() >= self.parallel_from
     }
 
     /// The periodic wrap, if any axis is periodic.
@@ -682,9 +677,7 @@ impl Simulation {
         }
         let pool = self.choice.use_pool(self.step, self.particles.len());
         let start = std::time::Instant::now();
-        self.one_thread_now = !pool;
         self.step_on(pool, defer);
-        self.one_thread_now = false;
         self.choice.record(pool, start.elapsed().as_secs_f64(), self.step);
     }
 
@@ -706,14 +699,14 @@ impl Simulation {
         let n = self.particles.len();
         match self.integrator {
             Integrator::Euler => {
-                self.compute_forces();
+                self.evaluate_forces(true, par);
                 let common = self.common_mass_and_inertia();
                 let blocks = thread_blocks(&self.sources.pairs.plan, par, n);
                 let pass = integrate::Pass { runs: &self.free, gravity: g, dt, blocks, common };
                 integrate::euler(&mut self.particles, &pass);
             }
             Integrator::AdamsBashforth => {
-                self.compute_forces();
+                self.evaluate_forces(true, par);
                 let first = !self.history_started;
                 let common = self.common_mass_and_inertia();
                 let blocks = thread_blocks(&self.sources.pairs.plan, par, n);
@@ -729,7 +722,7 @@ impl Simulation {
                 if !self.forces_current {
                     // Forces of the current state for the first half kick; the tangential
                     // springs advance once per step, in the evaluation after the drift.
-                    self.evaluate_forces(false);
+                    self.evaluate_forces(false, par);
                 }
                 let common = self.common_mass_and_inertia();
                 let blocks = thread_blocks(&self.sources.pairs.plan, par, n);
@@ -742,7 +735,7 @@ impl Simulation {
                     integrate::verlet_kick_drift(&mut self.particles, &pass);
                 }
                 self.drifted = true;
-                self.compute_forces();
+                self.evaluate_forces(true, par);
                 if defer {
                     self.kick_pending = true;
                 } else {
@@ -820,16 +813,16 @@ impl Simulation {
     /// Contact forces and torques from the current state into the accumulators, advancing the
     /// tangential springs by one step (this is the force evaluation of a step).
     pub fn compute_forces(&mut self) {
-        self.evaluate_forces(true);
+        self.evaluate_forces(true, self.parallel());
     }
 
     /// Contact forces and torques into the accumulators. With `advance_history` the tangential
     /// springs take this step's increment (s = h + Δt·v_t) and store it; without, the forces
     /// are those of the stored springs as they are (s = h), and nothing is stored — so
     /// evaluating the same state again gives the same forces and leaves the history alone.
-    fn evaluate_forces(&mut self, advance_history: bool) {
+    /// With `par`, on the current rayon pool.
+    fn evaluate_forces(&mut self, advance_history: bool, par: bool) {
         let t0 = self.timing.map(|_| std::time::Instant::now());
-        let par = self.parallel();
         let blocks = thread_blocks(&self.sources.pairs.plan, par, self.particles.len());
         self.neighbors.update(&self.particles, &self.walls, blocks);
         if let (Some(t0), Some(t)) = (t0, self.timing.as_mut()) {

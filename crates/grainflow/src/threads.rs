@@ -53,6 +53,29 @@ pub(crate) fn pinned<T: Send, R: Send>(
         .collect()
 }
 
+/// Runs of consecutive slots a thread takes at a time in the stages that share slots out by
+/// work stealing (the mesh and cylinder walls, the rebuild's wall pairs and merge), per thread:
+/// enough for the threads to even out runs with more contacts than others.
+pub(crate) const RUNS_PER_THREAD: usize = 4;
+
+/// Below this many slots to work on, those stages stay on one thread (the results do not
+/// depend on it).
+pub(crate) const MIN_PARALLEL_SLOTS: usize = 256;
+
+/// `n` items in `parts` consecutive runs of nearly equal length (at most `n`, at least one).
+pub(crate) fn runs(n: usize, parts: usize) -> impl Iterator<Item = std::ops::Range<usize>> + Clone {
+    let parts = parts.clamp(1, n.max(1));
+    (0..parts).map(move |k| k * n / parts..(k + 1) * n / parts)
+}
+
+/// `work` on [`runs`] of `n` slots ([`RUNS_PER_THREAD`] per thread of the current rayon
+/// pool), the runs taken by whichever thread is free, the results in run order.
+pub(crate) fn in_runs<R: Send>(n: usize, work: impl Fn(std::ops::Range<usize>) -> R + Sync) -> Vec<R> {
+    use rayon::prelude::*;
+    let runs: Vec<_> = runs(n, RUNS_PER_THREAD * rayon::current_num_threads()).collect();
+    runs.into_par_iter().map(&work).collect()
+}
+
 /// Splits `s` at the given ends of consecutive parts (the last end must be `s.len()`).
 pub(crate) fn split_at_ends<T>(mut s: &mut [T], ends: impl Iterator<Item = usize>) -> Parts<&mut [T]> {
     let mut parts = Parts::new();

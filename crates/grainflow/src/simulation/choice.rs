@@ -6,7 +6,6 @@
 //! any number of threads.
 
 use super::Simulation;
-use crate::forces;
 
 /// Steps in a window of the trial.
 const WINDOW: u32 = 16;
@@ -53,9 +52,6 @@ pub(crate) struct ThreadChoice {
     steps: u32,
     seconds: f64,
     pub(crate) report: ThreadReport,
-    /// Steps run on the pool only from this many particles (`None`:
-    /// [`forces::MIN_PARALLEL_PARTICLES`]).
-    parallel_from: Option<usize>,
 }
 
 impl ThreadChoice {
@@ -67,16 +63,6 @@ impl ThreadChoice {
             report: ThreadReport { automatic, pool_threads, ..Default::default() },
             ..Default::default()
         }
-    }
-
-    /// This choice, with `other`'s threshold of particles.
-    pub(crate) fn keeping(self, other: &ThreadChoice) -> ThreadChoice {
-        ThreadChoice { parallel_from: other.parallel_from, ..self }
-    }
-
-    /// The particle count from which a step may run on the pool.
-    pub(crate) fn parallel_from(&self) -> usize {
-        self.parallel_from.unwrap_or(forces::MIN_PARALLEL_PARTICLES)
     }
 
     /// Whether step `step` of `n` particles runs on the pool.
@@ -140,16 +126,16 @@ impl Simulation {
     /// doc). [`set_threads`](Self::set_threads) instead uses the pool for every step.
     pub fn choose_threads(&mut self, threads: usize) -> Result<(), crate::error::EngineError> {
         self.set_threads(threads)?;
-        self.choice = ThreadChoice::new(threads > 1, threads).keeping(&self.choice);
+        self.choice = ThreadChoice::new(threads > 1, threads);
         Ok(())
     }
 
     /// Steps run on the pool only with at least `n` particles (default
-    /// [`forces::MIN_PARALLEL_PARTICLES`]: below it, handing the stages to threads costs more
+    /// [`crate::forces::MIN_PARALLEL_PARTICLES`]: below it, handing the stages to threads costs more
     /// than it saves). The results do not depend on it; a test of the threads on a small
     /// system lowers it.
     pub fn set_parallel_from(&mut self, n: usize) {
-        self.choice.parallel_from = Some(n);
+        self.parallel_from = n;
     }
 
     /// What the choice of threads did so far.

@@ -263,28 +263,17 @@ impl ContactSource for Cylinders {
         part.loads.clear();
         let n = run.particles.len();
         let settings = (run.coeffs, law, quanta, advance, dt);
-        match run.pool.filter(|_| n >= 256) {
+        match run.pool.filter(|_| n >= crate::threads::MIN_PARALLEL_SLOTS) {
             Some(pool) => {
                 // Runs of slots on the threads, joined in slot order: the loads and histories
                 // one pass over the slots gives.
-                use rayon::prelude::*;
-                let parts = 4 * pool.current_num_threads();
                 let p = &*run.particles;
-                let found: Vec<Part> = pool.install(|| {
-                    (0..parts)
-                        .into_par_iter()
-                        .map(|k| {
-                            let mut out = Part::default();
-                            self.slot_loads::<N, T>(
-                                p,
-                                settings,
-                                k * n / parts..(k + 1) * n / parts,
-                                &old,
-                                &mut out,
-                            );
-                            out
-                        })
-                        .collect()
+                let found = pool.install(|| {
+                    crate::threads::in_runs(n, |slots| {
+                        let mut out = Part::default();
+                        self.slot_loads::<N, T>(p, settings, slots, &old, &mut out);
+                        out
+                    })
                 });
                 for f in found {
                     part.stored.extend_from_slice(&f.stored);

@@ -38,6 +38,7 @@ use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, SurfaceMotion, TriangleGrid
 use crate::neighbor::NeighborState;
 use crate::simulation::{ContactInfo, ContactPartner, Simulation};
 use crate::state::Particles;
+use crate::threads;
 
 /// A contact's normal may turn this far (cosine) from one evaluation to the next and still
 /// carry its history to another triangle: 60°.
@@ -135,20 +136,6 @@ impl Worker {
             + self.out.stored.capacity() * std::mem::size_of::<MeshHistory>()
             + self.out.loads.capacity() * std::mem::size_of::<MeshLoadPart>()
     }
-}
-
-/// Runs of slots a thread takes at a time, per thread: enough for the threads to even out
-/// runs with more contacts than others.
-const RUNS_PER_THREAD: usize = 4;
-
-/// Below this many slots to search or evaluate, the mesh stage stays on one thread (the
-/// results do not depend on it).
-const MIN_PARALLEL_SLOTS: usize = 256;
-
-/// `n` items in `parts` consecutive runs of nearly equal length.
-fn runs(n: usize, parts: usize) -> impl Iterator<Item = std::ops::Range<usize>> + Clone {
-    let parts = parts.clamp(1, n.max(1));
-    (0..parts).map(move |k| k * n / parts..(k + 1) * n / parts)
 }
 
 /// A mesh's motion rates at an evaluation: (linear velocity, angular velocity, a point on the
@@ -576,7 +563,7 @@ impl Meshes {
             full || (0..n_meshes)
                 .any(|m| (relative(i, m) - self.centres[i * n_meshes + m]).length_squared() > limit)
         };
-        let pool = pool.filter(|_| n >= MIN_PARALLEL_SLOTS);
+        let pool = pool.filter(|_| n >= threads::MIN_PARALLEL_SLOTS);
         let stale: Vec<usize> = match pool {
             Some(pool) => {
                 use rayon::prelude::*;
@@ -602,7 +589,9 @@ impl Meshes {
         // Each run of the stale slots is searched on its own; the runs' finds are then placed
         // in slot order, as one search of them all would place them.
         let parts = match pool {
-            Some(pool) if stale.len() >= MIN_PARALLEL_SLOTS => RUNS_PER_THREAD * pool.current_num_threads(),
+            Some(pool) if stale.len() >= threads::MIN_PARALLEL_SLOTS => {
+                threads::RUNS_PER_THREAD * pool.current_num_threads()
+            }
             _ => 1,
         };
         let mut workers = std::mem::take(&mut self.workers);
@@ -613,13 +602,13 @@ impl Meshes {
         match pool.filter(|_| parts > 1) {
             Some(pool) => {
                 use rayon::prelude::*;
-                let runs: Vec<_> = runs(stale.len(), parts).map(|r| &stale[r]).collect();
+                let runs: Vec<_> = threads::runs(stale.len(), parts).map(|r| &stale[r]).collect();
                 pool.install(|| workers[..parts].par_iter_mut().zip(runs).for_each(|(w, s)| search(w, s)));
             }
             None => search(&mut workers[0], &stale),
         }
         let pad = Candidate { mesh: u32::MAX, triangle: u32::MAX, distance: f64::INFINITY };
-        for (w, r) in workers.iter().zip(runs(stale.len(), parts)) {
+        for (w, r) in workers.iter().zip(threads::runs(stale.len(), parts)) {
             let mut at = 0;
             for (k, &i) in stale[r].iter().enumerate() {
                 self.centres[i * n_meshes..(i + 1) * n_meshes]
@@ -772,8 +761,8 @@ impl ContactSource for Meshes {
         };
         let old = std::mem::take(&mut self.history);
         let n = self.span.len();
-        let pool = run.pool.filter(|_| n >= MIN_PARALLEL_SLOTS);
-        let parts = pool.map_or(1, |pool| RUNS_PER_THREAD * pool.current_num_threads());
+        let pool = run.pool.filter(|_| n >= threads::MIN_PARALLEL_SLOTS);
+        let parts = pool.map_or(1, |pool| threads::RUNS_PER_THREAD * pool.current_num_threads());
         let mut workers = std::mem::take(&mut self.workers);
         if workers.len() < parts {
             workers.resize_with(parts, Worker::default);
@@ -792,7 +781,7 @@ impl ContactSource for Meshes {
                     pool.install(|| {
                         workers[..parts]
                             .par_iter_mut()
-                            .zip(runs(n, parts).collect::<Vec<_>>())
+                            .zip(threads::runs(n, parts).collect::<Vec<_>>())
                             .for_each(|(w, r)| work(w, r))
                     });
                 }
