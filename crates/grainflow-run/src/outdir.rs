@@ -40,7 +40,9 @@ const KNOWN_FOLDERS: [&str; 2] = ["snapshots", "vtk"];
 
 /// True for a path (relative to the folder) that grainflow's outputs may have: one of
 /// [`KNOWN_FILES`], a snapshot `snapshots/particles_<step>.csv`, or in `vtk/` a frame
-/// `<kind>_<step>.vtp`, a collection `<kind>.pvd`, `walls.vtp` or `meshes_fixed.vtp`.
+/// `<kind>_<step>.vtp` or a collection `<kind>.pvd` of the particles, the contacts or a moving
+/// surface, or the file `<stem>.vtp` of a fixed one (`walls.vtp`, `meshes_fixed.vtp`,
+/// `cylinders.vtp`: [`grainflow::surface::surface_kinds`]).
 fn grainflow_named(rel: &Path) -> bool {
     let parts: Vec<String> = rel.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
     let frame = |name: &str, kinds: &[&str], ext: &str| {
@@ -52,9 +54,12 @@ fn grainflow_named(rel: &Path) -> bool {
         [name] => KNOWN_FILES.contains(name),
         ["snapshots", name] => frame(name, &["particles"], ".csv"),
         ["vtk", name] => {
-            frame(name, &["particles", "contacts", "meshes"], ".vtp")
-                || ["particles.pvd", "contacts.pvd", "meshes.pvd", "walls.vtp", crate::vtk::FIXED_MESHES_FILE]
-                    .contains(name)
+            let surfaces = grainflow::surface::surface_kinds();
+            let mut kinds = vec!["particles", "contacts"];
+            kinds.extend(surfaces.iter().filter(|k| k.moves).map(|k| k.stem));
+            frame(name, &kinds, ".vtp")
+                || ["particles.pvd", "contacts.pvd"].contains(name)
+                || surfaces.iter().any(|&k| crate::vtk::collection_or_file(k) == *name)
         }
         _ => false,
     }

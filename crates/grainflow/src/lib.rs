@@ -47,6 +47,7 @@ pub mod neighbor;
 pub mod observe;
 pub mod simulation;
 pub mod state;
+pub mod surface;
 mod threads;
 pub mod timestep;
 pub mod wall;
@@ -66,5 +67,6 @@ pub use simulation::{
     StageTimes, Tally, ThreadReport,
 };
 pub use state::Particles;
+pub use surface::{Surface, SurfaceKind};
 pub use timestep::{TimeStepChoice, TimeStepRule};
 pub use wall::{Cylinder, CylinderSide, Wall};
