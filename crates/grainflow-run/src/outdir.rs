@@ -668,6 +668,27 @@ mod tests {
         assert_eq!(std::fs::read_to_string(dir.join("snapshots/particles_000001000.csv")).unwrap(), "copied");
     }
 
+    /// The VTK names come from the surfaces' kinds: each fixed surface's file (the cylinders'
+    /// among them), a moving one's frames and collection; a fixed surface has no frames, and a
+    /// name of no kind is the user's.
+    #[test]
+    fn vtk_names_follow_the_surface_kinds() {
+        for ours in [
+            "vtk/walls.vtp",
+            "vtk/meshes_fixed.vtp",
+            "vtk/cylinders.vtp",
+            "vtk/meshes.pvd",
+            "vtk/meshes_000000040.vtp",
+            "vtk/particles_000000040.vtp",
+            "vtk/contacts.pvd",
+        ] {
+            assert!(grainflow_named(Path::new(ours)), "{ours}");
+        }
+        for theirs in ["vtk/walls_000000040.vtp", "vtk/cylinders.pvd", "vtk/meshes.vtp", "vtk/rods.vtp", "walls.vtp"] {
+            assert!(!grainflow_named(Path::new(theirs)), "{theirs}");
+        }
+    }
+
     #[test]
     fn a_restart_continues_only_its_own_run() {
         let d = tempfile::tempdir().unwrap();
