@@ -684,7 +684,9 @@ mod tests {
         ] {
             assert!(grainflow_named(Path::new(ours)), "{ours}");
         }
-        for theirs in ["vtk/walls_000000040.vtp", "vtk/cylinders.pvd", "vtk/meshes.vtp", "vtk/rods.vtp", "walls.vtp"] {
+        for theirs in
+            ["vtk/walls_000000040.vtp", "vtk/cylinders.pvd", "vtk/meshes.vtp", "vtk/rods.vtp", "walls.vtp"]
+        {
             assert!(!grainflow_named(Path::new(theirs)), "{theirs}");
         }
     }

@@ -1220,4 +1220,3 @@ fn open_vtk(
         None => None,
     })
 }
-

@@ -148,15 +148,18 @@ fn every_wall_kind_writes_its_files_and_closes_on_its_polygons() {
             want.insert(format!("{kind}_{s:09}.vtp"));
         }
     }
-    let have: BTreeSet<String> =
-        std::fs::read_dir(&vtk).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let have: BTreeSet<String> = std::fs::read_dir(&vtk)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
     assert_eq!(have, want);
     // The manifest lists each of them, and the summary the collections and fixed surfaces.
     let manifest = std::fs::read_to_string(out.join("manifest.toml")).unwrap();
     for f in &want {
         assert!(manifest.contains(&format!("path = \"vtk/{f}\"")), "{f} not in the manifest");
     }
-    for f in ["particles.pvd", "contacts.pvd", "walls.vtp", "meshes_fixed.vtp", "meshes.pvd", "cylinders.vtp"] {
+    for f in ["particles.pvd", "contacts.pvd", "walls.vtp", "meshes_fixed.vtp", "meshes.pvd", "cylinders.vtp"]
+    {
         assert!(summary.files.contains(&vtk.join(f)), "{f} not in the summary");
     }
     let read = |f: &str| std::fs::read_to_string(vtk.join(f)).unwrap();
@@ -179,11 +182,15 @@ fn every_wall_kind_writes_its_files_and_closes_on_its_polygons() {
         assert_eq!((ints(&frame, "mesh"), ints(&frame, "triangle")), (vec![1; 4], vec![0, 1, 2, 3]));
     }
     let collection = read("meshes.pvd");
-    let files: Vec<&str> = collection.lines().filter_map(|l| l.split("file=\"").nth(1)?.split('"').next()).collect();
+    let files: Vec<&str> =
+        collection.lines().filter_map(|l| l.split("file=\"").nth(1)?.split('"').next()).collect();
     assert_eq!(files, steps.map(|s| format!("meshes_{s:09}.vtp")));
     // Two cylinders, 64 quadrilaterals on 128 points each.
     let cylinders = read("cylinders.vtp");
     assert_eq!((piece(&cylinders, "NumberOfPolys"), piece(&cylinders, "NumberOfPoints")), (128, 256));
     let index = ints(&cylinders, "cylinder");
-    assert_eq!((index.iter().filter(|&&k| k == 0).count(), index.iter().filter(|&&k| k == 1).count()), (64, 64));
+    assert_eq!(
+        (index.iter().filter(|&&k| k == 0).count(), index.iter().filter(|&&k| k == 1).count()),
+        (64, 64)
+    );
 }

@@ -22,7 +22,7 @@ use crate::math::Vec3;
 use crate::neighbor::NeighborState;
 use crate::simulation::{ContactInfo, ContactPartner, Simulation};
 use crate::state::Particles;
-use crate::surface::{CellData, CellValues, Surface, SurfaceKind, Which, TUBE_FACETS, box_corners};
+use crate::surface::{CellData, CellValues, Surface, SurfaceKind, TUBE_FACETS, Which, box_corners};
 use crate::wall::{Cylinder, CylinderContact};
 
 /// The tangential history of one particle–cylinder contact.
@@ -346,7 +346,8 @@ impl ContactSource for Cylinders {
         let (mut index, mut material) = (Vec::new(), Vec::new());
         for (k, c) in self.walls.iter().enumerate() {
             let t = box_corners(lo, hi).map(|x| (x - c.origin).dot(c.axis));
-            let (t0, t1) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            let (t0, t1) =
+                t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
             let u = c.axis.any_orthonormal_vector();
             let w = c.axis.cross(u);
             let base = s.points.len();

@@ -37,9 +37,9 @@ use crate::contact::pair::{CommonMass, contact_coeffs, contact_reach};
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw};
 use crate::forces::{Peak, Quanta};
+use crate::math::Vec3;
 use crate::neighbor::{NeighborList, NeighborState};
 use crate::simulation::{ContactInfo, StageTimes};
-use crate::math::Vec3;
 use crate::state::Particles;
 use crate::surface::{Surface, SurfaceKind, Which};
 use crate::wall::Wall;
@@ -149,7 +149,15 @@ pub(crate) trait ContactSource {
     /// Appends the source's surfaces of `which` where they are now, for display (see
     /// [`crate::surface`]), each of one of [`SURFACES`](Self::SURFACES); the infinite walls
     /// are shown within the box [lo, hi].
-    fn surfaces(&self, _sim: &crate::Simulation, _lo: Vec3, _hi: Vec3, _which: Which, _out: &mut Vec<Surface>) {}
+    fn surfaces(
+        &self,
+        _sim: &crate::Simulation,
+        _lo: Vec3,
+        _hi: Vec3,
+        _which: Which,
+        _out: &mut Vec<Surface>,
+    ) {
+    }
 }
 
 /// The contact sources of a simulation, in the order they are evaluated and reported.
@@ -301,10 +309,7 @@ impl Sources {
 /// The load a wall takes from its contacts' loads on the particles, each (the particle's
 /// centre, the force and the torque about the centre on it): minus their sums, the torque about
 /// `about`. The sums do not depend on the contacts' order.
-pub(crate) fn wall_load(
-    parts: &[(Vec3, Vec3, Vec3)],
-    about: Vec3,
-) -> MeshLoad {
+pub(crate) fn wall_load(parts: &[(Vec3, Vec3, Vec3)], about: Vec3) -> MeshLoad {
     use crate::observe::order_free_sum;
     let sum = |f: &dyn Fn(&(Vec3, Vec3, Vec3)) -> Vec3| {
         let c = |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
