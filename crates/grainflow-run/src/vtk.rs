@@ -361,13 +361,13 @@ impl VtkSeries {
         contacts: &[ContactInfo],
         moving: &[Surface],
     ) -> io::Result<()> {
-        let mut names = frame_files(step, moving).into_iter();
-        let (pf, cf) = (names.next().unwrap_or_default(), names.next().unwrap_or_default());
+        let names = frame_files(step, moving);
+        let (pf, cf) = (names[0].clone(), names[1].clone());
         write_atomic(&self.dir.join(&pf), particles_vtp(p, contacts).as_bytes())?;
         write_atomic(&self.dir.join(&cf), contacts_vtp(p, contacts).as_bytes())?;
         self.particles.push((time, pf));
         self.contacts.push((time, cf));
-        for (s, file) in moving.iter().zip(names) {
+        for (s, file) in moving.iter().zip(names.into_iter().skip(2)) {
             write_atomic(&self.dir.join(&file), surface_vtp(s).as_bytes())?;
             let k = match self.moving.iter().position(|(stem, _)| *stem == s.kind.stem) {
                 Some(k) => k,
