@@ -40,7 +40,9 @@ const KNOWN_FOLDERS: [&str; 2] = ["snapshots", "vtk"];
 
 /// True for a path (relative to the folder) that grainflow's outputs may have: one of
 /// [`KNOWN_FILES`], a snapshot `snapshots/particles_<step>.csv`, or in `vtk/` a frame
-/// `<kind>_<step>.vtp`, a collection `<kind>.pvd`, `walls.vtp` or `meshes_fixed.vtp`.
+/// `<kind>_<step>.vtp` or a collection `<kind>.pvd` of the particles, the contacts or a moving
+/// surface, or the file `<stem>.vtp` of a fixed one (`walls.vtp`, `meshes_fixed.vtp`,
+/// `cylinders.vtp`: [`grainflow::surface::surface_kinds`]).
 fn grainflow_named(rel: &Path) -> bool {
     let parts: Vec<String> = rel.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
     let frame = |name: &str, kinds: &[&str], ext: &str| {
@@ -52,9 +54,12 @@ fn grainflow_named(rel: &Path) -> bool {
         [name] => KNOWN_FILES.contains(name),
         ["snapshots", name] => frame(name, &["particles"], ".csv"),
         ["vtk", name] => {
-            frame(name, &["particles", "contacts", "meshes"], ".vtp")
-                || ["particles.pvd", "contacts.pvd", "meshes.pvd", "walls.vtp", crate::vtk::FIXED_MESHES_FILE]
-                    .contains(name)
+            let surfaces = grainflow::surface::surface_kinds();
+            let mut kinds = vec!["particles", "contacts"];
+            kinds.extend(surfaces.iter().filter(|k| k.moves).map(|k| k.stem));
+            frame(name, &kinds, ".vtp")
+                || ["particles.pvd", "contacts.pvd"].contains(name)
+                || surfaces.iter().any(|&k| crate::vtk::collection_or_file(k) == *name)
         }
         _ => false,
     }
@@ -661,6 +666,29 @@ mod tests {
             );
         }
         assert_eq!(std::fs::read_to_string(dir.join("snapshots/particles_000001000.csv")).unwrap(), "copied");
+    }
+
+    /// The VTK names come from the surfaces' kinds: each fixed surface's file (the cylinders'
+    /// among them), a moving one's frames and collection; a fixed surface has no frames, and a
+    /// name of no kind is the user's.
+    #[test]
+    fn vtk_names_follow_the_surface_kinds() {
+        for ours in [
+            "vtk/walls.vtp",
+            "vtk/meshes_fixed.vtp",
+            "vtk/cylinders.vtp",
+            "vtk/meshes.pvd",
+            "vtk/meshes_000000040.vtp",
+            "vtk/particles_000000040.vtp",
+            "vtk/contacts.pvd",
+        ] {
+            assert!(grainflow_named(Path::new(ours)), "{ours}");
+        }
+        for theirs in
+            ["vtk/walls_000000040.vtp", "vtk/cylinders.pvd", "vtk/meshes.vtp", "vtk/rods.vtp", "walls.vtp"]
+        {
+            assert!(!grainflow_named(Path::new(theirs)), "{theirs}");
+        }
     }
 
     #[test]

@@ -22,7 +22,8 @@ use crate::output::{
     ResumeError, SeriesRecord, TimeSeriesWriter, Value, cylinder_columns, mesh_columns, rotation_axis,
     snapshot_csv, write_atomic, write_atomic_with,
 };
-use crate::vtk::{CYLINDERS_FILE, FIXED_MESHES_FILE, MeshShape, VtkSeries};
+use crate::vtk::{VtkSeries, frame_files, series_files};
+use grainflow::surface::Which;
 use grainflow::{Diagnostics, Simulation, Vec3};
 use grainflow_case::plan::output_every;
 use grainflow_case::{Case, OutputSettings};
@@ -950,24 +951,6 @@ impl MeshLoads {
     }
 }
 
-/// The mesh walls that move (`moving`) or those that do not, where they are now.
-fn mesh_shapes(sim: &Simulation, moving: bool) -> Vec<MeshShape<'_>> {
-    sim.meshes()
-        .iter()
-        .enumerate()
-        .filter(|(_, w)| w.motion.moves() == moving)
-        .map(|(m, w)| {
-            let pose = sim.mesh_pose(m);
-            MeshShape {
-                index: m,
-                vertices: sim.mesh_vertices(m),
-                triangles: w.mesh.triangles(),
-                normals: w.mesh.normals().iter().map(|&n| pose.turn(n)).collect(),
-            }
-        })
-        .collect()
-}
-
 #[allow(clippy::too_many_arguments)]
 fn run_simulation(
     sim: &mut Simulation,
@@ -1058,14 +1041,10 @@ fn run_simulation(
         if let Some((series, k)) = vtk.as_mut()
             && (force || sim.step_index().is_multiple_of(*k))
         {
-            let moving = mesh_shapes(sim, true);
-            let kinds = if moving.is_empty() {
-                &["particles", "contacts"][..]
-            } else {
-                &["particles", "contacts", "meshes"]
-            };
-            for kind in kinds {
-                folder.record(&Path::new("vtk").join(format!("{kind}_{:09}.vtp", sim.step_index())))?;
+            let (lo, hi) = health.domain;
+            let moving = sim.surfaces(lo, hi, Which::Moving);
+            for file in frame_files(sim.step_index(), &moving) {
+                folder.record(&Path::new("vtk").join(file))?;
             }
             let (particles, contacts) = sim.in_id_order();
             series
@@ -1185,8 +1164,8 @@ fn run_simulation(
     if let Some(c) = &checkpoint {
         files.push(c.clone());
     }
-    if vtk.is_some() {
-        push_vtk_files(sim, &vtk_dir, &mut files);
+    if let Some((series, _)) = &vtk {
+        files.extend(series.files().iter().map(|f| vtk_dir.join(f)));
     }
     let steps = sim.step_index() - start_step;
     Ok(RunSummary {
@@ -1228,41 +1207,16 @@ fn open_vtk(
 ) -> Result<Option<(VtkSeries, u64)>, RunError> {
     Ok(match vtk_interval {
         Some(iv) => {
-            let fixed = mesh_shapes(sim, false);
-            let moving = sim.meshes().iter().any(|w| w.motion.moves());
-            let mut files = vec!["walls.vtp", "particles.pvd", "contacts.pvd"];
-            files.extend(fixed.first().map(|_| FIXED_MESHES_FILE));
-            files.extend(moving.then_some("meshes.pvd"));
-            files.extend((!sim.cylinders().is_empty()).then_some(CYLINDERS_FILE));
-            for f in files {
+            let (lo, hi) = health.domain;
+            let surfaces = sim.surfaces(lo, hi, Which::All);
+            for f in series_files(&surfaces) {
                 folder.record(&Path::new("vtk").join(f))?;
             }
             // A series of another run is not continued (its frames were removed).
             let from = if folder.continues() { start_step } else { 0 };
-            let (lo, hi) = health.domain;
-            let series =
-                VtkSeries::resume(vtk_dir, sim.walls(), lo, hi, &fixed, from).map_err(io_err(vtk_dir))?;
-            if !sim.cylinders().is_empty() {
-                series.write_cylinders(sim.cylinders(), lo, hi).map_err(io_err(vtk_dir))?;
-            }
+            let series = VtkSeries::resume(vtk_dir, &surfaces, from).map_err(io_err(vtk_dir))?;
             Some((series, output_every(Some(iv), sim.dt(), sim.total_steps())))
         }
         None => None,
     })
-}
-
-/// The series files of a run's VTK output, once it has ended.
-fn push_vtk_files(sim: &Simulation, vtk_dir: &Path, files: &mut Vec<PathBuf>) {
-    files.push(vtk_dir.join("particles.pvd"));
-    files.push(vtk_dir.join("contacts.pvd"));
-    files.push(vtk_dir.join("walls.vtp"));
-    if sim.meshes().iter().any(|w| !w.motion.moves()) {
-        files.push(vtk_dir.join(FIXED_MESHES_FILE));
-    }
-    if sim.meshes().iter().any(|w| w.motion.moves()) {
-        files.push(vtk_dir.join("meshes.pvd"));
-    }
-    if !sim.cylinders().is_empty() {
-        files.push(vtk_dir.join(CYLINDERS_FILE));
-    }
 }

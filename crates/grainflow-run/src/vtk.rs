@@ -1,7 +1,7 @@
 //! VTK XML output that ParaView and VTK read natively: particles as points (`.vtp`, with a
-//! vertex cell each), contacts as line cells (force chains), walls as polygons clipped to the
-//! domain box, mesh walls as triangles where they are, and a `.pvd` collection per series with
-//! the physical time of every frame.
+//! vertex cell each), contacts as line cells (force chains), the walls' surfaces as polygons
+//! (as their contact sources describe them, [`grainflow::surface`]: no kind of wall is named
+//! here), and a `.pvd` collection per series with the physical time of every frame.
 //!
 //! Data arrays use VTK's inline `binary` format: base64 of a UInt64 byte count followed by the
 //! little-endian values. Every file is written atomically.
@@ -9,7 +9,8 @@
 use crate::output::write_atomic;
 use base64::Engine as _;
 use base64::engine::general_purpose::STANDARD;
-use grainflow::{ContactInfo, ContactPartner, Particles, Vec3, Wall};
+use grainflow::surface::CellValues;
+use grainflow::{ContactInfo, ContactPartner, Particles, Surface, SurfaceKind, Vec3};
 use std::fmt::Write as _;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -187,179 +188,29 @@ pub fn contacts_vtp(p: &Particles, contacts: &[ContactInfo]) -> String {
     )
 }
 
-/// A mesh wall where it is, for [`meshes_vtp`].
-#[derive(Debug, Clone)]
-pub struct MeshShape<'a> {
-    /// Its index among the case's meshes (0-based, in the order of the `[[meshes]]` tables).
-    pub index: usize,
-    /// Its vertices where they are, m.
-    pub vertices: Vec<Vec3>,
-    /// Its triangles, as indices into `vertices`.
-    pub triangles: &'a [[u32; 3]],
-    /// Each triangle's unit normal where it is (towards the particles' side).
-    pub normals: Vec<Vec3>,
+/// A wall's surface (see [`grainflow::surface`]) as polygons, with its cell data as the
+/// source gives it: the plane walls clipped to the domain box (`wall`, `material`), the meshes'
+/// triangles (`mesh`, `triangle`, `normal`), the cylinders' tubes (`cylinder`, `material`).
+pub fn surface_vtp(surface: &Surface) -> String {
+    let conn: Vec<i64> = surface.corners.iter().map(|&k| k as i64).collect();
+    let offsets: Vec<i64> = surface.ends.iter().map(|&k| k as i64).collect();
+    let vectors: Vec<Vec<f64>> = surface
+        .cell_data
+        .iter()
+        .map(|d| if let CellValues::Vector(v) = &d.values { flat(v) } else { Vec::new() })
+        .collect();
+    let cell_data: Vec<Array> = surface
+        .cell_data
+        .iter()
+        .zip(&vectors)
+        .map(|(d, flat)| match &d.values {
+            CellValues::Int(v) => Array { name: d.name, components: 1, values: Values::I32(v) },
+            CellValues::Real(v) => Array { name: d.name, components: 1, values: Values::F64(v) },
+            CellValues::Vector(_) => Array { name: d.name, components: 3, values: Values::F64(flat) },
+        })
+        .collect();
+    polydata(&surface.points, "Polys", &conn, &offsets, &[], &cell_data)
 }
-
-/// Mesh walls as triangles. Cell data: `mesh` (the mesh's index, 0-based in the case's
-/// order), `triangle` (the triangle's index in its mesh, as contacts name it) and `normal`.
-pub fn meshes_vtp(meshes: &[MeshShape]) -> String {
-    let mut points = Vec::new();
-    let (mut conn, mut index, mut triangle, mut normals) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for m in meshes {
-        let base = points.len() as i64;
-        points.extend_from_slice(&m.vertices);
-        for (t, corners) in m.triangles.iter().enumerate() {
-            conn.extend(corners.iter().map(|&v| base + i64::from(v)));
-            index.push(m.index as i32);
-            triangle.push(t as i32);
-        }
-        normals.extend_from_slice(&m.normals);
-    }
-    let offsets: Vec<i64> = (1..=index.len() as i64).map(|k| 3 * k).collect();
-    polydata(
-        &points,
-        "Polys",
-        &conn,
-        &offsets,
-        &[],
-        &[
-            Array { name: "mesh", components: 1, values: Values::I32(&index) },
-            Array { name: "triangle", components: 1, values: Values::I32(&triangle) },
-            Array { name: "normal", components: 3, values: Values::F64(&flat(&normals)) },
-        ],
-    )
-}
-
-/// The part of an infinite plane inside the box [lo, hi], as a convex polygon (empty if the
-/// plane misses the box).
-pub fn clip_plane_to_box(wall: &Wall, lo: Vec3, hi: Vec3) -> Vec<Vec3> {
-    let corner = |k: usize| {
-        Vec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
-    let scale = (hi - lo).length();
-    let eps = 1e-12 * scale;
-    let mut pts: Vec<Vec3> = Vec::new();
-    let mut add = |x: Vec3| {
-        if !pts.iter().any(|q| (*q - x).length() <= 1e-9 * scale) {
-            pts.push(x);
-        }
-    };
-    for a in 0..8 {
-        for bit in [1, 2, 4] {
-            if a & bit != 0 {
-                continue;
-            }
-            let (pa, pb) = (corner(a), corner(a | bit));
-            let (da, db) = (wall.distance(pa), wall.distance(pb));
-            if da.abs() <= eps {
-                add(pa);
-            }
-            if db.abs() <= eps {
-                add(pb);
-            }
-            if (da < -eps && db > eps) || (da > eps && db < -eps) {
-                add(pa + (pb - pa) * (da / (da - db)));
-            }
-        }
-    }
-    if pts.len() < 3 {
-        return Vec::new();
-    }
-    let centre = pts.iter().copied().sum::<Vec3>() / pts.len() as f64;
-    let u = (pts[0] - centre).normalize();
-    let v = wall.normal.cross(u);
-    pts.sort_by(|a, b| {
-        let (da, db) = (*a - centre, *b - centre);
-        da.dot(v).atan2(da.dot(u)).total_cmp(&db.dot(v).atan2(db.dot(u)))
-    });
-    pts
-}
-
-/// Walls as polygons clipped to the box [lo, hi]. Cell data: `wall` (index), `material`.
-pub fn walls_vtp(walls: &[Wall], lo: Vec3, hi: Vec3) -> String {
-    let mut points = Vec::new();
-    let mut offsets = Vec::new();
-    let mut index = Vec::new();
-    let mut material = Vec::new();
-    for (k, w) in walls.iter().enumerate() {
-        let poly = clip_plane_to_box(w, lo, hi);
-        if poly.is_empty() {
-            continue;
-        }
-        points.extend(poly);
-        offsets.push(points.len() as i64);
-        index.push(k as i32);
-        material.push(w.material as i32);
-    }
-    let conn: Vec<i64> = (0..points.len() as i64).collect();
-    polydata(
-        &points,
-        "Polys",
-        &conn,
-        &offsets,
-        &[],
-        &[
-            Array { name: "wall", components: 1, values: Values::I32(&index) },
-            Array { name: "material", components: 1, values: Values::I32(&material) },
-        ],
-    )
-}
-
-/// Facets round a cylinder's tube in [`cylinders_vtp`] (display only: the contact is exact).
-const TUBE_FACETS: usize = 64;
-
-/// Cylinder walls as faceted tubes (display only; the contact is exact) of finite length: the
-/// stretch of the axis the domain box [lo, hi] spans. Cell data: `cylinder` (index, 0-based in
-/// the case's order), `material`.
-pub fn cylinders_vtp(cylinders: &[grainflow::Cylinder], lo: Vec3, hi: Vec3) -> String {
-    let (mut points, mut conn, mut index, mut material) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (k, c) in cylinders.iter().enumerate() {
-        let corners = (0..8).map(|j| {
-            Vec3::new(
-                if j & 1 == 0 { lo.x } else { hi.x },
-                if j & 2 == 0 { lo.y } else { hi.y },
-                if j & 4 == 0 { lo.z } else { hi.z },
-            )
-        });
-        let t: Vec<f64> = corners.map(|x| (x - c.origin).dot(c.axis)).collect();
-        let (t0, t1) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-        let u = c.axis.any_orthonormal_vector();
-        let w = c.axis.cross(u);
-        let base = points.len() as i64;
-        for j in 0..TUBE_FACETS {
-            let phi = std::f64::consts::TAU * j as f64 / TUBE_FACETS as f64;
-            let r = (u * phi.cos() + w * phi.sin()) * c.radius;
-            points.push(c.origin + c.axis * t0 + r);
-            points.push(c.origin + c.axis * t1 + r);
-        }
-        let n = TUBE_FACETS as i64;
-        for j in 0..n {
-            let next = (j + 1) % n;
-            conn.extend([base + 2 * j, base + 2 * next, base + 2 * next + 1, base + 2 * j + 1]);
-            index.push(k as i32);
-            material.push(c.material as i32);
-        }
-    }
-    let offsets: Vec<i64> = (1..=index.len() as i64).map(|k| 4 * k).collect();
-    polydata(
-        &points,
-        "Polys",
-        &conn,
-        &offsets,
-        &[],
-        &[
-            Array { name: "cylinder", components: 1, values: Values::I32(&index) },
-            Array { name: "material", components: 1, values: Values::I32(&material) },
-        ],
-    )
-}
-
-/// File of the cylinder walls, written once.
-pub const CYLINDERS_FILE: &str = "cylinders.vtp";
 
 /// Significant digits of a frame time in a `.pvd` file: a time is step·Δt with rounding
 /// error in the last digits (0.6 arrives as 0.6000000000000001); 12 digits drop that error
@@ -405,53 +256,72 @@ pub fn pvd(frames: &[(f64, String)]) -> String {
     s
 }
 
-/// File of the fixed mesh walls, written once.
-pub const FIXED_MESHES_FILE: &str = "meshes_fixed.vtp";
+/// The files of a VTK series other than its frames, for the walls' `surfaces`: the collections
+/// `particles.pvd` and `contacts.pvd`, then each surface's, in their order: `<stem>.vtp` for
+/// one that does not move (written once), the collection `<stem>.pvd` for one that does.
+pub fn series_files(surfaces: &[Surface]) -> Vec<String> {
+    let mut files = vec!["particles.pvd".to_string(), "contacts.pvd".to_string()];
+    files.extend(surfaces.iter().map(|s| collection_or_file(s.kind)));
+    files
+}
 
-/// Writes a VTK series into a folder: `particles_<step>.vtp`, `contacts_<step>.vtp`, one
-/// `walls.vtp`, and `particles.pvd`, `contacts.pvd` (rewritten after every frame, so a run
-/// stopped early still leaves readable collections); with mesh walls, the fixed ones once in
-/// `meshes_fixed.vtp` and the moving ones in `meshes_<step>.vtp` with `meshes.pvd`.
+/// The file a fixed surface of `kind` is written to, or the collection of a moving one's
+/// frames.
+pub fn collection_or_file(kind: SurfaceKind) -> String {
+    format!("{}.{}", kind.stem, if kind.moves { "pvd" } else { "vtp" })
+}
+
+/// The frames of step `step`: `particles_<step>.vtp`, `contacts_<step>.vtp`, then
+/// `<stem>_<step>.vtp` for each of the `moving` surfaces.
+pub fn frame_files(step: u64, moving: &[Surface]) -> Vec<String> {
+    ["particles", "contacts"]
+        .into_iter()
+        .chain(moving.iter().map(|s| s.kind.stem))
+        .map(|stem| format!("{stem}_{step:09}.vtp"))
+        .collect()
+}
+
+/// Writes a VTK series into a folder: `particles_<step>.vtp`, `contacts_<step>.vtp` and
+/// `particles.pvd`, `contacts.pvd` (rewritten after every frame, so a run stopped early still
+/// leaves readable collections); each wall surface that does not move once, in `<stem>.vtp`
+/// (`walls.vtp`, `meshes_fixed.vtp`, `cylinders.vtp`), and each that moves in
+/// `<stem>_<step>.vtp` with `<stem>.pvd` (`meshes`).
 pub struct VtkSeries {
     dir: PathBuf,
+    /// The files other than the frames ([`series_files`]).
+    files: Vec<String>,
     particles: Vec<(f64, String)>,
     contacts: Vec<(f64, String)>,
-    meshes: Vec<(f64, String)>,
+    /// The frames of each moving surface, by stem.
+    moving: Vec<(&'static str, Vec<(f64, String)>)>,
 }
 
 impl VtkSeries {
-    /// Starts a series in `dir` (created if needed) and writes the walls and the `fixed`
-    /// meshes (if any) once.
-    pub fn create(dir: &Path, walls: &[Wall], lo: Vec3, hi: Vec3, fixed: &[MeshShape]) -> io::Result<Self> {
+    /// Starts a series in `dir` (created if needed) for the walls' `surfaces`, writing those
+    /// that do not move once.
+    pub fn create(dir: &Path, surfaces: &[Surface]) -> io::Result<Self> {
         std::fs::create_dir_all(dir)?;
-        write_atomic(&dir.join("walls.vtp"), walls_vtp(walls, lo, hi).as_bytes())?;
-        if !fixed.is_empty() {
-            write_atomic(&dir.join(FIXED_MESHES_FILE), meshes_vtp(fixed).as_bytes())?;
+        let mut moving = Vec::new();
+        for s in surfaces {
+            if s.kind.moves {
+                moving.push((s.kind.stem, Vec::new()));
+            } else {
+                write_atomic(&dir.join(collection_or_file(s.kind)), surface_vtp(s).as_bytes())?;
+            }
         }
         Ok(VtkSeries {
             dir: dir.to_path_buf(),
+            files: series_files(surfaces),
             particles: Vec::new(),
             contacts: Vec::new(),
-            meshes: Vec::new(),
+            moving,
         })
-    }
-
-    /// Writes the cylinder walls once, in [`CYLINDERS_FILE`] (see [`cylinders_vtp`]).
-    pub fn write_cylinders(&self, cylinders: &[grainflow::Cylinder], lo: Vec3, hi: Vec3) -> io::Result<()> {
-        write_atomic(&self.dir.join(CYLINDERS_FILE), cylinders_vtp(cylinders, lo, hi).as_bytes())
     }
 
     /// Continues a series from an earlier run in `dir`: frames before `step` are kept in the
     /// collections (a restarted run continues where the checkpoint was written).
-    pub fn resume(
-        dir: &Path,
-        walls: &[Wall],
-        lo: Vec3,
-        hi: Vec3,
-        fixed: &[MeshShape],
-        step: u64,
-    ) -> io::Result<Self> {
-        let mut series = Self::create(dir, walls, lo, hi, fixed)?;
+    pub fn resume(dir: &Path, surfaces: &[Surface], step: u64) -> io::Result<Self> {
+        let mut series = Self::create(dir, surfaces)?;
         let keep = |collection: &str| -> Vec<(f64, String)> {
             // Our own file, at most a line per frame; anything else (not a regular file, or
             // larger than any collection of a million frames) is not continued.
@@ -475,34 +345,49 @@ impl VtkSeries {
         };
         series.particles = keep("particles.pvd");
         series.contacts = keep("contacts.pvd");
-        series.meshes = keep("meshes.pvd");
+        for (stem, frames) in &mut series.moving {
+            *frames = keep(&format!("{stem}.pvd"));
+        }
         Ok(series)
     }
 
-    /// Adds one frame; `moving` are the moving mesh walls where they are now (none: no mesh
-    /// frame).
+    /// Adds one frame; `moving` are the moving surfaces where they are now
+    /// ([`grainflow::surface::Which::Moving`]), each written in its own frame file.
     pub fn write(
         &mut self,
         step: u64,
         time: f64,
         p: &Particles,
         contacts: &[ContactInfo],
-        moving: &[MeshShape],
+        moving: &[Surface],
     ) -> io::Result<()> {
-        let pf = format!("particles_{step:09}.vtp");
-        let cf = format!("contacts_{step:09}.vtp");
+        let names = frame_files(step, moving);
+        let (pf, cf) = (names[0].clone(), names[1].clone());
         write_atomic(&self.dir.join(&pf), particles_vtp(p, contacts).as_bytes())?;
         write_atomic(&self.dir.join(&cf), contacts_vtp(p, contacts).as_bytes())?;
         self.particles.push((time, pf));
         self.contacts.push((time, cf));
-        if !moving.is_empty() {
-            let mf = format!("meshes_{step:09}.vtp");
-            write_atomic(&self.dir.join(&mf), meshes_vtp(moving).as_bytes())?;
-            self.meshes.push((time, mf));
-            write_atomic(&self.dir.join("meshes.pvd"), pvd(&self.meshes).as_bytes())?;
+        for (s, file) in moving.iter().zip(names.into_iter().skip(2)) {
+            write_atomic(&self.dir.join(&file), surface_vtp(s).as_bytes())?;
+            let k = match self.moving.iter().position(|(stem, _)| *stem == s.kind.stem) {
+                Some(k) => k,
+                None => {
+                    self.moving.push((s.kind.stem, Vec::new()));
+                    self.moving.len() - 1
+                }
+            };
+            let frames = &mut self.moving[k].1;
+            frames.push((time, file));
+            write_atomic(&self.dir.join(collection_or_file(s.kind)), pvd(frames).as_bytes())?;
         }
         write_atomic(&self.dir.join("particles.pvd"), pvd(&self.particles).as_bytes())?;
         write_atomic(&self.dir.join("contacts.pvd"), pvd(&self.contacts).as_bytes())
+    }
+
+    /// The files of the series other than its frames ([`series_files`]), relative to its
+    /// folder.
+    pub fn files(&self) -> &[String] {
+        &self.files
     }
 
     /// The folder.
@@ -565,8 +450,6 @@ mod tests {
     #[test]
     fn resume_reads_old_and_new_collections() {
         let dir = tempfile::tempdir().unwrap();
-        let lo = Vec3::new(0.0, 0.0, 0.0);
-        let hi = Vec3::new(1.0, 1.0, 1.0);
         // The format of earlier versions: `{:e}` of the exact f64.
         let old = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n<Collection>\n\
 <DataSet timestep=\"0e0\" group=\"\" part=\"0\" file=\"particles_000000000.vtp\"/>\n\
@@ -575,14 +458,14 @@ mod tests {
 </Collection>\n</VTKFile>\n";
         std::fs::write(dir.path().join("particles.pvd"), old).unwrap();
         // Restart at step 100: the frame of step 120 is dropped (the run writes it again).
-        let mut series = VtkSeries::resume(dir.path(), &[], lo, hi, &[], 100).unwrap();
+        let mut series = VtkSeries::resume(dir.path(), &[], 100).unwrap();
         let p = Particles::default();
         series.write(100, 100.0 * 0.01, &p, &[], &[]).unwrap();
         let text = std::fs::read_to_string(dir.path().join("particles.pvd")).unwrap();
         assert_eq!(times(&text), ["0", "0.6", "1"]);
         assert!(text.contains("particles_000000060.vtp") && !text.contains("particles_000000120.vtp"));
         // And a second restart reads what this one wrote.
-        let series = VtkSeries::resume(dir.path(), &[], lo, hi, &[], 200).unwrap();
+        let series = VtkSeries::resume(dir.path(), &[], 200).unwrap();
         assert_eq!(series.particles.iter().map(|f| f.0).collect::<Vec<_>>(), [0.0, 0.6, 1.0]);
     }
 }

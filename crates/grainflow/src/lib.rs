@@ -21,7 +21,8 @@
 //!    cap, torques ([`contact::law`]), coefficients derived from the inputs
 //!    ([`contact::coefficients`]).
 //! 3. [`wall`] — planes (the six faces of the domain box, or any infinite plane) and infinite
-//!    cylinders (drums, pipes, rods; [`SimulationConfig::cylinders`], after the meshes).
+//!    cylinders (drums, pipes, rods; [`SimulationConfig::cylinders`], after the meshes);
+//!    [`surface`] shows every wall as polygons for display, as its contact source describes it.
 //! 4. [`integrate`] — MFIX's Euler and Adams–Bashforth steps, and velocity Verlet.
 //! 5. [`motion`] — prescribed particle motion applied after every step; user hooks run through
 //!    [`Simulation::run_with`].
@@ -47,6 +48,7 @@ pub mod neighbor;
 pub mod observe;
 pub mod simulation;
 pub mod state;
+pub mod surface;
 mod threads;
 pub mod timestep;
 pub mod wall;
@@ -66,5 +68,6 @@ pub use simulation::{
     StageTimes, Tally, ThreadReport,
 };
 pub use state::Particles;
+pub use surface::{Surface, SurfaceKind};
 pub use timestep::{TimeStepChoice, TimeStepRule};
 pub use wall::{Cylinder, CylinderSide, Wall};

@@ -22,6 +22,7 @@ use crate::math::Vec3;
 use crate::neighbor::NeighborState;
 use crate::simulation::{ContactInfo, ContactPartner, Simulation};
 use crate::state::Particles;
+use crate::surface::{CellData, CellValues, Surface, SurfaceKind, TUBE_FACETS, Which, box_corners};
 use crate::wall::{Cylinder, CylinderContact};
 
 /// The tangential history of one particle–cylinder contact.
@@ -331,7 +332,48 @@ impl ContactSource for Cylinders {
         self.history.capacity() * std::mem::size_of::<CylinderHistory>()
             + self.loads.capacity() * std::mem::size_of::<LoadPart>()
     }
+
+    const SURFACES: &'static [SurfaceKind] = &[CYLINDERS];
+
+    /// The cylinders (if any) as tubes of [`TUBE_FACETS`] quadrilaterals each, of finite
+    /// length: the stretch of the axis the box spans. Cell data: `cylinder` (the cylinder's
+    /// index), `material`.
+    fn surfaces(&self, _sim: &Simulation, lo: Vec3, hi: Vec3, which: Which, out: &mut Vec<Surface>) {
+        if !which.wants(CYLINDERS) || self.walls.is_empty() {
+            return;
+        }
+        let mut s = Surface::new(CYLINDERS);
+        let (mut index, mut material) = (Vec::new(), Vec::new());
+        for (k, c) in self.walls.iter().enumerate() {
+            let t = box_corners(lo, hi).map(|x| (x - c.origin).dot(c.axis));
+            let (t0, t1) =
+                t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            let u = c.axis.any_orthonormal_vector();
+            let w = c.axis.cross(u);
+            let base = s.points.len();
+            for j in 0..TUBE_FACETS {
+                let phi = std::f64::consts::TAU * j as f64 / TUBE_FACETS as f64;
+                let r = (u * phi.cos() + w * phi.sin()) * c.radius;
+                s.points.push(c.origin + c.axis * t0 + r);
+                s.points.push(c.origin + c.axis * t1 + r);
+            }
+            for j in 0..TUBE_FACETS {
+                let next = (j + 1) % TUBE_FACETS;
+                s.push_polygon([base + 2 * j, base + 2 * next, base + 2 * next + 1, base + 2 * j + 1]);
+                index.push(k as i32);
+                material.push(c.material as i32);
+            }
+        }
+        s.cell_data = vec![
+            CellData { name: "cylinder", values: CellValues::Int(index) },
+            CellData { name: "material", values: CellValues::Int(material) },
+        ];
+        out.push(s);
+    }
 }
+
+/// The cylinders' surface: fixed (a turning shell keeps its shape).
+const CYLINDERS: SurfaceKind = SurfaceKind { stem: "cylinders", moves: false };
 
 impl Simulation {
     /// The cylinder walls.

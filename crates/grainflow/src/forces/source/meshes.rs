@@ -38,6 +38,7 @@ use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, SurfaceMotion, TriangleGrid
 use crate::neighbor::NeighborState;
 use crate::simulation::{ContactInfo, ContactPartner, Simulation};
 use crate::state::Particles;
+use crate::surface::{CellData, CellValues, Surface, SurfaceKind, Which};
 use crate::threads;
 
 /// A contact's normal may turn this far (cosine) from one evaluation to the next and still
@@ -838,7 +839,46 @@ impl ContactSource for Meshes {
     fn heap_bytes(&self) -> usize {
         self.bytes()
     }
+
+    const SURFACES: &'static [SurfaceKind] = &[FIXED_MESHES, MOVING_MESHES];
+
+    /// The meshes that do not move (if any), then those that do (if any), as triangles where
+    /// they are. Cell data: `mesh` (the mesh's index), `triangle` (its index in its mesh, as
+    /// contacts name it) and `normal` (towards the particles' side).
+    fn surfaces(&self, sim: &Simulation, _lo: Vec3, _hi: Vec3, which: Which, out: &mut Vec<Surface>) {
+        for kind in [FIXED_MESHES, MOVING_MESHES] {
+            let shown: Vec<usize> =
+                (0..self.walls.len()).filter(|&m| self.walls[m].motion.moves() == kind.moves).collect();
+            if !which.wants(kind) || shown.is_empty() {
+                continue;
+            }
+            let mut s = Surface::new(kind);
+            let (mut index, mut triangle, mut normals) = (Vec::new(), Vec::new(), Vec::new());
+            for m in shown {
+                let (mesh, pose) = (&self.walls[m].mesh, self.pose_at(m, sim.time()));
+                let base = s.points.len();
+                s.points.extend(mesh.vertices().iter().map(|&y| pose.apply(y)));
+                for (t, corners) in mesh.triangles().iter().enumerate() {
+                    s.push_polygon(corners.iter().map(|&v| base + v as usize));
+                    index.push(m as i32);
+                    triangle.push(t as i32);
+                }
+                normals.extend(mesh.normals().iter().map(|&n| pose.turn(n)));
+            }
+            s.cell_data = vec![
+                CellData { name: "mesh", values: CellValues::Int(index) },
+                CellData { name: "triangle", values: CellValues::Int(triangle) },
+                CellData { name: "normal", values: CellValues::Vector(normals) },
+            ];
+            out.push(s);
+        }
+    }
 }
+
+/// The surface of the meshes that do not move: shown once.
+const FIXED_MESHES: SurfaceKind = SurfaceKind { stem: "meshes_fixed", moves: false };
+/// The surface of the meshes that move: shown at every frame.
+const MOVING_MESHES: SurfaceKind = SurfaceKind { stem: "meshes", moves: true };
 
 impl Simulation {
     /// Restores the mesh-wall contacts' histories of a checkpoint: (particle id, mesh),

@@ -7,7 +7,9 @@
 //! for output, their part of the diagnostics, and what becomes of their histories when the
 //! particles move to other slots. The simulation holds the sources in one [`Sources`] in a
 //! fixed order (planes, pairs, meshes, cylinders) and loops over them with `each_source!`; adding a
-//! kind of contact is one file here, a field of `Sources` and its name in `each_source!`.
+//! kind of contact is one file here, a field of `Sources` and its name in `each_source!`. A
+//! source with a wall also describes its surfaces for display there
+//! ([`ContactSource::surfaces`], [`crate::surface`]): the output writers name no kind.
 //!
 //! The plane walls' and the particle pairs' candidates are found by the neighbour list in one
 //! pass over its grid, and their loads are computed in one kernel (each block of particles
@@ -35,9 +37,11 @@ use crate::contact::pair::{CommonMass, contact_coeffs, contact_reach};
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::contact::{CoeffTable, ContactCoeffs, ContactLaw};
 use crate::forces::{Peak, Quanta};
+use crate::math::Vec3;
 use crate::neighbor::{NeighborList, NeighborState};
 use crate::simulation::{ContactInfo, StageTimes};
 use crate::state::Particles;
+use crate::surface::{Surface, SurfaceKind, Which};
 use crate::wall::Wall;
 
 /// What a source reads of the state outside itself.
@@ -136,6 +140,23 @@ pub(crate) trait ContactSource {
     /// Heap bytes the source holds outside the neighbour list.
     fn heap_bytes(&self) -> usize {
         0
+    }
+
+    /// The kinds of surface the source can show, in the order [`surfaces`](Self::surfaces)
+    /// gives them (none: a source without a surface, like the particle pairs).
+    const SURFACES: &'static [SurfaceKind] = &[];
+
+    /// Appends the source's surfaces of `which` where they are now, for display (see
+    /// [`crate::surface`]), each of one of [`SURFACES`](Self::SURFACES); the infinite walls
+    /// are shown within the box [lo, hi].
+    fn surfaces(
+        &self,
+        _sim: &crate::Simulation,
+        _lo: Vec3,
+        _hi: Vec3,
+        _which: Which,
+        _out: &mut Vec<Surface>,
+    ) {
     }
 }
 
@@ -268,16 +289,27 @@ impl Sources {
         each_source!(ref self, |s| bytes += s.heap_bytes());
         bytes
     }
+
+    /// Every source's surfaces, in the sources' order (see [`ContactSource::surfaces`]).
+    pub(crate) fn surfaces(&self, sim: &crate::Simulation, lo: Vec3, hi: Vec3, which: Which) -> Vec<Surface> {
+        let mut out = Vec::new();
+        each_source!(ref self, |s| s.surfaces(sim, lo, hi, which, &mut out));
+        out
+    }
+
+    /// Every source's kinds of surface, in the sources' order (see
+    /// [`ContactSource::SURFACES`]).
+    pub(crate) fn surface_kinds() -> Vec<SurfaceKind> {
+        let mut kinds = Vec::new();
+        each_source_type!(|S| kinds.extend_from_slice(<S as ContactSource>::SURFACES));
+        kinds
+    }
 }
 
 /// The load a wall takes from its contacts' loads on the particles, each (the particle's
 /// centre, the force and the torque about the centre on it): minus their sums, the torque about
 /// `about`. The sums do not depend on the contacts' order.
-pub(crate) fn wall_load(
-    parts: &[(crate::math::Vec3, crate::math::Vec3, crate::math::Vec3)],
-    about: crate::math::Vec3,
-) -> MeshLoad {
-    use crate::math::Vec3;
+pub(crate) fn wall_load(parts: &[(Vec3, Vec3, Vec3)], about: Vec3) -> MeshLoad {
     use crate::observe::order_free_sum;
     let sum = |f: &dyn Fn(&(Vec3, Vec3, Vec3)) -> Vec3| {
         let c = |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());

@@ -10,6 +10,7 @@ use crate::contact::submodel::{NormalSubModel, TangentialSubModel, formed};
 use crate::math::Vec3;
 use crate::neighbor::NeighborState;
 use crate::simulation::{ContactInfo, ContactPartner};
+use crate::surface::{CellData, CellValues, Surface, SurfaceKind, Which, clip_plane_to_box};
 
 /// The plane walls' contacts (their geometry and candidates are the neighbour list's).
 #[derive(Debug, Clone, Default)]
@@ -77,7 +78,38 @@ impl ContactSource for Planes {
             .unzip();
         (list.wall_pairs, list.wall_history) = (wall_pairs, wall_history);
     }
+
+    const SURFACES: &'static [SurfaceKind] = &[WALLS];
+
+    /// The walls (always, none or many) as polygons clipped to the box, one per wall that
+    /// cuts it. Cell data: `wall` (the wall's index), `material`.
+    fn surfaces(&self, sim: &crate::Simulation, lo: Vec3, hi: Vec3, which: Which, out: &mut Vec<Surface>) {
+        if !which.wants(WALLS) {
+            return;
+        }
+        let mut s = Surface::new(WALLS);
+        let (mut index, mut material) = (Vec::new(), Vec::new());
+        for (k, w) in sim.walls().iter().enumerate() {
+            let poly = clip_plane_to_box(w, lo, hi);
+            if poly.is_empty() {
+                continue;
+            }
+            let base = s.points.len();
+            s.points.extend(poly);
+            s.push_polygon(base..s.points.len());
+            index.push(k as i32);
+            material.push(w.material as i32);
+        }
+        s.cell_data = vec![
+            CellData { name: "wall", values: CellValues::Int(index) },
+            CellData { name: "material", values: CellValues::Int(material) },
+        ];
+        out.push(s);
+    }
 }
+
+/// The plane walls' surface: fixed.
+const WALLS: SurfaceKind = SurfaceKind { stem: "walls", moves: false };
 
 /// The plane-wall pairs (particle id, wall) and their histories, from the neighbour list.
 impl crate::checkpoint::Saved for Planes {
