@@ -96,35 +96,35 @@ impl ForcePlan {
         }
         self.made_for = Some((build, n_blocks));
         let n = offsets.len().saturating_sub(1);
-        // Each row's estimated work and whether it has contacts, row by row. The list is
-        // walked twice (for the total, then for the cuts) rather than the prefix sums kept: on
-        // a million particles they would take 8 MB.
-        let row_costs = || {
-            let mut walls = wall_pairs.iter().zip(wall_history).peekable();
-            (0..n).map(move |a| {
-                let row = offsets[a]..offsets[a + 1];
-                let mut contacts = in_contact[row.clone()].iter().filter(|&&c| c).count();
-                let mut cost = ROW_COST + row.len() + CONTACT_COST * contacts;
-                while let Some((_, h)) = walls.next_if(|&(&[i, _], _)| i as usize == a) {
-                    let contact = *h != Vec3::ZERO;
-                    cost += 1 + CONTACT_COST * contact as usize;
-                    contacts += contact as usize;
-                }
-                (cost, contacts > 0)
-            })
-        };
-        let (total, touching) = row_costs().fold((0, false), |(w, t), (c, touches)| (w + c, t | touches));
-        self.provisional = !same_build && !touching;
-        // Block t ends at the first row with at least t/n_blocks of the work before it.
+        // The total work, from whole-list counts (they compile to vector instructions).
+        let contacts = in_contact.iter().filter(|&&c| c).count();
+        let wall_contacts = wall_history.iter().filter(|&&h| h != Vec3::ZERO).count();
+        let total = ROW_COST * n
+            + partners.len()
+            + CONTACT_COST * contacts
+            + wall_pairs.len()
+            + CONTACT_COST * wall_contacts;
+        self.provisional = !same_build && contacts + wall_contacts == 0;
+        // Block t ends at the first row with at least t/n_blocks of the work before it. The rows
+        // are walked only up to the last cut (the work after it is not needed).
         self.blocks.clear();
-        let (mut start, mut before) = (0, 0);
+        let (mut start, mut before, mut w) = (0, 0, 0);
         let mut targets = (1..n_blocks).map(|t| total * t / n_blocks).peekable();
-        for (a, (cost, _)) in row_costs().enumerate() {
+        for a in 0..n {
             while targets.next_if(|&target| before >= target).is_some() {
                 self.blocks.push(start..a);
                 start = a;
             }
-            before += cost;
+            if targets.peek().is_none() {
+                break;
+            }
+            let row = offsets[a]..offsets[a + 1];
+            let touching = in_contact[row.clone()].iter().filter(|&&c| c).count();
+            before += ROW_COST + row.len() + CONTACT_COST * touching;
+            while w < wall_pairs.len() && wall_pairs[w][0] as usize == a {
+                before += 1 + CONTACT_COST * (wall_history[w] != Vec3::ZERO) as usize;
+                w += 1;
+            }
         }
         while self.blocks.len() + 1 < n_blocks {
             self.blocks.push(start..n);
@@ -140,6 +140,10 @@ impl ForcePlan {
         self.incoming_start.resize(n + 1, 0);
         for rows in &self.blocks {
             self.crossing_start.push(self.crossing.len());
+            // (The last block's pairs all lie inside it.)
+            if rows.end == n {
+                continue;
+            }
             for a in rows.clone() {
                 for k in offsets[a]..offsets[a + 1] {
                     let b = partners[k] as usize;
