@@ -559,7 +559,6 @@ impl NeighborList {
                 checks
             };
             if parallel {
-                use rayon::prelude::*;
                 // The keys go into the list in any order (it is sorted below): each thread
                 // hands its pairs over a bufferful at a time, so that the pairs found but not
                 // yet handed over stay a small part of the list (collecting every layer's
@@ -569,23 +568,20 @@ impl NeighborList {
                     keys.lock().unwrap_or_else(|e| e.into_inner()).extend_from_slice(buf.found());
                     buf.used = 0;
                 };
-                self.stats.distance_checks += (0..nz)
-                    .into_par_iter()
-                    .fold(
-                        || (Keys::default(), 0u64),
-                        |(mut buf, checks), cz| {
-                            let checks = checks + layer(cz, &mut buf);
-                            if buf.used >= HAND_OVER_KEYS {
-                                hand_over(&mut buf);
-                            }
-                            (buf, checks)
-                        },
-                    )
-                    .map(|(mut buf, checks)| {
-                        hand_over(&mut buf);
-                        checks
-                    })
-                    .sum::<u64>();
+                self.stats.distance_checks += crate::threads::in_runs(nz, |layers| {
+                    let mut buf = Keys::default();
+                    let mut checks = 0u64;
+                    for cz in layers {
+                        checks += layer(cz, &mut buf);
+                        if buf.used >= HAND_OVER_KEYS {
+                            hand_over(&mut buf);
+                        }
+                    }
+                    hand_over(&mut buf);
+                    checks
+                })
+                .into_iter()
+                .sum::<u64>();
                 self.fresh = keys.into_inner().unwrap_or_else(|e| e.into_inner());
             } else {
                 let mut buf = Keys { keys: std::mem::take(&mut self.fresh), used: 0 };
@@ -596,7 +592,7 @@ impl NeighborList {
                 self.fresh = buf.keys;
             }
         }
-        if parallel {
+        if parallel && !crate::threads::on_team() {
             use rayon::prelude::*;
             // The keys are distinct: any sort gives the same list.
             self.fresh.par_sort_unstable();

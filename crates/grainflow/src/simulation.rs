@@ -632,7 +632,7 @@ impl Simulation {
     /// Runs `f` on the thread pool if the stages run in parallel (telling it so), else here.
     fn on_stages(&mut self, f: impl FnOnce(&mut Simulation, bool) + Send) {
         match self.pool.clone() {
-            Some(pool) if self.parallel() => pool.install(|| f(self, true)),
+            Some(pool) if self.parallel() => crate::threads::with_team(&pool, || f(self, true)),
             _ => f(self, false),
         }
     }
@@ -650,7 +650,7 @@ impl Simulation {
     /// costs several microseconds a step: a caller that takes many steps in a row saves that.
     pub fn on_pool<R: Send>(&mut self, f: impl FnOnce(&mut Simulation) -> R + Send) -> R {
         match self.pool.clone() {
-            Some(pool) => pool.install(|| f(self)),
+            Some(pool) => crate::threads::with_team(&pool, || f(self)),
             None => f(self),
         }
     }

@@ -566,10 +566,9 @@ impl Meshes {
         };
         let pool = pool.filter(|_| n >= threads::MIN_PARALLEL_SLOTS);
         let stale: Vec<usize> = match pool {
-            Some(pool) => {
-                use rayon::prelude::*;
-                pool.install(|| (0..n).into_par_iter().filter(|&i| stale(i)).collect())
-            }
+            Some(pool) => pool.install(|| {
+                threads::in_runs(n, |r| r.filter(|&i| stale(i)).collect::<Vec<usize>>()).concat()
+            }),
             None => (0..n).filter(|&i| stale(i)).collect(),
         };
         if stale.is_empty() {
@@ -602,9 +601,9 @@ impl Meshes {
         let search = |w: &mut Worker, slots: &[usize]| self.search(v, poses, margin, slots, w);
         match pool.filter(|_| parts > 1) {
             Some(pool) => {
-                use rayon::prelude::*;
-                let runs: Vec<_> = threads::runs(stale.len(), parts).map(|r| &stale[r]).collect();
-                pool.install(|| workers[..parts].par_iter_mut().zip(runs).for_each(|(w, s)| search(w, s)));
+                let runs = threads::runs(stale.len(), parts).map(|r| &stale[r]);
+                let parts: Vec<_> = workers[..parts].iter_mut().zip(runs).collect();
+                pool.install(|| threads::each_taken(parts, |(w, s)| search(w, s)));
             }
             None => search(&mut workers[0], &stale),
         }
@@ -778,13 +777,8 @@ impl ContactSource for Meshes {
             };
             match pool {
                 Some(pool) => {
-                    use rayon::prelude::*;
-                    pool.install(|| {
-                        workers[..parts]
-                            .par_iter_mut()
-                            .zip(threads::runs(n, parts).collect::<Vec<_>>())
-                            .for_each(|(w, r)| work(w, r))
-                    });
+                    let parts: Vec<_> = workers[..parts].iter_mut().zip(threads::runs(n, parts)).collect();
+                    pool.install(|| threads::each_taken(parts, |(w, r)| work(w, r)));
                 }
                 None => work(&mut workers[0], 0..n),
             }
