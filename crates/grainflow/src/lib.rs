@@ -36,6 +36,7 @@
 pub mod boundary;
 pub mod checkpoint;
 pub mod contact;
+pub mod domain;
 pub mod error;
 pub mod forces;
 pub mod insertion;

@@ -1,0 +1,199 @@
+//! The domain cut into one box per rank, by recursive coordinate bisection weighted by work:
+//! the first step of spreading a run over processes.
+//!
+//! A region of `r` ranks is cut across its longest side (the lowest axis of equally long
+//! ones) into a part for `⌊r/2⌋` ranks and one for the rest, where the work before the cut is
+//! the share of the first part; each part is then cut the same way until every part has one
+//! rank. The particles are taken in the order of their coordinate along the cut and their id,
+//! so the cut depends only on the particles, never on the order they are held in: every rank
+//! that cuts the same particles finds the same boxes, to the bit.
+//!
+//! A particle belongs to the box with `lo ≤ x < hi` on every axis ([`Boxes::owner`]); a cut
+//! lies halfway between the last particle before it and the first after it.
+
+use crate::math::Vec3;
+
+/// A particle as the cut sees it: its position, its work (any positive measure, e.g. 1 + its
+/// contacts) and its id.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Weighted {
+    pub position: Vec3,
+    pub work: f64,
+    pub id: u64,
+}
+
+/// The boxes of the ranks, rank by rank: `lo` and `hi` corners, m.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Boxes {
+    pub boxes: Vec<[Vec3; 2]>,
+}
+
+impl Boxes {
+    /// The rank whose box holds `x` (`lo ≤ x < hi` on every axis; a point on the domain's upper
+    /// faces belongs to the box that ends there), or `None` outside the domain.
+    pub fn owner(&self, x: Vec3) -> Option<usize> {
+        let (lo, hi) = self.bounds();
+        let inside = |b: &[Vec3; 2]| {
+            (0..3).all(|k| {
+                let (v, l, h) = (x[k], b[0][k], b[1][k]);
+                l <= v && (v < h || (h == hi[k] && v == h))
+            })
+        };
+        if (0..3).any(|k| !(x[k] >= lo[k] && x[k] <= hi[k])) {
+            return None;
+        }
+        self.boxes.iter().position(inside)
+    }
+
+    /// The corners of the whole domain.
+    fn bounds(&self) -> (Vec3, Vec3) {
+        self.boxes.iter().fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(lo, hi), b| {
+            (lo.min(b[0]), hi.max(b[1]))
+        })
+    }
+}
+
+/// Cuts the domain `lo`..`hi` into `ranks` boxes (at least one) of about equal work of
+/// `particles` (see the module doc).
+pub fn bisect(lo: Vec3, hi: Vec3, particles: &[Weighted], ranks: usize) -> Boxes {
+    let mut items = particles.to_vec();
+    let mut boxes = Vec::with_capacity(ranks.max(1));
+    cut(lo, hi, &mut items, ranks.max(1), &mut boxes);
+    Boxes { boxes }
+}
+
+/// Cuts the region `lo`..`hi` holding `items` into `ranks` boxes, appended to `out` in rank
+/// order.
+fn cut(lo: Vec3, hi: Vec3, items: &mut [Weighted], ranks: usize, out: &mut Vec<[Vec3; 2]>) {
+    if ranks == 1 {
+        out.push([lo, hi]);
+        return;
+    }
+    let extent = hi - lo;
+    let axis = (0..3).fold(0, |best, k| if extent[k] > extent[best] { k } else { best });
+    items.sort_unstable_by(|a, b| a.position[axis].total_cmp(&b.position[axis]).then(a.id.cmp(&b.id)));
+    let first = ranks / 2;
+    let total: f64 = items.iter().map(|p| p.work).sum();
+    let target = total * first as f64 / ranks as f64;
+    // The first particle with at least the first part's share of the work before it.
+    let mut before = 0.0;
+    let mut k = items.len();
+    for (i, p) in items.iter().enumerate() {
+        if before >= target {
+            k = i;
+            break;
+        }
+        before += p.work;
+    }
+    let coordinate = |i: usize| items[i].position[axis];
+    let at = if items.is_empty() {
+        lo[axis] + extent[axis] * first as f64 / ranks as f64
+    } else if k == 0 {
+        lo[axis].min(coordinate(0))
+    } else if k == items.len() {
+        hi[axis].max(coordinate(k - 1))
+    } else {
+        0.5 * (coordinate(k - 1) + coordinate(k))
+    };
+    let at = at.clamp(lo[axis], hi[axis]);
+    // The particles before the cut plane (those at the plane's coordinate belong above it).
+    let split = items.partition_point(|p| p.position[axis] < at);
+    let (low, high) = items.split_at_mut(split);
+    let (mut low_hi, mut high_lo) = (hi, lo);
+    low_hi[axis] = at;
+    high_lo[axis] = at;
+    cut(lo, low_hi, low, first, out);
+    cut(high_lo, hi, high, ranks - first, out);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    fn cloud(n: usize, seed: u64, work: impl Fn(Vec3) -> f64) -> Vec<Weighted> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        (0..n)
+            .map(|i| {
+                let position =
+                    Vec3::new(rng.random::<f64>() * 4.0, rng.random::<f64>() * 2.0, rng.random::<f64>());
+                Weighted { position, work: work(position), id: i as u64 }
+            })
+            .collect()
+    }
+
+    /// The boxes tile the domain (their volumes add up to its volume, and every particle lies
+    /// in exactly one), and each holds its share of the work to within one particle's work per
+    /// level of cuts: a cut misses its target by less than the work of the particle at it.
+    #[test]
+    fn boxes_tile_the_domain_and_share_the_work() {
+        let (lo, hi) = (Vec3::ZERO, Vec3::new(4.0, 2.0, 1.0));
+        for (ranks, seed) in [(1, 1), (2, 2), (3, 3), (4, 4), (7, 5), (16, 6)] {
+            let particles = cloud(5_000, seed, |x| 1.0 + (x.x * 3.0).floor());
+            let cut = bisect(lo, hi, &particles, ranks);
+            assert_eq!(cut.boxes.len(), ranks);
+            let volume: f64 =
+                cut.boxes.iter().map(|b| (b[1] - b[0]).x * (b[1] - b[0]).y * (b[1] - b[0]).z).sum();
+            // Volumes of boxes cut at rounded coordinates: to a few roundings of the domain's.
+            assert!((volume - 8.0).abs() < 1e-12, "{ranks} ranks: volume {volume}");
+            let mut work = vec![0.0; ranks];
+            for p in &particles {
+                let inside: Vec<usize> = (0..ranks)
+                    .filter(|&r| {
+                        (0..3).all(|k| {
+                            cut.boxes[r][0][k] <= p.position[k] && p.position[k] < cut.boxes[r][1][k]
+                        })
+                    })
+                    .collect();
+                assert_eq!(inside.len(), 1, "{ranks} ranks: particle {} in boxes {inside:?}", p.id);
+                assert_eq!(cut.owner(p.position), Some(inside[0]));
+                work[inside[0]] += p.work;
+            }
+            let total: f64 = particles.iter().map(|p| p.work).sum();
+            let w_max = particles.iter().map(|p| p.work).fold(0.0, f64::max);
+            // A cut misses its target by less than one particle's work, and a part's target
+            // follows the work it was given: the errors add up over the levels of cuts. (Twice
+            // that, for a particle on either side of a cut's midpoint.)
+            let levels = (ranks as f64).log2().ceil();
+            for (r, w) in work.iter().enumerate() {
+                let share = total / ranks as f64;
+                assert!(
+                    (w - share).abs() <= levels * 2.0 * w_max,
+                    "{ranks} ranks: rank {r} has work {w}, its share {share}"
+                );
+            }
+        }
+    }
+
+    /// The cut depends on the particles only: held in another order, they give the same bits.
+    #[test]
+    fn the_cut_does_not_depend_on_the_order_of_the_particles() {
+        let (lo, hi) = (Vec3::ZERO, Vec3::new(4.0, 2.0, 1.0));
+        let particles = cloud(2_000, 9, |x| 1.0 + x.y);
+        let mut reversed = particles.clone();
+        reversed.reverse();
+        for ranks in [2, 3, 5, 8] {
+            assert_eq!(bisect(lo, hi, &particles, ranks), bisect(lo, hi, &reversed, ranks));
+        }
+    }
+
+    /// Work, not count: a quarter of the domain with nine times the work per particle takes
+    /// its rank nearly alone. Two ranks on particles spread evenly along x with work 9 for
+    /// x < 1 and 1 beyond: the work before x is 9x (x ≤ 1), then 9 + (x − 1); half of the
+    /// total 12 is reached at x = 6/9 ≈ 0.667, to within the spacing of the particles.
+    #[test]
+    fn the_cut_follows_the_work() {
+        let (lo, hi) = (Vec3::ZERO, Vec3::new(4.0, 1.0, 1.0));
+        let particles: Vec<Weighted> = (0..4_000)
+            .map(|i| {
+                let x = (i as f64 + 0.5) / 1000.0;
+                Weighted { position: Vec3::new(x, 0.5, 0.5), work: if x < 1.0 { 9.0 } else { 1.0 }, id: i }
+            })
+            .collect();
+        let cut = bisect(lo, hi, &particles, 2);
+        let at = cut.boxes[0][1].x;
+        assert!((at - 2.0 / 3.0).abs() < 1e-3, "cut at x = {at}");
+        assert_eq!(cut.owner(Vec3::new(4.0, 1.0, 1.0)), Some(1), "the upper corner belongs to the last box");
+        assert_eq!(cut.owner(Vec3::new(4.1, 0.5, 0.5)), None);
+    }
+}
