@@ -11,6 +11,7 @@
 //! A particle belongs to the box with `lo ≤ x < hi` on every axis ([`Boxes::owner`]); a cut
 //! lies halfway between the last particle before it and the first after it.
 
+use crate::boundary::Periodic;
 use crate::math::Vec3;
 
 /// A particle as the cut sees it: its position, its work (any positive measure, e.g. 1 + its
@@ -43,6 +44,40 @@ impl Boxes {
             return None;
         }
         self.boxes.iter().position(inside)
+    }
+
+    /// Appends to `out` every other rank (with the shift of the periodic image, m) whose box
+    /// lies closer than `reach` to a particle at `x` owned by rank `own`: the ranks that need
+    /// it as a ghost, for its contacts with their particles. A rank's own box counts through a
+    /// periodic image (a rank that wraps onto itself); shifts run over −L, 0 and +L on the
+    /// periodic axes of `periodic`, whose box must be the domain.
+    pub fn ghost_ranks(
+        &self,
+        x: Vec3,
+        reach: f64,
+        own: usize,
+        periodic: &Periodic,
+        out: &mut Vec<(usize, Vec3)>,
+    ) {
+        let length = periodic.hi - periodic.lo;
+        let steps = |k: usize| if periodic.axes[k] { -1..=1 } else { 0..=0 };
+        for sx in steps(0) {
+            for sy in steps(1) {
+                for sz in steps(2) {
+                    let shift = Vec3::new(sx as f64 * length.x, sy as f64 * length.y, sz as f64 * length.z);
+                    let image = x + shift;
+                    for (r, b) in self.boxes.iter().enumerate() {
+                        if r == own && shift == Vec3::ZERO {
+                            continue;
+                        }
+                        let gap = (b[0] - image).max(image - b[1]).max(Vec3::ZERO);
+                        if gap.length_squared() < reach * reach {
+                            out.push((r, shift));
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// The corners of the whole domain.
@@ -195,5 +230,53 @@ mod tests {
         assert!((at - 2.0 / 3.0).abs() < 1e-3, "cut at x = {at}");
         assert_eq!(cut.owner(Vec3::new(4.0, 1.0, 1.0)), Some(1), "the upper corner belongs to the last box");
         assert_eq!(cut.owner(Vec3::new(4.1, 0.5, 0.5)), None);
+    }
+
+    /// Ghosts suffice: every pair of particles closer than the reach, owned by two ranks or
+    /// one rank through a periodic image, finds each particle as a ghost on the other's rank
+    /// with the shift that brings it next to the other (checked against every pair).
+    #[test]
+    fn every_pair_within_reach_across_ranks_has_its_ghosts() {
+        let (lo, hi) = (Vec3::ZERO, Vec3::new(4.0, 2.0, 1.0));
+        let periodic = Periodic { lo, hi, axes: [true, false, true] };
+        let particles = cloud(600, 11, |_| 1.0);
+        let reach = 0.3;
+        for ranks in [1, 2, 3, 5] {
+            let cut = bisect(lo, hi, &particles, ranks);
+            let owner: Vec<usize> = particles.iter().map(|p| cut.owner(p.position).unwrap()).collect();
+            let ghosts: Vec<Vec<(usize, Vec3)>> = particles
+                .iter()
+                .zip(&owner)
+                .map(|(p, &o)| {
+                    let mut g = Vec::new();
+                    cut.ghost_ranks(p.position, reach, o, &periodic, &mut g);
+                    g
+                })
+                .collect();
+            let mut checked = 0;
+            for (i, a) in particles.iter().enumerate() {
+                for (j, b) in particles.iter().enumerate() {
+                    if i == j {
+                        continue;
+                    }
+                    for sx in -1..=1 {
+                        for sz in -1..=1 {
+                            let shift = Vec3::new(4.0 * sx as f64, 0.0, sz as f64);
+                            let near = (a.position + shift - b.position).length() < reach;
+                            if near && (owner[i] != owner[j] || shift != Vec3::ZERO) {
+                                checked += 1;
+                                assert!(
+                                    ghosts[i].contains(&(owner[j], shift)),
+                                    "{ranks} ranks: particle {i} (rank {}) is not a ghost on rank {} at shift {shift}",
+                                    owner[i],
+                                    owner[j]
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+            assert!(checked > 100, "{ranks} ranks: only {checked} pairs across ranks or images");
+        }
     }
 }
