@@ -23,17 +23,18 @@ pub struct Weighted {
     pub id: u64,
 }
 
-/// The boxes of the ranks, rank by rank: `lo` and `hi` corners, m.
+/// The boxes of the ranks, rank by rank: `lo` and `hi` corners, m; and the domain they tile.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Boxes {
     pub boxes: Vec<[Vec3; 2]>,
+    pub domain: [Vec3; 2],
 }
 
 impl Boxes {
     /// The rank whose box holds `x` (`lo ≤ x < hi` on every axis; a point on the domain's upper
     /// faces belongs to the box that ends there), or `None` outside the domain.
     pub fn owner(&self, x: Vec3) -> Option<usize> {
-        let (lo, hi) = self.bounds();
+        let [lo, hi] = self.domain;
         let inside = |b: &[Vec3; 2]| {
             (0..3).all(|k| {
                 let (v, l, h) = (x[k], b[0][k], b[1][k]);
@@ -79,13 +80,6 @@ impl Boxes {
             }
         }
     }
-
-    /// The corners of the whole domain.
-    fn bounds(&self) -> (Vec3, Vec3) {
-        self.boxes.iter().fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(lo, hi), b| {
-            (lo.min(b[0]), hi.max(b[1]))
-        })
-    }
 }
 
 /// Cuts the domain `lo`..`hi` into `ranks` boxes (at least one) of about equal work of
@@ -94,7 +88,7 @@ pub fn bisect(lo: Vec3, hi: Vec3, particles: &[Weighted], ranks: usize) -> Boxes
     let mut items = particles.to_vec();
     let mut boxes = Vec::with_capacity(ranks.max(1));
     cut(lo, hi, &mut items, ranks.max(1), &mut boxes);
-    Boxes { boxes }
+    Boxes { boxes, domain: [lo, hi] }
 }
 
 /// Cuts the region `lo`..`hi` holding `items` into `ranks` boxes, appended to `out` in rank

@@ -592,9 +592,11 @@ impl NeighborList {
                 self.fresh = buf.keys;
             }
         }
+        // The keys are distinct: any sort gives the same list. Within a team of threads
+        // (`threads::team`) the pool's other threads wait in the team's loop, not rayon's, so
+        // rayon's parallel sort would run on this thread alone: the plain sort is used.
         if parallel && !crate::threads::on_team() {
             use rayon::prelude::*;
-            // The keys are distinct: any sort gives the same list.
             self.fresh.par_sort_unstable();
         } else {
             self.fresh.sort_unstable();

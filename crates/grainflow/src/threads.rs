@@ -15,6 +15,7 @@ mod team;
 use smallvec::SmallVec;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use team::lock;
 pub(crate) use team::with_team;
 
 /// True on a thread that leads a team or works on its job (see [`team`]).
@@ -37,9 +38,6 @@ pub(crate) fn pinned<T: Send, R: Send>(
     let cells: Parts<Mutex<Option<T>>> = parts.into_iter().map(|p| Mutex::new(Some(p))).collect();
     let n = cells.len();
     let results: Parts<Mutex<Option<R>>> = (0..n).map(|_| Mutex::new(None)).collect();
-    fn lock<X>(m: &Mutex<X>) -> std::sync::MutexGuard<'_, X> {
-        m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
     let take = |i: usize| lock(&cells[i]).take().expect("every part is taken by one thread only");
     if team::in_job() {
         // Within a job of a team: here, part after part.
@@ -57,12 +55,12 @@ pub(crate) fn pinned<T: Send, R: Send>(
     } else {
         broadcast_parts(n, &|i| *lock(&results[i]) = Some(work(i, take(i))));
     }
-    results
-        .into_iter()
-        .map(|r| {
-            r.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner()).expect("one result per part")
-        })
-        .collect()
+    results.into_iter().map(result).collect()
+}
+
+/// A part's result, once its thread has put it in.
+fn result<R>(cell: Mutex<Option<R>>) -> R {
+    cell.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner()).expect("one result per part")
 }
 
 /// `part(i)` for i in 0..n, part i on thread i mod T of the current rayon pool.
@@ -122,16 +120,13 @@ pub(crate) fn each_taken<T: Send, R: Send>(parts: Vec<T>, work: impl Fn(T) -> R 
                 loop {
                     let k = next.fetch_add(1, Ordering::Relaxed);
                     let Some(cell) = cells.get(k) else { break };
-                    let part = cell.lock().unwrap_or_else(|p| p.into_inner()).take();
+                    let part = lock(cell).take();
                     if let Some(part) = part {
-                        *results[k].lock().unwrap_or_else(|p| p.into_inner()) = Some(work(part));
+                        *lock(&results[k]) = Some(work(part));
                     }
                 }
             });
-            results
-                .into_iter()
-                .map(|r| r.into_inner().unwrap_or_else(|p| p.into_inner()).expect("one result per part"))
-                .collect()
+            results.into_iter().map(result).collect()
         }
         None => {
             use rayon::prelude::*;

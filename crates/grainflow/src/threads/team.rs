@@ -59,7 +59,9 @@ fn as_job<R>(f: impl FnOnce() -> R) -> R {
     r.unwrap_or_else(|payload| resume_unwind(payload))
 }
 
-fn lock<X>(m: &Mutex<X>) -> MutexGuard<'_, X> {
+/// `m` locked; a panic on another thread while it held the lock leaves the data usable (every
+/// panic is raised again where the work was handed out).
+pub(super) fn lock<X>(m: &Mutex<X>) -> MutexGuard<'_, X> {
     m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
