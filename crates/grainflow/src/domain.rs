@@ -14,6 +14,78 @@
 use crate::boundary::Periodic;
 use crate::math::Vec3;
 
+/// What the ranks of a run say to each other: a message is a list of 64-bit words (`f64`s by
+/// their bits). Every rank calls each method at the same point of the run (they are
+/// collective); the run's MPI layer implements it, and [`LocalComm`] runs ranks as threads of
+/// one process (for tests).
+pub trait Comm: Send + Sync + std::fmt::Debug {
+    /// This rank, from 0.
+    fn rank(&self) -> usize;
+    /// The number of ranks.
+    fn size(&self) -> usize;
+    /// Sends `out[r]` to rank `r` (one list per rank, this one's included) and returns what
+    /// each rank sent to this one, by rank.
+    fn exchange(&self, out: Vec<Vec<u64>>) -> Vec<Vec<u64>>;
+    /// Every rank's `mine`, by rank.
+    fn all_gather(&self, mine: &[u64]) -> Vec<Vec<u64>> {
+        self.exchange(vec![mine.to_vec(); self.size()])
+    }
+}
+
+/// Ranks as threads of one process: [`LocalComm::team`] gives one communicator per rank, each
+/// to be used on its own thread.
+#[derive(Debug)]
+pub struct LocalComm {
+    rank: usize,
+    shared: std::sync::Arc<Mailbox>,
+}
+
+/// The messages on their way: `slots[to][from]`, and the barrier the ranks meet at.
+#[derive(Debug)]
+struct Mailbox {
+    slots: std::sync::Mutex<Vec<Vec<Vec<u64>>>>,
+    barrier: std::sync::Barrier,
+}
+
+impl LocalComm {
+    /// Communicators for `ranks` ranks (at least one).
+    pub fn team(ranks: usize) -> Vec<LocalComm> {
+        let n = ranks.max(1);
+        let shared = std::sync::Arc::new(Mailbox {
+            slots: std::sync::Mutex::new(vec![vec![Vec::new(); n]; n]),
+            barrier: std::sync::Barrier::new(n),
+        });
+        (0..n).map(|rank| LocalComm { rank, shared: shared.clone() }).collect()
+    }
+}
+
+impl Comm for LocalComm {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+
+    fn size(&self) -> usize {
+        self.shared.slots.lock().unwrap_or_else(|e| e.into_inner()).len()
+    }
+
+    fn exchange(&self, out: Vec<Vec<u64>>) -> Vec<Vec<u64>> {
+        {
+            let mut slots = self.shared.slots.lock().unwrap_or_else(|e| e.into_inner());
+            for (to, words) in out.into_iter().enumerate() {
+                slots[to][self.rank] = words;
+            }
+        }
+        self.shared.barrier.wait();
+        let got: Vec<Vec<u64>> = {
+            let mut slots = self.shared.slots.lock().unwrap_or_else(|e| e.into_inner());
+            slots[self.rank].iter_mut().map(std::mem::take).collect()
+        };
+        // Nobody writes the next round before everyone has read this one.
+        self.shared.barrier.wait();
+        got
+    }
+}
+
 /// A particle as the cut sees it: its position, its work (any positive measure, e.g. 1 + its
 /// contacts) and its id.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -52,8 +52,11 @@ pub struct NeighborList {
     stats: NeighborStats,
     /// Periodic axes of the domain (distances by nearest image).
     periodic: Periodic,
-    /// Slots whose pairs with each other are left out (particles that never move).
+    /// Slots whose pairs with each other are left out (particles that never move, ghosts).
     excluded: Vec<bool>,
+    /// The first slot of the ghosts (copies of other ranks' particles), which have no wall
+    /// candidates; `None` in one process.
+    ghosts_from: Option<usize>,
     // scratch, reused between builds
     cell_count: Vec<u32>,
     cell_of: Vec<u32>,
@@ -152,6 +155,22 @@ impl NeighborList {
     /// The skin distance, m.
     pub fn skin(&self) -> f64 {
         self.skin
+    }
+
+    /// Marks the slots from `from` on as ghosts: they get no wall candidates (their walls are
+    /// their own rank's). Takes effect at the next build.
+    pub(crate) fn set_ghosts_from(&mut self, from: Option<usize>) {
+        self.ghosts_from = from;
+    }
+
+    /// True when one of the first `positions.len()` slots moved more than half the skin since
+    /// the last build (or the list was never built): a rank's part of the rebuild decision.
+    pub(crate) fn any_moved(&self, positions: &[Vec3]) -> bool {
+        !self.built || positions.len() > self.reference.len() || {
+            let blocks: [Range<usize>; 0] = [];
+            let refs = &self.reference[..positions.len()];
+            self.moved(positions, refs, &blocks)
+        }
     }
 
     /// The state a checkpoint carries.
@@ -341,6 +360,12 @@ impl NeighborList {
         if !self.built || positions.len() != self.reference.len() {
             return true;
         }
+        self.moved(positions, &self.reference, blocks)
+    }
+
+    /// Whether a particle of `positions` moved more than half the skin from `refs`; with two or
+    /// more `blocks`, on the current rayon pool.
+    fn moved(&self, positions: &[Vec3], refs: &[Vec3], blocks: &[Range<usize>]) -> bool {
         let lim = 0.25 * self.skin * self.skin;
         // Per axis, the distance to the nearest image: min(|d|, L − |d|) on a periodic axis
         // (positions lie in the box, so |d| < L), |d| on the others (L = ∞).
@@ -362,9 +387,8 @@ impl NeighborList {
                 > 0
         };
         if blocks.len() < 2 {
-            moved(positions, &self.reference)
+            moved(positions, refs)
         } else {
-            let refs = &self.reference;
             crate::threads::pinned(blocks, |_, b| moved(&positions[b.clone()], &refs[b.clone()]))
                 .contains(&true)
         }
@@ -385,7 +409,7 @@ impl NeighborList {
 
     /// [`build`](Self::build); with `parallel`, the pairs are found and sorted on the current
     /// rayon pool (the list is the same).
-    fn build_on(&mut self, p: &Particles, walls: &[Wall], parallel: bool) {
+    pub(crate) fn build_on(&mut self, p: &Particles, walls: &[Wall], parallel: bool) {
         self.stats.builds += 1;
         self.stats.distance_checks = 0;
         self.reference.clear();
@@ -707,7 +731,7 @@ impl NeighborList {
     /// (zero if new); with `parallel`, runs of slots are searched on the current rayon pool and
     /// joined in slot order (the list is the same).
     fn build_walls(&mut self, p: &Particles, walls: &[Wall], parallel: bool) {
-        let n = p.len();
+        let n = self.ghosts_from.unwrap_or(p.len()).min(p.len());
         self.stats.distance_checks += (n * walls.len()) as u64;
         let (old, old_history, skin) = (&self.wall_pairs, &self.wall_history, self.skin);
         let find = |slots: Range<usize>| {

@@ -20,6 +20,7 @@ use crate::wall::Wall;
 mod choice;
 mod inflow;
 mod population;
+mod ranks;
 
 pub use crate::forces::source::{
     MeshLoad, periodic_cylinder_message, periodic_cylinder_reach, periodic_mesh_message, periodic_mesh_reach,
@@ -27,6 +28,7 @@ pub use crate::forces::source::{
 pub use choice::ThreadReport;
 pub use inflow::{FlowBooks, Tally};
 pub use population::ResortRule;
+pub use ranks::DomainStats;
 
 /// Standard gravity, m/s² (MFIX's default, along −y).
 pub const STANDARD_GRAVITY: f64 = 9.80665;
@@ -213,6 +215,8 @@ pub struct Simulation {
     sort: population::SortState,
     /// The particle count the slot facts (held, free runs, blocks) were derived for.
     slot_count: usize,
+    /// This rank's part of a run spread over ranks (`None` in one process).
+    domain: Option<Box<ranks::Decomposition>>,
 }
 
 impl Simulation {
@@ -393,6 +397,7 @@ impl Simulation {
             inexact_sums: 0,
             sort: population::SortState { rule: config.resort, ..Default::default() },
             slot_count: n_particles,
+            domain: None,
         };
         sim.put_prescribed_last()?;
         Ok(sim)
@@ -758,6 +763,7 @@ impl Simulation {
         {
             integrate::wrap(&mut self.particles, per, thread_blocks(&self.sources.pairs.plan, par, n));
         }
+        self.end_of_step_ghosts();
         self.step += 1;
         self.drifted = false;
         if let (Some((t0, before)), Some(now)) = (start, self.timing.as_mut()) {
@@ -824,7 +830,11 @@ impl Simulation {
     fn evaluate_forces(&mut self, advance_history: bool, par: bool) {
         let t0 = self.timing.map(|_| std::time::Instant::now());
         let blocks = thread_blocks(&self.sources.pairs.plan, par, self.particles.len());
-        self.neighbors.update(&self.particles, &self.walls, blocks);
+        if self.domain.is_some() {
+            self.domain_stage();
+        } else {
+            self.neighbors.update(&self.particles, &self.walls, blocks);
+        }
         if let (Some(t0), Some(t)) = (t0, self.timing.as_mut()) {
             t.neighbor += t0.elapsed().as_secs_f64();
         }
@@ -852,11 +862,17 @@ impl Simulation {
             let x = a.next()?;
             a.all(|y| y.to_bits() == x.to_bits()).then_some(x)
         }
+        let owned = self.domain.as_ref().map_or(p.len(), |d| d.owned);
+        let domain = &self.domain;
         *self.common.get_or_insert_with(|| {
             let slots = || free.iter().flat_map(|r| r.clone());
             let free_mass = same(slots().map(|i| p.mass[i]));
             let free_inertia = same(slots().map(|i| p.inertia[i]));
-            (same(p.mass.iter().copied()), free_mass.zip(free_inertia))
+            let common = (same(p.mass[..owned].iter().copied()), free_mass.zip(free_inertia));
+            match domain {
+                Some(d) => d.common_over_ranks(common, owned == 0, free.is_empty()),
+                None => common,
+            }
         })
     }
 
@@ -873,7 +889,7 @@ impl Simulation {
         let common_mass = self.common().0.map(forces::CommonMass::of);
         let peak_before = self.load_peak.unwrap_or([0.0; 2]);
         let quanta = forces::Quanta::new(peak_before, self.peak_floor);
-        let (time, r_max) = (self.positions_time(), self.r_max());
+        let (time, r_max, owned) = (self.positions_time(), self.r_max(), self.owned());
         let mut run = LoadRun {
             particles: &mut self.particles,
             neighbors: &mut self.neighbors,
@@ -889,11 +905,12 @@ impl Simulation {
             dt: self.time_step.dt,
             time,
             r_max,
+            owned,
             peak: [0.0; 2],
             times: self.timing.as_mut(),
         };
         self.sources.loads::<N, T>(&mut run);
-        let peak = run.peak;
+        let peak = self.domain.as_ref().map_or(run.peak, |d| d.largest_peak(run.peak));
         if quanta.exceeded_by(peak) {
             self.inexact_sums += 1;
         }
@@ -917,6 +934,7 @@ impl Simulation {
             walls: &self.walls,
             time,
             r_max: self.r_max(),
+            owned: self.owned(),
         }
     }
 
@@ -924,7 +942,7 @@ impl Simulation {
     /// contacts and diagnostics of a state not yet evaluated (a new or a restored simulation)
     /// include its mesh contacts (see [`sources::Meshes::prepare`]).
     pub(crate) fn prepare_mesh_candidates(&mut self) {
-        let (time, r_max) = (self.time(), self.r_max());
+        let (time, r_max, owned) = (self.time(), self.r_max(), self.owned());
         let v = View {
             particles: &self.particles,
             law: self.law,
@@ -935,6 +953,7 @@ impl Simulation {
             walls: &self.walls,
             time,
             r_max,
+            owned,
         };
         self.sources.meshes.prepare(&v);
     }
@@ -982,23 +1001,34 @@ impl Simulation {
         use crate::observe::order_free_sum;
         let p = &self.particles;
         let mut d = Diagnostics { time: self.time(), step: self.step, ..Default::default() };
-        let n = p.len();
-        let per = |f: &dyn Fn(usize) -> f64| order_free_sum(&(0..n).map(f).collect::<Vec<f64>>());
-        d.kinetic_translational = per(&|i| 0.5 * p.mass[i] * p.velocity[i].length_squared());
-        d.kinetic_rotational = per(&|i| 0.5 * p.inertia[i] * p.omega[i].length_squared());
-        d.potential = per(&|i| -(p.mass[i] * self.gravity.dot(p.position[i])));
+        let n = self.owned();
+        let per = |f: &dyn Fn(usize) -> f64| (0..n).map(f).collect::<Vec<f64>>();
+        let kinetic = per(&|i| 0.5 * p.mass[i] * p.velocity[i].length_squared());
+        let rotational = per(&|i| 0.5 * p.inertia[i] * p.omega[i].length_squared());
+        let potential = per(&|i| -(p.mass[i] * self.gravity.dot(p.position[i])));
         let mut elastic = Vec::new();
         self.sources.diagnose(&self.view(self.time()), &mut |(delta, r_min, energy)| {
             d.contacts += 1;
             elastic.push(energy);
             d.max_overlap_ratio = d.max_overlap_ratio.max(delta / r_min);
         });
-        d.elastic = order_free_sum(&elastic);
+        match &self.domain {
+            None => {
+                d.kinetic_translational = order_free_sum(&kinetic);
+                d.kinetic_rotational = order_free_sum(&rotational);
+                d.potential = order_free_sum(&potential);
+                d.elastic = order_free_sum(&elastic);
+            }
+            Some(domain) => {
+                let [k, r, u, e] = domain.order_free_sums([&kinetic, &rotational, &potential, &elastic]);
+                (d.kinetic_translational, d.kinetic_rotational, d.potential, d.elastic) = (k, r, u, e);
+                (d.contacts, d.max_overlap_ratio) = domain.count_and_max(d.contacts, d.max_overlap_ratio);
+            }
+        }
         d
     }
 }
 
-/// Refuses a mesh wall's motion with non-finite or meaningless values.
 fn check_mesh_motion(m: &MeshWall) -> Result<(), EngineError> {
     use crate::mesh::{MeshMotion, SurfaceMotion};
     let unit = |a: Vec3| a.is_finite() && (a.length() - 1.0).abs() < 1e-12;

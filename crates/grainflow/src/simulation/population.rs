@@ -104,10 +104,13 @@ impl Simulation {
     pub(super) fn derive_slot_facts(&mut self) {
         let n = self.particles.len();
         self.slot_count = n;
+        let owned = self.owned();
         let held = motion::held(&self.motion, n);
-        self.neighbors.remap_excluded(held.clone());
+        // Ghosts (slots from `owned` on) are left out of each other's pairs and never moved.
+        let excluded = held.iter().enumerate().map(|(i, &h)| h || i >= owned).collect();
+        self.neighbors.remap_excluded(excluded);
         self.held = if held.iter().any(|&h| h) { held } else { Vec::new() };
-        self.free = motion::free_runs(&self.motion, n);
+        self.free = motion::free_runs(&self.motion, owned);
         self.common = None;
         self.sources.pairs.plan = ForcePlan::default();
     }

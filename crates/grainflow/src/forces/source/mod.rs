@@ -61,6 +61,9 @@ pub(crate) struct View<'a> {
     pub time: f64,
     /// The largest radius a particle of the run has or can be inserted with, m.
     pub r_max: f64,
+    /// The slots from this one on are ghosts (copies of other ranks' particles): a contact is
+    /// reported by the rank that owns its particle of the lower id.
+    pub owned: usize,
 }
 
 /// One force evaluation, as the sources see it: the state, the accumulators they add their
@@ -89,6 +92,8 @@ pub(crate) struct LoadRun<'a> {
     pub time: f64,
     /// The largest radius a particle of the run has or can be inserted with, m.
     pub r_max: f64,
+    /// The first ghost slot (the particle count in one process).
+    pub owned: usize,
     /// The largest force and torque bounds of the loads so far.
     pub peak: Peak,
     /// The stage times, when timing is on.
@@ -108,6 +113,7 @@ impl LoadRun<'_> {
             walls: self.walls,
             time: self.time,
             r_max: self.r_max,
+            owned: self.owned,
         }
     }
 }

@@ -111,6 +111,9 @@ impl ContactSource for Pairs {
             } else {
                 (j as usize, i as usize, -h)
             };
+            if i >= v.owned {
+                continue;
+            }
             let c = &pair_coeffs(v, i, j);
             let (x, r) = (&p.position, &p.radius);
             if let Some(g) = pair_geometry_in_contact(
@@ -147,6 +150,10 @@ impl ContactSource for Pairs {
         let nl = v.neighbors;
         for ([i, j], h) in nl.pairs().zip(nl.pair_histories()) {
             let (i, j) = (i as usize, j as usize);
+            let lower = if p.id[i] < p.id[j] { i } else { j };
+            if lower >= v.owned {
+                continue;
+            }
             let c = &pair_coeffs(v, i, j);
             // A cohesive contact holds beyond the touch.
             let g = if reaches {

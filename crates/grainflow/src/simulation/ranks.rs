@@ -1,0 +1,603 @@
+//! A run spread over ranks: each rank holds the particles of its box ([`crate::domain`]) and,
+//! after them, ghosts — copies of the other ranks' particles within the list's reach of its
+//! box — and steps as one process would, with the same bits.
+//!
+//! A rank's slots `0..owned` are its own particles, integrated and touching its walls; the
+//! ghosts after them only lend their positions and velocities to pairs with an owned
+//! particle (pairs of two ghosts are left out of the list). A pair across two ranks is
+//! evaluated on both, each adding its load to its own particle: the load is the same bits
+//! from either side and the sums are order-free (`forces::sum`), so every particle's force is
+//! the one process's. What the sums' quanta, the common mass and the diagnostics depend on is
+//! reduced over the ranks exactly (maxima, and integer sums of fixed-point values).
+//!
+//! At the end of every step (and after velocity Verlet's drift) each rank sends its particles'
+//! new positions, velocities and spins to the ranks holding them as ghosts, so that between
+//! steps every ghost equals its particle. Before every force evaluation the ranks decide
+//! together whether the neighbour list is due (a particle anywhere moved half the skin): if
+//! so, the particles that left a box move to its owner with their pair and wall histories
+//! (keyed by ids), the ghosts are chosen again and each rank builds its list. The rebuilds fall
+//! on the one process's steps.
+//! Periodic axes need no shifted images: every rank measures distances by the nearest image
+//! of the whole box, as one process does, so a ghost is sent as it is.
+
+use super::{Common, ResortRule, Simulation};
+use crate::domain::{Boxes, Comm, Weighted};
+use crate::error::EngineError;
+use crate::math::Vec3;
+use crate::neighbor::NeighborState;
+use crate::state::Particles;
+use std::collections::HashMap;
+use std::ops::Range;
+use std::sync::Arc;
+
+/// This rank's part of a run spread over ranks.
+#[derive(Debug, Clone)]
+pub(crate) struct Decomposition {
+    comm: Arc<dyn Comm>,
+    boxes: Boxes,
+    /// The first ghost slot: slots below are this rank's particles.
+    pub owned: usize,
+    /// Per rank: the owned slots it holds as ghosts, in the order it holds them.
+    sends: Vec<Vec<u32>>,
+    /// Per rank: the ghost slots holding its particles.
+    ghosts: Vec<Range<usize>>,
+    /// How far from its box a rank needs the other ranks' particles: the list's largest
+    /// cut-off, m.
+    reach: f64,
+    /// Whether particles carry an Adams–Bashforth history.
+    history: bool,
+    /// What this rank has sent so far.
+    stats: DomainStats,
+}
+
+/// What a rank has sent to the others so far (collectives with itself left out).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct DomainStats {
+    /// Messages with content, to another rank.
+    pub messages: u64,
+    /// Bytes of those messages.
+    pub bytes: u64,
+    /// Particles that moved to another rank.
+    pub migrated: u64,
+    /// Ghosts sent at rebuilds (a particle to each rank that holds it).
+    pub ghosts_sent: u64,
+}
+
+/// Words of a particle that moves to another rank (without its Adams–Bashforth history).
+const MOVING: usize = 20;
+/// Words of a ghost as first sent, and of its refreshed state.
+const GHOST: usize = 14;
+const REFRESH: usize = 9;
+
+impl Simulation {
+    /// Spreads the run over the ranks of `comm`, keeping on this rank the particles of its box
+    /// and their ghosts. Every rank must call it with the same simulation (as set up from the
+    /// same case), before the first step. Refused for what ranks cannot run yet: mesh and
+    /// cylinder walls, insertions and outlets, prescribed motion.
+    pub fn decompose(&mut self, comm: Arc<dyn Comm>) -> Result<(), EngineError> {
+        let refuse = |what: &str| {
+            Err(EngineError::BadReference(format!("{what} cannot yet run on more than one rank")))
+        };
+        if self.domain.is_some() {
+            return refuse("a run already spread over ranks");
+        }
+        if comm.size() > 1 {
+            if !self.sources.meshes.walls.is_empty() {
+                return refuse("mesh walls");
+            }
+            if !self.sources.cylinders.walls.is_empty() {
+                return refuse("cylinder walls");
+            }
+            if !self.flow.is_empty() {
+                return refuse("insertions and outlets");
+            }
+            if !self.motion.is_empty() {
+                return refuse("prescribed motion");
+            }
+        }
+        if self.kick_pending || self.particles.len() != self.slot_count {
+            return Err(EngineError::BadReference(
+                "internal error: a simulation is spread over ranks between the stages of a step".into(),
+            ));
+        }
+        let counts = comm.all_gather(&[self.particles.len() as u64, self.step]);
+        if counts.iter().any(|c| c[..] != counts[0][..]) {
+            return Err(EngineError::BadReference(
+                "the ranks were given different simulations to spread over them".into(),
+            ));
+        }
+        if !self.neighbors.is_built() {
+            self.neighbors.build(&self.particles, &self.walls);
+        }
+        let boxes = self.cut(comm.size());
+        let reach = 2.0 * self.r_max() + self.neighbors.skin();
+        let history = !self.particles.accel_prev.is_empty();
+        let ranks = comm.size();
+        self.domain = Some(Box::new(Decomposition {
+            comm,
+            boxes,
+            owned: self.particles.len(),
+            sends: vec![Vec::new(); ranks],
+            ghosts: vec![0..0; ranks],
+            reach,
+            history,
+            stats: DomainStats::default(),
+        }));
+        // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
+        self.sort.rule = ResortRule::Never;
+        self.redistribute(true);
+        Ok(())
+    }
+
+    /// The number of this rank's own particles (slots `0..owned()`; ghosts follow): all of
+    /// them in one process.
+    pub fn owned(&self) -> usize {
+        self.domain.as_ref().map_or(self.particles.len(), |d| d.owned)
+    }
+
+    /// What this rank has sent to the others so far (zeros in one process).
+    pub fn domain_stats(&self) -> DomainStats {
+        self.domain.as_ref().map_or_else(DomainStats::default, |d| d.stats)
+    }
+
+    /// The ranks the run is spread over (1 in one process).
+    pub fn ranks(&self) -> usize {
+        self.domain.as_ref().map_or(1, |d| d.comm.size())
+    }
+
+    /// Every rank's particles (ghosts left out) in id order, on every rank: what outputs
+    /// write, the same however the run is spread. Collective: every rank must call it.
+    pub fn gathered_in_id_order(&self) -> Particles {
+        let p = &self.particles;
+        let mut all = match &self.domain {
+            None => p.clone(),
+            Some(d) => {
+                let mut mine = Vec::with_capacity(d.owned * d.moving());
+                for i in 0..d.owned {
+                    d.push_moving(&mut mine, p, i);
+                }
+                let mut all = Particles::default();
+                for words in d.comm.all_gather(&mine) {
+                    let mut at = 0;
+                    while at < words.len() {
+                        d.read_moving(&words, &mut at, &mut all);
+                    }
+                }
+                all
+            }
+        };
+        all = all.gathered(&all.id_order());
+        all
+    }
+
+    /// The boxes of `ranks` ranks for the particles as they are, weighted by 1 + their
+    /// partners in the list; the outer faces pushed to infinity on axes that do not wrap, so
+    /// that every particle has an owner.
+    fn cut(&self, ranks: usize) -> Boxes {
+        let p = &self.particles;
+        let per = self.periodic;
+        let mut work = vec![1.0; p.len()];
+        for [a, b] in self.neighbors.pairs() {
+            work[a as usize] += 1.0;
+            work[b as usize] += 1.0;
+        }
+        let items: Vec<Weighted> = (0..p.len())
+            .map(|i| Weighted { position: per.wrap(p.position[i]), work: work[i], id: p.id[i] as u64 })
+            .filter(|w| w.position.is_finite())
+            .collect();
+        let (mut lo, mut hi) =
+            items.iter().fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(l, h), w| {
+                (l.min(w.position), h.max(w.position))
+            });
+        if !lo.is_finite() || !hi.is_finite() {
+            (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
+        }
+        for k in 0..3 {
+            if per.axes[k] {
+                lo[k] = per.lo[k];
+                hi[k] = per.hi[k];
+            }
+        }
+        let mut boxes = crate::domain::bisect(lo, hi, &items, ranks);
+        let far = |v: f64, edge: f64, sign: f64| if v == edge { sign * f64::INFINITY } else { v };
+        for b in &mut boxes.boxes {
+            for k in (0..3).filter(|&k| !per.axes[k]) {
+                b[0][k] = far(b[0][k], lo[k], -1.0);
+                b[1][k] = far(b[1][k], hi[k], 1.0);
+            }
+        }
+        for k in (0..3).filter(|&k| !per.axes[k]) {
+            boxes.domain[0][k] = f64::NEG_INFINITY;
+            boxes.domain[1][k] = f64::INFINITY;
+        }
+        boxes
+    }
+
+    /// The domain stage before a force evaluation: the ranks decide together whether the list
+    /// is due; if so the particles move to their boxes' ranks and the lists are built again,
+    /// else the ghosts take their owners' new state.
+    pub(super) fn domain_stage(&mut self) {
+        let Some(d) = self.domain.as_ref() else { return };
+        let moved = self.neighbors.any_moved(&self.particles.position[..d.owned]);
+        let due = d.comm.all_gather(&[moved as u64]).iter().any(|w| w[0] != 0);
+        if due {
+            self.redistribute(false);
+        } else if self.drifted {
+            // Velocity Verlet's drift moved the particles since the end of the last step.
+            self.refresh_ghosts();
+        }
+    }
+
+    /// At the end of a step: the ghosts take their owners' new state, so that between steps
+    /// (for diagnostics, contacts and the next evaluation) every ghost equals its particle.
+    pub(super) fn end_of_step_ghosts(&mut self) {
+        if self.domain.is_some() {
+            self.refresh_ghosts();
+        }
+    }
+
+    /// Sends every rank the new positions, velocities and spins of the ghosts it holds of
+    /// this rank's particles, and takes this rank's ghosts' from their owners.
+    fn refresh_ghosts(&mut self) {
+        let Some(d) = self.domain.as_mut() else { return };
+        let p = &mut self.particles;
+        let out = d
+            .sends
+            .iter()
+            .map(|slots| {
+                let mut w = Vec::with_capacity(slots.len() * REFRESH);
+                for &i in slots {
+                    let i = i as usize;
+                    push_vecs(&mut w, &[p.position[i], p.velocity[i], p.omega[i]]);
+                }
+                w
+            })
+            .collect();
+        for (words, slots) in d.exchange(out).iter().zip(&d.ghosts) {
+            for (k, i) in slots.clone().enumerate() {
+                let w = &words[k * REFRESH..(k + 1) * REFRESH];
+                p.position[i] = vec_at(w, 0);
+                p.velocity[i] = vec_at(w, 3);
+                p.omega[i] = vec_at(w, 6);
+            }
+        }
+    }
+
+    /// Moves every particle to the rank of its box with its pair and wall histories, chooses
+    /// the ghosts again and builds the list. With `initial`, every rank holds every particle
+    /// (the set-up's), so none has to travel.
+    fn redistribute(&mut self, initial: bool) {
+        let Some(mut d) = self.domain.take() else { return };
+        let (me, ranks) = (d.comm.rank(), d.comm.size());
+        let per = self.periodic;
+        let p = &self.particles;
+        let owned_before = if initial { p.len() } else { d.owned };
+        let dest: Vec<usize> =
+            (0..owned_before).map(|i| d.boxes.owner(per.wrap(p.position[i])).unwrap_or(me)).collect();
+        // The histories by ids: pairs (lower id first, seen from it), walls (id, wall).
+        let state = self.neighbors.state();
+        let mut pairs: Vec<([u32; 2], [u32; 2], Vec3)> = Vec::new();
+        for (&[a, b], &h) in state.pairs.iter().zip(&state.pair_history) {
+            if nonzero(h) {
+                let (ia, ib) = (p.id[a as usize], p.id[b as usize]);
+                pairs.push(if ia < ib { ([ia, ib], [a, b], h) } else { ([ib, ia], [b, a], -h) });
+            }
+        }
+        let walls: Vec<(u32, u32, Vec3, u32)> = state
+            .wall_pairs
+            .iter()
+            .zip(&state.wall_history)
+            .filter(|(_, h)| nonzero(**h))
+            .map(|(&[i, w], &h)| (p.id[i as usize], w, h, i))
+            .collect();
+        let mut table: HashMap<[u32; 2], Vec3> = HashMap::with_capacity(pairs.len());
+        let mut wall_table: Vec<(u32, u32, Vec3)> = Vec::new();
+        let kept: Vec<usize> = (0..owned_before).filter(|&i| dest[i] == me).collect();
+        let mut next = p.gathered(&kept);
+        for (ids, _, h) in &pairs {
+            table.insert(*ids, *h);
+        }
+        for &(id, w, h, i) in &walls {
+            if dest[i as usize] == me {
+                wall_table.push((id, w, h));
+            }
+        }
+        if !initial {
+            // The particles that left this box, each followed by its histories.
+            let mut out: Vec<Vec<u64>> = vec![Vec::new(); ranks];
+            let mut count = vec![0usize; ranks];
+            for i in 0..owned_before {
+                if dest[i] != me {
+                    d.push_moving(&mut out[dest[i]], p, i);
+                    count[dest[i]] += 1;
+                    d.stats.migrated += 1;
+                }
+            }
+            let mut histories: Vec<Vec<u64>> = vec![Vec::new(); ranks];
+            for (ids, [a, b], h) in &pairs {
+                let mut sent = usize::MAX;
+                for s in [*a as usize, *b as usize] {
+                    if s < owned_before && dest[s] != me && dest[s] != sent {
+                        sent = dest[s];
+                        push_history(&mut histories[sent], *ids, *h);
+                    }
+                }
+            }
+            let mut wall_words: Vec<Vec<u64>> = vec![Vec::new(); ranks];
+            for &(id, w, h, i) in &walls {
+                let r = dest[i as usize];
+                if r != me {
+                    push_history(&mut wall_words[r], [id, w], h);
+                }
+            }
+            for r in 0..ranks {
+                let (pw, ww) = (std::mem::take(&mut histories[r]), std::mem::take(&mut wall_words[r]));
+                let o = &mut out[r];
+                let particles = std::mem::take(o);
+                o.push(count[r] as u64);
+                o.extend(particles);
+                o.push((pw.len() / 5) as u64);
+                o.extend(pw);
+                o.extend(ww);
+            }
+            for words in d.exchange(out) {
+                if words.is_empty() {
+                    continue;
+                }
+                let mut at = 1;
+                for _ in 0..words[0] {
+                    d.read_moving(&words, &mut at, &mut next);
+                }
+                let n_pairs = words[at] as usize;
+                at += 1;
+                for k in 0..n_pairs {
+                    let (ids, h) = read_history(&words[at + 5 * k..]);
+                    table.entry(ids).or_insert(h);
+                }
+                at += 5 * n_pairs;
+                while at < words.len() {
+                    let ([id, w], h) = read_history(&words[at..]);
+                    wall_table.push((id, w, h));
+                    at += 5;
+                }
+            }
+        }
+        // The ghosts: each own particle to every rank whose box lies within reach.
+        let owned = next.len();
+        let mut near = Vec::new();
+        let mut sends = vec![Vec::new(); ranks];
+        let mut out: Vec<Vec<u64>> = vec![Vec::new(); ranks];
+        for i in 0..owned {
+            near.clear();
+            d.boxes.ghost_ranks(per.wrap(next.position[i]), d.reach, me, &per, &mut near);
+            near.sort_unstable_by_key(|e| e.0);
+            near.dedup_by_key(|e| e.0);
+            for &(r, _) in near.iter().filter(|e| e.0 != me) {
+                sends[r].push(i as u32);
+                push_ghost(&mut out[r], &next, i);
+                d.stats.ghosts_sent += 1;
+            }
+        }
+        let mut ghosts = vec![0..0; ranks];
+        for (r, words) in d.exchange(out).into_iter().enumerate() {
+            let start = next.len();
+            for w in words.chunks_exact(GHOST) {
+                read_ghost(w, &mut next, d.history);
+            }
+            ghosts[r] = start..next.len();
+        }
+        // The list's state under the new slots; pairs of two ghosts are left out.
+        let slot_of: HashMap<u32, u32> = next.id.iter().enumerate().map(|(k, &id)| (id, k as u32)).collect();
+        let mut list = NeighborState { skin: self.neighbors.skin(), built: false, ..Default::default() };
+        for (ids, h) in &table {
+            if let (Some(&a), Some(&b)) = (slot_of.get(&ids[0]), slot_of.get(&ids[1]))
+                && ((a as usize) < owned || (b as usize) < owned)
+            {
+                list.pairs.push([a, b]);
+                list.pair_history.push(*h);
+            }
+        }
+        for &(id, w, h) in &wall_table {
+            if let Some(&i) = slot_of.get(&id) {
+                list.wall_pairs.push([i, w]);
+                list.wall_history.push(h);
+            }
+        }
+        let n = next.len();
+        next.force.resize(n, Vec3::ZERO);
+        next.torque.resize(n, Vec3::ZERO);
+        self.particles = next;
+        if let Err(e) = self.neighbors.set_state(list, n, self.walls.len()) {
+            // The state was made from a valid list: only a defect can break it.
+            panic!("internal error: the ranks' histories do not fit the particles: {e}");
+        }
+        (d.owned, d.sends, d.ghosts) = (owned, sends, ghosts);
+        self.domain = Some(d);
+        self.derive_slot_facts();
+        self.neighbors.set_ghosts_from(Some(owned));
+        self.neighbors.build_on(&self.particles, &self.walls, false);
+        // The common mass is found now, by every rank at once.
+        self.common();
+    }
+}
+
+impl Decomposition {
+    /// [`Comm::exchange`], counted.
+    fn exchange(&mut self, out: Vec<Vec<u64>>) -> Vec<Vec<u64>> {
+        let me = self.comm.rank();
+        for (r, w) in out.iter().enumerate() {
+            if r != me && !w.is_empty() {
+                self.stats.messages += 1;
+                self.stats.bytes += 8 * w.len() as u64;
+            }
+        }
+        self.comm.exchange(out)
+    }
+
+    /// Words of a moving particle.
+    fn moving(&self) -> usize {
+        MOVING + if self.history { 6 } else { 0 }
+    }
+
+    /// Appends particle `i` of `p` with everything it carries.
+    fn push_moving(&self, out: &mut Vec<u64>, p: &Particles, i: usize) {
+        out.extend([
+            p.id[i] as u64,
+            p.phase[i] as u64,
+            p.radius[i].to_bits(),
+            p.mass[i].to_bits(),
+            p.inertia[i].to_bits(),
+        ]);
+        push_vecs(out, &[p.position[i], p.velocity[i], p.omega[i], p.force[i], p.torque[i]]);
+        if self.history {
+            push_vecs(out, &[p.accel_prev[i], p.alpha_prev[i]]);
+        }
+    }
+
+    /// Reads a particle written by [`push_moving`](Self::push_moving) at `*at` into `p`.
+    fn read_moving(&self, w: &[u64], at: &mut usize, p: &mut Particles) {
+        let w = &w[*at..*at + self.moving()];
+        *at += self.moving();
+        p.id.push(w[0] as u32);
+        p.phase.push(w[1] as u32);
+        p.radius.push(f64::from_bits(w[2]));
+        p.mass.push(f64::from_bits(w[3]));
+        p.inertia.push(f64::from_bits(w[4]));
+        p.position.push(vec_at(w, 5));
+        p.velocity.push(vec_at(w, 8));
+        p.omega.push(vec_at(w, 11));
+        p.force.push(vec_at(w, 14));
+        p.torque.push(vec_at(w, 17));
+        if self.history {
+            p.accel_prev.push(vec_at(w, 20));
+            p.alpha_prev.push(vec_at(w, 23));
+        }
+    }
+
+    /// The largest of every rank's `peak`.
+    pub fn largest_peak(&self, peak: crate::forces::Peak) -> crate::forces::Peak {
+        let all = self.comm.all_gather(&[peak[0].to_bits(), peak[1].to_bits()]);
+        all.iter()
+            .fold([0.0; 2], |m, w| crate::forces::max_peak(m, [f64::from_bits(w[0]), f64::from_bits(w[1])]))
+    }
+
+    /// The common masses of one process from every rank's (`empty`: it has no particles,
+    /// `no_free`: none it integrates, which leave the answer to the others).
+    pub fn common_over_ranks(&self, c: Common, empty: bool, no_free: bool) -> Common {
+        let opt =
+            |v: Option<f64>, skip: bool| if skip { [2, 0] } else { v.map_or([0, 0], |x| [1, x.to_bits()]) };
+        let (m, fi) = (opt(c.0, empty), c.1);
+        let (f, i) = (opt(fi.map(|v| v.0), no_free), opt(fi.map(|v| v.1), no_free));
+        let all = self.comm.all_gather(&[m[0], m[1], f[0], f[1], i[0], i[1]]);
+        let same = |k: usize| -> Option<f64> {
+            let given: Vec<&Vec<u64>> = all.iter().filter(|w| w[k] != 2).collect();
+            let first = given.first()?;
+            given.iter().all(|w| w[k] == 1 && w[k + 1] == first[k + 1]).then(|| f64::from_bits(first[k + 1]))
+        };
+        (same(0), same(2).zip(same(4)))
+    }
+
+    /// [`crate::observe::order_free_sum`] of each set of values, over every rank's values:
+    /// the one process's sums to the bit.
+    pub fn order_free_sums<const K: usize>(&self, sets: [&[f64]; K]) -> [f64; K] {
+        // First the largest magnitude, the count and the plain sum of each set on each rank.
+        let mut mine = Vec::with_capacity(4 * K);
+        for v in sets {
+            let largest = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let nan = v.iter().any(|x| x.is_nan());
+            mine.extend([largest.to_bits(), v.len() as u64, nan as u64, v.iter().sum::<f64>().to_bits()]);
+        }
+        let all = self.comm.all_gather(&mine);
+        let mut scales = [None; K];
+        let mut totals = [0.0; K];
+        for (k, scale) in scales.iter_mut().enumerate() {
+            let largest = all.iter().fold(0.0f64, |m, w| m.max(f64::from_bits(w[4 * k])));
+            let len: u64 = all.iter().map(|w| w[4 * k + 1]).sum();
+            let nan = all.iter().any(|w| w[4 * k + 2] != 0);
+            if largest == 0.0 || !largest.is_finite() || nan {
+                // The plain sum, as one process takes it: its value does not depend on the
+                // order here (zeros, infinities, NaN); ranks without values are left out.
+                totals[k] =
+                    all.iter().filter(|w| w[4 * k + 1] > 0).map(|w| f64::from_bits(w[4 * k + 3])).sum();
+            } else {
+                let e = largest.log2().ceil() as i32 + 1;
+                let bits = (len as f64 + 1.0).log2().ceil() as i32;
+                *scale = Some(2f64.powi(126 - bits - e));
+            }
+        }
+        let mut fixed = Vec::with_capacity(2 * K);
+        for (v, scale) in sets.iter().zip(&scales) {
+            let t: i128 = scale.map_or(0, |s| v.iter().map(|&x| (x * s).round() as i128).sum());
+            fixed.extend([t as u64, (t >> 64) as u64]);
+        }
+        let all = self.comm.all_gather(&fixed);
+        for (k, scale) in scales.iter().enumerate() {
+            if let Some(s) = scale {
+                let t: i128 =
+                    all.iter().map(|w| (w[2 * k] as u128 | (w[2 * k + 1] as u128) << 64) as i128).sum();
+                totals[k] = t as f64 / s;
+            }
+        }
+        totals
+    }
+
+    /// The contacts counted on every rank, and the largest overlap ratio of any.
+    pub fn count_and_max(&self, contacts: usize, ratio: f64) -> (usize, f64) {
+        let all = self.comm.all_gather(&[contacts as u64, ratio.to_bits()]);
+        let count = all.iter().map(|w| w[0] as usize).sum();
+        (count, all.iter().fold(0.0f64, |m, w| m.max(f64::from_bits(w[1]))))
+    }
+}
+
+fn push_vecs(out: &mut Vec<u64>, vs: &[Vec3]) {
+    for v in vs {
+        out.extend([v.x.to_bits(), v.y.to_bits(), v.z.to_bits()]);
+    }
+}
+
+fn vec_at(w: &[u64], k: usize) -> Vec3 {
+    Vec3::new(f64::from_bits(w[k]), f64::from_bits(w[k + 1]), f64::from_bits(w[k + 2]))
+}
+
+/// Appends a ghost's first state: what pairs read of it.
+fn push_ghost(out: &mut Vec<u64>, p: &Particles, i: usize) {
+    out.extend([
+        p.id[i] as u64,
+        p.phase[i] as u64,
+        p.radius[i].to_bits(),
+        p.mass[i].to_bits(),
+        p.inertia[i].to_bits(),
+    ]);
+    push_vecs(out, &[p.position[i], p.velocity[i], p.omega[i]]);
+}
+
+fn read_ghost(w: &[u64], p: &mut Particles, history: bool) {
+    p.id.push(w[0] as u32);
+    p.phase.push(w[1] as u32);
+    p.radius.push(f64::from_bits(w[2]));
+    p.mass.push(f64::from_bits(w[3]));
+    p.inertia.push(f64::from_bits(w[4]));
+    p.position.push(vec_at(w, 5));
+    p.velocity.push(vec_at(w, 8));
+    p.omega.push(vec_at(w, 11));
+    p.force.push(Vec3::ZERO);
+    p.torque.push(Vec3::ZERO);
+    if history {
+        p.accel_prev.push(Vec3::ZERO);
+        p.alpha_prev.push(Vec3::ZERO);
+    }
+}
+
+fn push_history(out: &mut Vec<u64>, ids: [u32; 2], h: Vec3) {
+    out.extend([ids[0] as u64, ids[1] as u64]);
+    push_vecs(out, &[h]);
+}
+
+fn read_history(w: &[u64]) -> ([u32; 2], Vec3) {
+    ([w[0] as u32, w[1] as u32], vec_at(w, 2))
+}
+
+/// True unless every component of `h` is +0.0 (as the neighbour list tells a contact).
+fn nonzero(h: Vec3) -> bool {
+    h.to_array().iter().any(|v| v.to_bits() != 0)
+}
