@@ -7,6 +7,8 @@ use std::process::ExitCode;
 mod check;
 mod convert;
 mod example;
+#[cfg(feature = "mpi")]
+mod ranks;
 mod run;
 mod signals;
 mod verify;

@@ -354,6 +354,20 @@ fn load_case(
 }
 
 pub fn main(args: RunArgs) -> ExitCode {
+    // MPI first: the ranks other than 0 say nothing from here on.
+    #[cfg(feature = "mpi")]
+    let mpi = match crate::ranks::start() {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: cannot start MPI: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    #[cfg(feature = "mpi")]
+    let ranks = Some(mpi.comm.clone());
+    #[cfg(not(feature = "mpi"))]
+    let ranks: Option<std::sync::Arc<dyn grainflow::domain::Comm>> = None;
+    let (rank, rank_count) = ranks.as_ref().map_or((0, 1), |c| (c.rank(), c.size()));
     // Before the set-up, which can take long (particle files, seeded lattices, placement).
     let stop = crate::signals::install();
     grainflow_case::plan::set_memory_limit(args.memory_limit);
@@ -385,6 +399,11 @@ pub fn main(args: RunArgs) -> ExitCode {
         },
         (None, None) => PathBuf::from("out"),
     };
+    // Every rank writes the same outputs: rank 0 into the folder, the others into one of
+    // their own, removed at the end.
+    let scratch =
+        (rank > 0).then(|| std::env::temp_dir().join(format!("grainflow-rank{rank}-{}", std::process::id())));
+    let out = scratch.clone().unwrap_or(out);
     let options = RunOptions {
         overwrite: args.overwrite,
         provenance: Provenance {
@@ -396,14 +415,14 @@ pub fn main(args: RunArgs) -> ExitCode {
         restart: args.restart.clone(),
         accept_changed_case: args.accept_changed_case,
         stop: Some(stop),
-        threads: Some(
-            args.threads
-                .map(usize::from)
-                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-        ),
+        // Threads per rank: by default the cores shared out over the ranks.
+        threads: Some(args.threads.map(usize::from).unwrap_or_else(|| {
+            (std::thread::available_parallelism().map_or(1, |n| n.get()) / rank_count).max(1)
+        })),
         choose_threads: args.threads.is_none(),
         parallel_from: None,
         last_good_in_memory: None,
+        ranks,
     };
     let mut progress = Progress::new(args.quiet);
     let mut flow = FlowReport::default();
@@ -413,6 +432,9 @@ pub fn main(args: RunArgs) -> ExitCode {
         flow.update(sim, &progress);
     });
     progress.finish();
+    if let Some(dir) = &scratch {
+        let _ = std::fs::remove_dir_all(dir);
+    }
     let missed: u64 = flow.books.as_ref().map_or(0, |b| b.missed.iter().sum());
     match result {
         Ok(s) => {
@@ -442,11 +464,12 @@ pub fn main(args: RunArgs) -> ExitCode {
                 s.last.max_overlap_ratio
             );
             println!(
-                "wall time {:.3} s, {:.3e} particle-steps/s on {} thread{}",
+                "wall time {:.3} s, {:.3e} particle-steps/s on {} thread{}{}",
                 s.wall_seconds,
                 s.particle_steps_per_second,
                 s.threads,
-                if s.threads == 1 { "" } else { "s" }
+                if s.threads == 1 { "" } else { "s" },
+                if rank_count > 1 { format!(" × {rank_count} ranks") } else { String::new() }
             );
             if let Some(line) = thread_choice_line(&s.thread_report) {
                 println!("{line}");

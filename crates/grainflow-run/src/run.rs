@@ -77,6 +77,10 @@ pub struct RunOptions {
     pub overwrite: bool,
     /// What `run-info.toml` records of the run's inputs.
     pub provenance: Provenance,
+    /// The ranks to spread the run over (None, or one rank: one process). Every rank runs
+    /// [`run_case`] with the same case; each writes the same outputs, so all but rank 0 should
+    /// be given a folder of their own that is thrown away.
+    pub ranks: Option<Arc<dyn grainflow::domain::Comm>>,
 }
 
 /// The inputs of a run as the user gave them, recorded in `run-info.toml`.
@@ -219,6 +223,23 @@ pub fn run_case(
         }
     };
     check_output_volume(&sim, &output, mesh_loads.columns.len())?;
+    if let Some(comm) = options.ranks.clone().filter(|c| c.size() > 1) {
+        let refuse = |what: &str| {
+            Err(RunError::Engine(grainflow::EngineError::BadReference(format!(
+                "{what} cannot yet be used on more than one rank"
+            ))))
+        };
+        if options.restart.is_some() {
+            return refuse("--restart");
+        }
+        if options.checkpoint_every.is_some() {
+            return refuse("--checkpoint-every");
+        }
+        if output.vtk_interval.is_some() {
+            return refuse("[output] vtk_interval");
+        }
+        sim.decompose(comm)?;
+    }
     let intent = match &options.restart {
         None => Intent::Fresh,
         Some(path) => Intent::Continue { run_id: sim.run_id(), checkpoint: path },
@@ -430,6 +451,8 @@ impl RunInfo<'_> {
             q(status),
             q(&self.started),
         );
+        // Ranks × threads: the threads are each rank's.
+        s.push_str(&format!("ranks = {}\n", sim.ranks()));
         if status != "running" {
             s.push_str(&format!("ended = {}\n", q(&crate::outdir::utc_now())));
         }
@@ -585,41 +608,17 @@ pub fn health_problem(sim: &Simulation, health: Health, checked: Checked) -> Opt
         let outside = !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any());
         !(x.is_finite() && v.is_finite() && w.is_finite()) | outside | (v.length() * dt > p.radius[i])
     };
-    let suspects = (0..p.len()).fold(false, |any, i| any | suspect(i));
-    // In id order: the problem named is the same however the particles are stored.
-    for i in suspects.then(|| p.id_order()).into_iter().flatten() {
-        let (x, v, w) = (p.position[i], p.velocity[i], p.omega[i]);
-        if !(x.is_finite() && v.is_finite() && w.is_finite()) {
-            return Some(format!(
-                "step {step}: particle {} has a non-finite position, velocity or spin. {}",
-                p.id[i],
-                cause.of(i, None).unwrap_or_else(|| "Likely cause: the time step is too large for the contact stiffness (or a stiffness or density is extreme). Fix: reduce dt (leave it out for MFIX's rule) or lower k_n / E.".into())
-            ));
-        }
-        // A particle that has left through an outlet is removed at the outlets' next drain.
-        if !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any()) && !sim.left_through_outlet(i)
-        {
-            return Some(format!(
-                "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. {}",
-                p.id[i],
-                x.x,
-                x.y,
-                x.z,
-                v.length(),
-                cause.of(i, None).unwrap_or_else(|| "Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.".into())
-            ));
-        }
-        let (speed, r) = (v.length(), p.radius[i]);
-        if speed * dt > r {
-            let safe = grainflow::timestep::TRAVEL_FRACTION * r / speed;
-            return Some(format!(
-                "step {step}: particle {} moves {:.4e} m in a step (speed {speed:.4e} m/s at dt = {dt:.4e} s), more than its radius {r:.4e} m: in one step it can pass through a mesh sheet, a wall or another particle. {} A safe time step for this speed is dt <= {safe:.4e} s ({} of its radius a step).",
-                p.id[i],
-                speed * dt,
-                cause.of(i, None).unwrap_or_else(|| "Likely cause: the time step is too large for the speeds of the case (an initial or inserted velocity, or a fall from a great height). Fix: reduce dt, or the speeds.".into()),
-                grainflow::timestep::TRAVEL_FRACTION
-            ));
-        }
+    // A rank looks at its own particles; the ranks then agree on the problem of the lowest id.
+    let owned = sim.owned();
+    let suspects = (0..owned).fold(false, |any, i| any | suspect(i));
+    let first = first_problem(
+        sim,
+        health,
+        &cause,
+        suspects.then(|| p.id_order()).into_iter().flatten().filter(|&i| i < owned),
+    );
+    if let Some(problem) = agree(sim, first.map(|(i, m)| (0.0, p.id[i], m))) {
+        return Some(problem);
     }
     let d = sim.diagnostics();
     if d.max_overlap_ratio > health.max_overlap {
@@ -636,19 +635,28 @@ pub fn health_problem(sim: &Simulation, health: Health, checked: Checked) -> Opt
             .contacts()
             .into_iter()
             .max_by(|a, b| ratio(a).total_cmp(&ratio(b)).then(p.id[b.particle].cmp(&p.id[a.particle])));
-        let (what, why) = match worst {
-            Some(c) => {
-                let other = match c.other {
-                    grainflow::ContactPartner::Particle(j) => format!("particle {}", p.id[j]),
-                    grainflow::ContactPartner::Wall(w) => format!("wall '{}'", sim.walls()[w].name),
-                    grainflow::ContactPartner::Mesh { mesh, triangle } => {
-                        format!("mesh '{}' (triangle {triangle})", sim.meshes()[mesh].mesh.name())
-                    }
-                    grainflow::ContactPartner::Cylinder(m) => {
-                        format!("cylinder '{}'", sim.cylinders()[m].name)
-                    }
-                };
-                (format!(" (particle {} and {other})", p.id[c.particle]), cause.of(c.particle, Some(c.other)))
+        let worst = worst.map(|c| {
+            let other = match c.other {
+                grainflow::ContactPartner::Particle(j) => format!("particle {}", p.id[j]),
+                grainflow::ContactPartner::Wall(w) => format!("wall '{}'", sim.walls()[w].name),
+                grainflow::ContactPartner::Mesh { mesh, triangle } => {
+                    format!("mesh '{}' (triangle {triangle})", sim.meshes()[mesh].mesh.name())
+                }
+                grainflow::ContactPartner::Cylinder(m) => {
+                    format!("cylinder '{}'", sim.cylinders()[m].name)
+                }
+            };
+            let why = cause.of(c.particle, Some(c.other));
+            (
+                -ratio(&c),
+                p.id[c.particle],
+                format!(" (particle {} and {other})\u{0}{}", p.id[c.particle], why.unwrap_or_default()),
+            )
+        });
+        let (what, why) = match agree(sim, worst) {
+            Some(m) => {
+                let (what, why) = m.split_once('\u{0}').unwrap_or((&m, ""));
+                (what.to_string(), (!why.is_empty()).then(|| why.to_string()))
             }
             None => (String::new(), None),
         };
@@ -658,6 +666,80 @@ pub fn health_problem(sim: &Simulation, health: Health, checked: Checked) -> Opt
             health.max_overlap,
             why.unwrap_or_else(|| "Likely cause: the contact stiffness is too low for the loads and speeds (or dt too large). Fix: raise k_n (or E), or reduce the impact speeds; check that dt resolves the collision time (t_c/dt ≥ 20). If such overlaps are expected, raise [particles] max_overlap.".into())
         ));
+    }
+    None
+}
+
+/// The problem every rank names: of the candidates (a key, lower first, then the particle
+/// id, and a message) each rank found, the first. In one process, its own.
+fn agree(sim: &Simulation, mine: Option<(f64, u32, String)>) -> Option<String> {
+    let Some(comm) = sim.comm() else { return mine.map(|m| m.2) };
+    let mut words = Vec::new();
+    if let Some((key, id, message)) = &mine {
+        words.extend([key.to_bits(), *id as u64]);
+        words.extend(message.as_bytes().chunks(8).map(|c| {
+            let mut b = [0u8; 8];
+            b[..c.len()].copy_from_slice(c);
+            u64::from_le_bytes(b)
+        }));
+        words.push(message.len() as u64);
+    }
+    comm.all_gather(&words)
+        .into_iter()
+        .filter(|w| w.len() >= 3)
+        .map(|w| {
+            let len = w[w.len() - 1] as usize;
+            let bytes: Vec<u8> = w[2..w.len() - 1].iter().flat_map(|x| x.to_le_bytes()).take(len).collect();
+            (f64::from_bits(w[0]), w[1] as u32, String::from_utf8_lossy(&bytes).into_owned())
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+        .map(|m| m.2)
+}
+
+/// The first of `slots` (in id order) with a non-finite state, outside the domain box or moving
+/// more than its radius in a step, with its message.
+fn first_problem(
+    sim: &Simulation,
+    health: Health,
+    cause: &Cause,
+    slots: impl Iterator<Item = usize>,
+) -> Option<(usize, String)> {
+    let p = sim.particles();
+    let (step, dt) = (sim.step_index(), sim.dt());
+    let (lo, hi) = health.domain;
+    for i in slots {
+        let (x, v, w) = (p.position[i], p.velocity[i], p.omega[i]);
+        if !(x.is_finite() && v.is_finite() && w.is_finite()) {
+            return Some((i, format!(
+                "step {step}: particle {} has a non-finite position, velocity or spin. {}",
+                p.id[i],
+                cause.of(i, None).unwrap_or_else(|| "Likely cause: the time step is too large for the contact stiffness (or a stiffness or density is extreme). Fix: reduce dt (leave it out for MFIX's rule) or lower k_n / E.".into())
+            )));
+        }
+        // A particle that has left through an outlet is removed at the outlets' next drain.
+        if !health.leaving_removed && (x.cmplt(lo).any() || x.cmpgt(hi).any()) && !sim.left_through_outlet(i)
+        {
+            return Some((i, format!(
+                "step {step}: particle {} left the domain box at ({:.6e}, {:.6e}, {:.6e}) m with speed {:.3e} m/s. {}",
+                p.id[i],
+                x.x,
+                x.y,
+                x.z,
+                v.length(),
+                cause.of(i, None).unwrap_or_else(|| "Likely cause: it passed through a wall because the time step is too large for its speed and the wall stiffness, or the domain has no walls there. Fix: reduce dt, raise the wall stiffness, or enlarge the domain / add walls.".into())
+            )));
+        }
+        let (speed, r) = (v.length(), p.radius[i]);
+        if speed * dt > r {
+            let safe = grainflow::timestep::TRAVEL_FRACTION * r / speed;
+            return Some((i, format!(
+                "step {step}: particle {} moves {:.4e} m in a step (speed {speed:.4e} m/s at dt = {dt:.4e} s), more than its radius {r:.4e} m: in one step it can pass through a mesh sheet, a wall or another particle. {} A safe time step for this speed is dt <= {safe:.4e} s ({} of its radius a step).",
+                p.id[i],
+                speed * dt,
+                cause.of(i, None).unwrap_or_else(|| "Likely cause: the time step is too large for the speeds of the case (an initial or inserted velocity, or a fall from a great height). Fix: reduce dt, or the speeds.".into()),
+                grainflow::timestep::TRAVEL_FRACTION
+            )));
+        }
     }
     None
 }
@@ -1025,9 +1107,9 @@ fn run_simulation(
             let name = format!("particles_{:09}.csv", sim.step_index());
             folder.record(&Path::new("snapshots").join(&name))?;
             let path = snap_dir.join(name);
-            // In id order: the file does not depend on how the particles are stored.
-            let p = sim.particles();
-            write_atomic(&path, snapshot_csv(&p.gathered(&p.id_order())).as_bytes())
+            // In id order: the file does not depend on how the particles are stored (or spread
+            // over ranks).
+            write_atomic(&path, snapshot_csv(&sim.gathered_in_id_order()).as_bytes())
                 .map_err(io_err(&path))?;
             files.push(path);
         }
@@ -1066,8 +1148,14 @@ fn run_simulation(
     };
     sim.set_checkpoint_note(note(&ts, sim.step_index()));
     let mut checked = Checked::after(sim);
-    let mut last_good =
-        LastGood::new(sim, hash, &out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
+    // Spread over ranks, a state is not yet saved (a checkpoint holds one process's state).
+    let ranks = sim.ranks() > 1;
+    let mut last_good = match ranks {
+        false => {
+            Some(LastGood::new(sim, hash, &out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?)
+        }
+        true => None,
+    };
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
@@ -1086,7 +1174,7 @@ fn run_simulation(
     let mut checkpoint = None;
     let mut last = first;
     let mut interrupted = false;
-    let n_start = sim.particles().len();
+    let n_start = sim.total_particles();
     // Counted at each look at the state, for the steps since the last (a batch inserted or
     // drained within them counts from the look after it).
     let mut particle_steps = 0.0;
@@ -1100,13 +1188,20 @@ fn run_simulation(
         let ahead =
             periods.iter().flatten().filter(|&&p| p > 0).fold(MAX_STEPS_UNSEEN, |k, &p| k.min(p - step % p));
         sim.advance(ahead);
-        particle_steps += (sim.step_index() - step) as f64 * sim.particles().len() as f64;
+        let n = if ranks { n_start } else { sim.particles().len() };
+        particle_steps += (sim.step_index() - step) as f64 * n as f64;
         let step = sim.step_index();
         let end = sim.finished();
         let output_now = step.is_multiple_of(every) || end;
         if step.is_multiple_of(HEALTH_EVERY) || output_now {
             if let Some(message) = health_problem(sim, health, checked) {
                 folder.record(Path::new(LAST_GOOD_FILE))?;
+                let Some(last_good) = &last_good else {
+                    ts.finish().map_err(io_err(&ts_path))?;
+                    return Err(RunError::Engine(grainflow::EngineError::BadReference(format!(
+                        "{message}\n(On more than one rank no last good state is kept yet.)"
+                    ))));
+                };
                 let (good_step, saved) = last_good.save()?;
                 ts.finish().map_err(io_err(&ts_path))?;
                 return Err(RunError::Unhealthy { message, good_step, saved });
@@ -1116,7 +1211,9 @@ fn run_simulation(
             // every tenth check, not at every check.
             if output_now || step.is_multiple_of(10 * HEALTH_EVERY) {
                 sim.set_checkpoint_note(note(&ts, step));
-                last_good.keep(sim)?;
+                if let Some(last_good) = &mut last_good {
+                    last_good.keep(sim)?;
+                }
             }
         }
         let t_out = Instant::now();
@@ -1133,6 +1230,11 @@ fn run_simulation(
             None => false,
         };
         let stop = options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
+        // The ranks stop together, at the step the first of them was told to.
+        let stop = match sim.comm() {
+            Some(comm) => comm.all_gather(&[stop as u64]).iter().any(|w| w[0] != 0),
+            None => stop,
+        };
         if stop && !end && !output_now {
             // The rows of an interrupted run end at the step it stopped at.
             last = emit(sim, &mut ts, folder, &mut files, true, false)?;
@@ -1141,7 +1243,7 @@ fn run_simulation(
         // With checkpoints on, the last step has one too: a chained restart (a longer t_stop,
         // with --accept-changed-case) goes on from the end, not from an earlier checkpoint.
         let last_checkpoint_due = end && options.checkpoint_every.is_some();
-        if ((due || stop) && !end) || last_checkpoint_due {
+        if (((due || stop) && !end) || last_checkpoint_due) && !ranks {
             // The rows and the list of files up to the checkpoint are on the disk before it is:
             // a restart from it finds them all.
             ts.sync().map_err(io_err(&ts_path))?;
@@ -1179,7 +1281,7 @@ fn run_simulation(
         last,
         wall_seconds: wall,
         particle_steps_per_second: if wall > 0.0 { particle_steps / wall } else { 0.0 },
-        particles: (n_start, sim.particles().len()),
+        particles: (n_start, sim.total_particles()),
         particle_steps,
         threads: sim.threads(),
         thread_report: sim.thread_report(),

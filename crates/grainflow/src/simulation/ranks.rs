@@ -140,6 +140,21 @@ impl Simulation {
         self.domain.as_ref().map_or_else(DomainStats::default, |d| d.stats)
     }
 
+    /// The communicator of a run spread over ranks (`None` in one process): for callers that
+    /// must agree across the ranks (which problem to report, say). Collective calls on it must
+    /// be made by every rank at the same point.
+    pub fn comm(&self) -> Option<&Arc<dyn Comm>> {
+        self.domain.as_ref().map(|d| &d.comm)
+    }
+
+    /// The particles of every rank (ghosts left out). Collective.
+    pub fn total_particles(&self) -> usize {
+        match &self.domain {
+            None => self.particles.len(),
+            Some(d) => d.comm.all_gather(&[d.owned as u64]).iter().map(|w| w[0] as usize).sum(),
+        }
+    }
+
     /// The ranks the run is spread over (1 in one process).
     pub fn ranks(&self) -> usize {
         self.domain.as_ref().map_or(1, |d| d.comm.size())

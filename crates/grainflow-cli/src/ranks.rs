@@ -1,0 +1,117 @@
+//! The ranks of a run started by `mpirun`: MPI behind the engine's [`Comm`] (with the `mpi`
+//! feature), and the rule that only rank 0 speaks to the terminal.
+
+use grainflow::domain::Comm;
+use mpi::datatype::{Partition, PartitionMut};
+use mpi::traits::*;
+use std::sync::Arc;
+
+/// MPI's world as the engine's communicator.
+pub struct MpiComm {
+    world: mpi::topology::SimpleCommunicator,
+    rank: usize,
+    size: usize,
+}
+
+impl std::fmt::Debug for MpiComm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "MPI rank {} of {}", self.rank, self.size)
+    }
+}
+
+// SAFETY: MPI was initialised with at least MPI_THREAD_SERIALIZED (checked in `start`), under
+// which any thread may call MPI as long as no two do at once; a rank's simulation calls its
+// communicator from one thread at a time (the step runs on one thread of its pool).
+#[allow(unsafe_code)]
+unsafe impl Send for MpiComm {}
+// SAFETY: as above; `&MpiComm` is only used by the one thread stepping the simulation.
+#[allow(unsafe_code)]
+unsafe impl Sync for MpiComm {}
+
+impl Comm for MpiComm {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+
+    fn size(&self) -> usize {
+        self.size
+    }
+
+    fn exchange(&self, out: Vec<Vec<u64>>) -> Vec<Vec<u64>> {
+        let counts: Vec<i32> = out.iter().map(|w| count(w.len())).collect();
+        let mut got = vec![0i32; self.size];
+        self.world.all_to_all_into(&counts[..], &mut got[..]);
+        let send: Vec<u64> = out.concat();
+        let displs = offsets(&counts);
+        let (recv_displs, total) = (offsets(&got), got.iter().map(|&c| c as usize).sum());
+        let mut recv = vec![0u64; total];
+        {
+            let send = Partition::new(&send[..], &counts[..], &displs[..]);
+            let mut into = PartitionMut::new(&mut recv[..], &got[..], &recv_displs[..]);
+            self.world.all_to_all_varcount_into(&send, &mut into);
+        }
+        let mut at = 0;
+        got.iter()
+            .map(|&c| {
+                let part = recv[at..at + c as usize].to_vec();
+                at += c as usize;
+                part
+            })
+            .collect()
+    }
+}
+
+/// A message length as MPI counts it.
+fn count(n: usize) -> i32 {
+    i32::try_from(n).expect("a message of more than 2^31 words between two ranks")
+}
+
+/// Where each part starts in the concatenation of parts of `counts` words.
+fn offsets(counts: &[i32]) -> Vec<i32> {
+    counts
+        .iter()
+        .scan(0i32, |at, &c| {
+            let start = *at;
+            *at += c;
+            Some(start)
+        })
+        .collect()
+}
+
+/// MPI, started for this process: the universe (MPI ends when it is dropped) and the world as
+/// a communicator. A program started without `mpirun` is one rank.
+pub struct Ranks {
+    _universe: mpi::environment::Universe,
+    pub comm: Arc<dyn Comm>,
+}
+
+/// Starts MPI; on ranks other than 0 the terminal output goes to /dev/null, so that a
+/// message is printed once.
+pub fn start() -> Result<Ranks, String> {
+    let (universe, threading) = mpi::initialize_with_threading(mpi::Threading::Serialized)
+        .ok_or_else(|| "MPI was already initialised".to_string())?;
+    if threading < mpi::Threading::Serialized {
+        return Err(format!(
+            "the MPI library offers threads only at level {threading:?}; grainflow needs Serialized"
+        ));
+    }
+    let world = universe.world();
+    let (rank, size) = (world.rank() as usize, world.size() as usize);
+    if rank > 0 {
+        silence();
+    }
+    Ok(Ranks { _universe: universe, comm: Arc::new(MpiComm { world, rank, size }) })
+}
+
+/// Points standard output and error at /dev/null.
+fn silence() {
+    use std::os::fd::AsRawFd;
+    if let Ok(null) = std::fs::OpenOptions::new().write(true).open("/dev/null") {
+        // SAFETY: dup2 on two valid descriptors; the standard streams are replaced in place.
+        #[allow(unsafe_code)]
+        unsafe {
+            libc::dup2(null.as_raw_fd(), 1);
+            libc::dup2(null.as_raw_fd(), 2);
+        }
+    }
+}
