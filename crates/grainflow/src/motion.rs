@@ -177,6 +177,18 @@ pub(crate) fn free_runs(rules: &[ResolvedMotion], n: usize) -> Vec<std::ops::Ran
 /// Puts every prescribed particle where its rule says, at rest. Returns true if that changed
 /// any position, velocity or angular velocity (bit for bit): a held particle already at its
 /// anchor and at rest changes nothing, so the forces of the state stay valid.
+impl ResolvedMotion {
+    /// A `Hold` of slot `slot` at `anchor`.
+    pub(crate) fn hold(slot: usize, anchor: Vec3) -> Self {
+        ResolvedMotion { slot, leader: None, axes: [false; 3], anchor }
+    }
+
+    /// The position the rule started from.
+    pub(crate) fn anchor(&self) -> Vec3 {
+        self.anchor
+    }
+}
+
 pub(crate) fn apply(rules: &[ResolvedMotion], p: &mut Particles) -> bool {
     let mut changed = false;
     for r in rules {

@@ -52,8 +52,9 @@ pub struct NeighborList {
     stats: NeighborStats,
     /// Periodic axes of the domain (distances by nearest image).
     periodic: Periodic,
-    /// Slots whose pairs with each other are left out (particles that never move, ghosts).
-    excluded: Vec<bool>,
+    /// Groups of slots whose pairs with each other are left out, one bit a group (particles
+    /// that never move: 1; ghosts: 2): a pair is left out when its slots share a bit.
+    excluded: Vec<u8>,
     /// The first slot of the ghosts (copies of other ranks' particles), which have no wall
     /// candidates; `None` in one process.
     ghosts_from: Option<usize>,
@@ -126,14 +127,16 @@ impl NeighborList {
     /// Leaves out the pairs of particles that are both marked (e.g. particles held fixed:
     /// their mutual forces act on nothing that moves). Takes effect at the next build.
     pub fn exclude_pairs_among(&mut self, marked: Vec<bool>) {
-        self.excluded = if marked.iter().any(|&m| m) { marked } else { Vec::new() };
+        self.excluded =
+            if marked.iter().any(|&m| m) { marked.iter().map(|&m| m as u8).collect() } else { Vec::new() };
         self.built = false;
     }
 
-    /// Replaces the marks of [`exclude_pairs_among`](Self::exclude_pairs_among) by the same
-    /// marks under new slots (the list stays valid: the pairs it leaves out are the same).
-    pub(crate) fn remap_excluded(&mut self, marked: Vec<bool>) {
-        self.excluded = if marked.iter().any(|&m| m) { marked } else { Vec::new() };
+    /// Replaces the marks of [`exclude_pairs_among`](Self::exclude_pairs_among) by groups of
+    /// slots, one bit a group (pairs sharing a bit are left out): the same marks under new
+    /// slots, or with a rank's ghosts as a second group.
+    pub(crate) fn remap_excluded(&mut self, groups: Vec<u8>) {
+        self.excluded = if groups.iter().any(|&m| m != 0) { groups } else { Vec::new() };
     }
 
     /// How far apart in memory the two particles of a pair lie, on average over the list's
@@ -802,7 +805,7 @@ impl Keys {
 struct PairSearch<'a> {
     position: &'a [Vec3],
     radius: &'a [f64],
-    excluded: &'a [bool],
+    excluded: &'a [u8],
     skin: f64,
     images: Images,
 }
@@ -817,11 +820,11 @@ impl PairSearch<'_> {
         let (xi, ri) = (self.position[i as usize], self.radius[i as usize]);
         let room = out.room(others.len());
         let mut n = 0;
-        let ex_i = self.excluded.get(i as usize).copied().unwrap_or(false);
+        let ex_i = self.excluded.get(i as usize).copied().unwrap_or(0);
         for &j in others {
             let cut = ri + self.radius[j as usize] + self.skin;
             let d = self.images.nearest(self.position[j as usize] - xi);
-            let left_out = ex_i && self.excluded.get(j as usize).copied().unwrap_or(false);
+            let left_out = (ex_i & self.excluded.get(j as usize).copied().unwrap_or(0)) != 0;
             let within = (d.length_squared() < cut * cut) & !left_out;
             room[n] = pair_key(i.min(j), i.max(j));
             n += within as usize;

@@ -757,6 +757,7 @@ impl Simulation {
         // prescribed slots only, which the pending kick and the wrap after it leave alone or
         // wrap as they would have here.)
         let moved = motion::apply(&self.motion, &mut self.particles);
+        let moved = self.moved_on_any_rank(moved);
         self.forces_current = !moved;
         if !self.kick_pending
             && let Some(per) = self.wrap()

@@ -2,8 +2,8 @@
 //! 4 ranks (threads of this process talking through `LocalComm`) gives the same particles
 //! (positions, velocities, spins, forces, torques, by id) and the same diagnostics as without
 //! ranks — for a walled bed with the Hertz–Mindlin law (velocity Verlet) and for a chute
-//! periodic in x and y with the linear law (Adams–Bashforth), where the boxes wrap onto each
-//! other and onto themselves.
+//! periodic in x and y on a held base with the linear law (Adams–Bashforth), where the boxes
+//! wrap onto each other and onto themselves.
 //!
 //! Equality is exact: each pair's load is the same bits on either rank, and the sums do not
 //! depend on their order. The comparison has teeth: a 10⁻¹⁰ change in one particle's initial
@@ -13,6 +13,7 @@ mod common;
 
 use common::*;
 use grainflow::domain::{Comm, LocalComm};
+use grainflow::motion::{MotionRule, PrescribedMotion};
 use grainflow::state::ParticleInit;
 use grainflow::{Integrator, Simulation, Vec3, Wall};
 use std::sync::Arc;
@@ -119,7 +120,8 @@ fn walled_bed(nudged: bool) -> Simulation {
     simulation(cfg, &init)
 }
 
-/// The chute of `common`, on a floor.
+/// The chute of `common`, on a floor and a rough base held in place (whose pairs with each
+/// other are left out, and with the free particles not).
 fn periodic_chute(nudged: bool) -> Simulation {
     let (lo, hi) = CHUTE_BOX;
     let (law, params) = lammps_hooke();
@@ -135,6 +137,12 @@ fn periodic_chute(nudged: bool) -> Simulation {
     if nudged {
         nudge(&mut init);
     }
+    cfg.motion = init
+        .iter()
+        .filter(|q| q.position.z < 0.0045)
+        .map(|q| PrescribedMotion { particle: q.id, rule: MotionRule::Hold })
+        .collect();
+    assert!(cfg.motion.len() > 300, "a base of {} particles", cfg.motion.len());
     simulation(cfg, &init)
 }
 

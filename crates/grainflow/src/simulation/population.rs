@@ -105,9 +105,10 @@ impl Simulation {
         let n = self.particles.len();
         self.slot_count = n;
         let owned = self.owned();
-        let held = motion::held(&self.motion, n);
+        let mut held = motion::held(&self.motion, n);
+        self.mark_held_ghosts(&mut held);
         // Ghosts (slots from `owned` on) are left out of each other's pairs and never moved.
-        let excluded = held.iter().enumerate().map(|(i, &h)| h || i >= owned).collect();
+        let excluded = held.iter().enumerate().map(|(i, &h)| h as u8 | (((i >= owned) as u8) << 1)).collect();
         self.neighbors.remap_excluded(excluded);
         self.held = if held.iter().any(|&h| h) { held } else { Vec::new() };
         self.free = motion::free_runs(&self.motion, owned);

@@ -48,6 +48,9 @@ pub(crate) struct Decomposition {
     history: bool,
     /// What this rank has sent so far.
     stats: DomainStats,
+    /// The particles held in place, by id, with the positions they are held at (every
+    /// rank's: a ghost of a held particle is held too, as the pair law sees it).
+    held: HashMap<u32, Vec3>,
 }
 
 /// What a rank has sent to the others so far (collectives with itself left out).
@@ -91,8 +94,8 @@ impl Simulation {
             if !self.flow.is_empty() {
                 return refuse("insertions and outlets");
             }
-            if !self.motion.is_empty() {
-                return refuse("prescribed motion");
+            if self.motion.iter().any(|r| r.leader.is_some()) {
+                return refuse("prescribed motion that follows a leader");
             }
         }
         if self.kick_pending || self.particles.len() != self.slot_count {
@@ -122,6 +125,7 @@ impl Simulation {
             reach,
             history,
             stats: DomainStats::default(),
+            held: self.motion.iter().map(|r| (self.particles.id[r.slot], r.anchor())).collect(),
         }));
         // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
         self.sort.rule = ResortRule::Never;
@@ -240,6 +244,24 @@ impl Simulation {
         } else if self.drifted {
             // Velocity Verlet's drift moved the particles since the end of the last step.
             self.refresh_ghosts();
+        }
+    }
+
+    /// Marks the ghosts of held particles in `held` (slots of this rank).
+    pub(super) fn mark_held_ghosts(&self, held: &mut [bool]) {
+        if let Some(d) = self.domain.as_ref().filter(|d| !d.held.is_empty()) {
+            for (i, h) in held.iter_mut().enumerate().skip(d.owned) {
+                *h = d.held.contains_key(&self.particles.id[i]);
+            }
+        }
+    }
+
+    /// Whether prescribed motion moved a particle on any rank, given whether it did on this
+    /// one (every rank then evaluates the forces again, or none).
+    pub(super) fn moved_on_any_rank(&self, moved: bool) -> bool {
+        match self.domain.as_ref().filter(|d| !d.held.is_empty()) {
+            Some(d) => d.comm.all_gather(&[moved as u64]).iter().any(|w| w[0] != 0),
+            None => moved,
         }
     }
 
@@ -427,6 +449,11 @@ impl Simulation {
             panic!("internal error: the ranks' histories do not fit the particles: {e}");
         }
         (d.owned, d.sends, d.ghosts) = (owned, sends, ghosts);
+        self.motion = (0..owned)
+            .filter_map(|i| {
+                d.held.get(&self.particles.id[i]).map(|&x| crate::motion::ResolvedMotion::hold(i, x))
+            })
+            .collect();
         self.domain = Some(d);
         self.derive_slot_facts();
         self.neighbors.set_ghosts_from(Some(owned));
