@@ -1,0 +1,294 @@
+//! `mpirun -np N grainflow run` writes the bytes one process writes: the time series and the
+//! snapshots of a settling bed (the shipped example: Euler, walls), a walled Hertz–Mindlin bed
+//! (velocity Verlet) and a chute periodic in x and y on a held base (Adams–Bashforth) equal
+//! those of a run without MPI, on 1, 2, 3 and 4 ranks (oversubscribed) × 1 and 2 threads.
+//! That the comparison has teeth: a 10⁻¹⁰ change of one particle's initial velocity changes
+//! the files. A bad case on 2 ranks is refused once and every rank exits 2, within seconds.
+//!
+//! These need OpenMPI's `mpirun` and a build with `--features mpi` (`.ci/run` installs and
+//! runs them): `cargo test --release -p grainflow-cli --features mpi --test mpi_runs -- --ignored`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+fn grainflow() -> &'static str {
+    env!("CARGO_BIN_EXE_grainflow")
+}
+
+/// `grainflow run CASE --out OUT -j J -q`, on `ranks` MPI ranks (None: without mpirun).
+fn run(case: &Path, out: &Path, ranks: Option<usize>, threads: usize) -> Output {
+    assert!(cfg!(feature = "mpi"), "build with --features mpi: without it mpirun starts unrelated processes");
+    let args = ["run".into(), case.display().to_string(), "--out".into(), out.display().to_string()];
+    let more = ["-j".to_string(), threads.to_string(), "-q".into()];
+    let mut cmd = match ranks {
+        None => Command::new(grainflow()),
+        Some(n) => {
+            let mut c = Command::new("mpirun");
+            c.args(["--oversubscribe", "--allow-run-as-root", "-np", &n.to_string(), grainflow()]);
+            c
+        }
+    };
+    cmd.args(args).args(more).output().expect("mpirun (OpenMPI) is installed")
+}
+
+/// The time series and every snapshot, by name.
+fn outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files =
+        vec![("timeseries.csv".to_string(), std::fs::read(out.join("timeseries.csv")).expect("series"))];
+    let mut snaps: Vec<PathBuf> = std::fs::read_dir(out.join("snapshots"))
+        .expect("snapshots")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    snaps.sort();
+    for s in snaps {
+        files.push((
+            s.file_name().unwrap().to_string_lossy().into_owned(),
+            std::fs::read(&s).expect("snapshot"),
+        ));
+    }
+    files
+}
+
+/// A deterministic stream in [0, 1) (a 64-bit LCG: the test needs only variety, not quality).
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// A particle CSV of a jittered lattice of `n` spheres of diameter ≈ `d` in [0, lx] × [0, ly],
+/// layer above layer from z = d/2 + `z0`, with random velocities of `speed`; with `nudge`, the
+/// last particle's x-velocity 10⁻¹⁰ larger, relative.
+fn lattice(n: usize, lx: f64, ly: f64, d: f64, z0: f64, speed: f64, nudge: bool, seed: u64) -> String {
+    let mut rng = Lcg(seed);
+    let (nx, ny) = ((lx / d).floor() as usize, (ly / d).floor() as usize);
+    let mut s = String::from("id,phase,x,y,z,diameter,u,v,w\n");
+    for k in 0..n {
+        let (i, j, l) = (k % nx, (k / nx) % ny, k / (nx * ny));
+        let mut j3 = || 0.05 * d * (2.0 * rng.next() - 1.0);
+        let (x, y, z) =
+            ((i as f64 + 0.5) * d + j3(), (j as f64 + 0.5) * d + j3(), z0 + (l as f64 + 0.5) * d + j3());
+        let dia = d * (0.97 + 0.03 * rng.next());
+        let mut u = speed * (2.0 * rng.next() - 1.0);
+        let (v, w) = (speed * (2.0 * rng.next() - 1.0), speed * (2.0 * rng.next() - 1.0));
+        if nudge && k + 1 == n {
+            u += 1e-10 * u.abs().max(1e-3);
+        }
+        s.push_str(&format!(
+            "{},1,{x:.17e},{y:.17e},{z:.17e},{dia:.17e},{u:.17e},{v:.17e},{w:.17e}\n",
+            k + 1
+        ));
+    }
+    s
+}
+
+/// The three cases, written into `dir` (with `nudge`, each with one particle nudged).
+fn cases(dir: &Path, nudge: bool) -> Vec<PathBuf> {
+    std::fs::create_dir_all(dir).expect("case dir");
+    let mut out = Vec::new();
+    // The shipped settling bed, shortened, without VTK (not yet written on ranks).
+    let bed = dir.join("settling-bed");
+    let made = Command::new(grainflow())
+        .args(["example", "settling-bed", "--dir"])
+        .arg(&bed)
+        .output()
+        .expect("runs");
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    let text = std::fs::read_to_string(bed.join("case.toml")).expect("case");
+    let text: String = text
+        .lines()
+        .filter(|l| !l.starts_with("vtk_interval"))
+        .map(|l| {
+            if l.starts_with("t_stop") {
+                "t_stop = 0.06"
+            } else if l.starts_with("interval") {
+                "interval = 0.01"
+            } else {
+                l
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(bed.join("case.toml"), text).expect("case");
+    if nudge {
+        let p = std::fs::read_to_string(bed.join("particles.csv")).expect("particles");
+        let mut lines: Vec<String> = p.lines().map(String::from).collect();
+        let mut f: Vec<String> = lines[1].split(',').map(String::from).collect();
+        let u: f64 = f[6].parse().expect("u");
+        f[6] = format!("{:.17e}", u + 1e-10 * u.abs().max(1e-3));
+        lines[1] = f.join(",");
+        std::fs::write(bed.join("particles.csv"), lines.join("\n") + "\n").expect("particles");
+    }
+    out.push(bed.join("case.toml"));
+    // A walled Hertz–Mindlin bed, velocity Verlet.
+    std::fs::write(dir.join("hertz.csv"), lattice(2000, 0.03, 0.03, 0.002, 0.0, 0.3, nudge, 11))
+        .expect("csv");
+    std::fs::write(
+        dir.join("hertz.toml"),
+        r#"version = 1
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.03, 0.03, 0.06]
+[physics]
+gravity = [0.0, 0.0, -9.81]
+[[phases]]
+name = "glass"
+diameter = 0.002
+density = 2500.0
+youngs_modulus = 5.0e6
+poisson_ratio = 0.3
+[[wall_materials]]
+name = "wall"
+youngs_modulus = 5.0e6
+poisson_ratio = 0.3
+[contact]
+model = "hertz"
+history = "rotate"
+lever_arm = "lammps_granular"
+damping = "tsuji"
+coulomb = "lammps"
+[contact.particle]
+en = 0.9
+etat_fac = 1.0
+mu = 0.5
+[contact.wall]
+en = 0.9
+etat_fac = 1.0
+mu = 0.5
+[time]
+t_stop = 0.008
+dt = 2e-5
+integrator = "velocity_verlet"
+[output]
+interval = 0.002
+[particles]
+file = "hertz.csv"
+max_initial_overlap = 0.2
+"#,
+    )
+    .expect("case");
+    out.push(dir.join("hertz.toml"));
+    // A chute periodic in x and y on a held base, Adams–Bashforth.
+    std::fs::write(dir.join("chute.csv"), lattice(2400, 0.03, 0.03, 0.002, 0.0, 0.3, nudge, 12))
+        .expect("csv");
+    std::fs::write(
+        dir.join("chute.toml"),
+        r#"version = 1
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.03, 0.03, 0.06]
+periodic = ["x", "y"]
+walls = ["z_min", "z_max"]
+[physics]
+gravity = [4.3, 0.0, -8.8]
+[[phases]]
+name = "glass"
+diameter = 0.002
+density = 2500.0
+[contact]
+model = "lsd"
+history = "project"
+lever_arm = "radius"
+damping = "mass_velocity"
+coulomb = "lammps"
+[contact.particle]
+kn = 2000.0
+gamma_n = 1314.0
+gamma_t = 657.0
+mu = 0.5
+[contact.wall]
+kn = 2000.0
+gamma_n = 1314.0
+gamma_t = 657.0
+mu = 0.5
+[time]
+t_stop = 0.008
+dt = 2e-5
+integrator = "adams_bashforth"
+[output]
+interval = 0.002
+[particles]
+file = "chute.csv"
+max_initial_overlap = 0.2
+[[motion]]
+particles = [1, 225]
+rule = "hold"
+"#,
+    )
+    .expect("case");
+    out.push(dir.join("chute.toml"));
+    out
+}
+
+#[test]
+#[ignore = "needs MPI (OpenMPI's mpirun, a build with --features mpi)"]
+fn outputs_on_any_rank_and_thread_count_equal_one_process() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let plain = cases(&dir.path().join("plain"), false);
+    let nudged = cases(&dir.path().join("nudged"), true);
+    for (case, nudged) in plain.iter().zip(&nudged) {
+        let name = case.display().to_string();
+        let one = dir.path().join("one");
+        let r = run(case, &one, None, 1);
+        assert!(r.status.success(), "{name}: {}", String::from_utf8_lossy(&r.stderr));
+        let want = outputs(&one);
+        assert!(want.len() > 2, "{name}: only {} output files", want.len());
+        std::fs::remove_dir_all(&one).expect("clean");
+        for ranks in [1, 2, 3, 4] {
+            for threads in [1, 2] {
+                let out = dir.path().join(format!("r{ranks}j{threads}"));
+                let r = run(case, &out, Some(ranks), threads);
+                assert!(
+                    r.status.success(),
+                    "{name} on {ranks} ranks: {}",
+                    String::from_utf8_lossy(&r.stderr)
+                );
+                let got = outputs(&out);
+                let names: Vec<&str> = got.iter().map(|f| f.0.as_str()).collect();
+                assert_eq!(names, want.iter().map(|f| f.0.as_str()).collect::<Vec<_>>(), "{name}");
+                for (a, b) in want.iter().zip(&got) {
+                    assert!(a.1 == b.1, "{name}: {} differs on {ranks} ranks × {threads} threads", a.0);
+                }
+                let info = std::fs::read_to_string(out.join("run-info.toml")).expect("run info");
+                assert!(info.contains(&format!("ranks = {ranks}\n")), "{info}");
+                std::fs::remove_dir_all(&out).expect("clean");
+            }
+        }
+        // The teeth: the nudged case writes other bytes on 2 ranks.
+        let out = dir.path().join("nudged-out");
+        let r = run(nudged, &out, Some(2), 1);
+        assert!(r.status.success(), "{name} nudged: {}", String::from_utf8_lossy(&r.stderr));
+        let differ = want.iter().zip(outputs(&out)).filter(|(a, b)| a.1 != b.1).count();
+        assert!(differ >= 2, "{name}: a 1e-10 nudge changed only {differ} files");
+        std::fs::remove_dir_all(&out).expect("clean");
+    }
+}
+
+#[test]
+#[ignore = "needs MPI (OpenMPI's mpirun, a build with --features mpi)"]
+fn a_bad_case_on_two_ranks_exits_2_at_once_with_one_message() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let case = dir.path().join("case.toml");
+    std::fs::write(&case, "version = 1\n[domain]\nmin = [0,0,0]\nmax = [1,1,1]\n[[phases]]\nname = \"a\"\ndiameter = -0.1\ndensity = 1000.0\n").expect("write");
+    let start = Instant::now();
+    let r = run(&case, &dir.path().join("out"), Some(2), 1);
+    // Every rank reads and refuses the case before any message between them: none waits.
+    assert!(start.elapsed() < Duration::from_secs(30), "took {:?}", start.elapsed());
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.matches("diameter").count(), 1, "the message once, from rank 0: {stderr}");
+    // What ranks cannot run yet is refused the same way (a VTK series).
+    let made = Command::new(grainflow())
+        .args(["example", "settling-bed", "--dir"])
+        .arg(dir.path().join("bed"))
+        .output();
+    assert!(made.expect("runs").status.success());
+    let r = run(&dir.path().join("bed/case.toml"), &dir.path().join("out2"), Some(2), 1);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("vtk_interval") && stderr.contains("more than one rank"), "{stderr}");
+}
