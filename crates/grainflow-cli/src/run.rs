@@ -471,6 +471,20 @@ pub fn main(args: RunArgs) -> ExitCode {
                 if s.threads == 1 { "" } else { "s" },
                 if rank_count > 1 { format!(" × {rank_count} ranks") } else { String::new() }
             );
+            if s.ranks.0 > 1 {
+                let (d, steps) = (s.ranks.1, s.steps.max(1) as f64);
+                let st = s.stages;
+                println!(
+                    "domain: {} ranks; rank 0 sent {:.1} messages and {:.0} B a step, {} particles moved to other ranks, {} ghosts sent at rebuilds; domain stage (with the waits for the other ranks) {:.3} s ({:.0} % of the wall time)",
+                    s.ranks.0,
+                    d.messages as f64 / steps,
+                    d.bytes as f64 / steps,
+                    d.migrated,
+                    d.ghosts_sent,
+                    st.domain,
+                    if s.wall_seconds > 0.0 { 100.0 * st.domain / s.wall_seconds } else { 0.0 }
+                );
+            }
             if let Some(line) = thread_choice_line(&s.thread_report) {
                 println!("{line}");
             }

@@ -144,6 +144,8 @@ pub struct RunSummary {
     pub neighbor_builds: u64,
     /// The run's id (kept across restarts).
     pub run_id: String,
+    /// Spread over ranks: the ranks, and what this rank sent to the others.
+    pub ranks: (usize, grainflow::DomainStats),
 }
 
 /// A file that could not be written.
@@ -1294,6 +1296,7 @@ fn run_simulation(
         neighbor_pairs: sim.neighbors().pair_count(),
         neighbor_builds: sim.neighbors().stats().builds - builds_before,
         run_id: sim.run_id().to_string(),
+        ranks: (sim.ranks(), sim.domain_stats()),
     })
 }
 

@@ -65,8 +65,8 @@ pub use math::Vec3;
 pub use motion::{MotionRule, PrescribedMotion};
 pub use observe::Diagnostics;
 pub use simulation::{
-    ContactInfo, ContactPartner, FlowBooks, MemoryUse, MeshLoad, ResortRule, Simulation, SimulationConfig,
-    StageTimes, Tally, ThreadReport,
+    ContactInfo, ContactPartner, DomainStats, FlowBooks, MemoryUse, MeshLoad, ResortRule, Simulation,
+    SimulationConfig, StageTimes, Tally, ThreadReport,
 };
 pub use state::Particles;
 pub use surface::{Surface, SurfaceKind};

@@ -10,9 +10,11 @@
 //! the one process's. What the sums' quanta, the common mass and the diagnostics depend on is
 //! reduced over the ranks exactly (maxima, and integer sums of fixed-point values).
 //!
-//! At the end of every step (and after velocity Verlet's drift) each rank sends its particles'
-//! new positions, velocities and spins to the ranks holding them as ghosts, so that between
-//! steps every ghost equals its particle. Before every force evaluation the ranks decide
+//! Before a force evaluation whose particles moved since (velocity Verlet's drift, or a step
+//! within `advance` that nobody looks at), and at the end of the last step of a call, each
+//! rank sends its particles' new positions, velocities and spins to the ranks holding them as
+//! ghosts, so that between calls every ghost equals its particle. Before every force
+//! evaluation the ranks also decide
 //! together whether the neighbour list is due (a particle anywhere moved half the skin): if
 //! so, the particles that left a box move to its owner with their pair and wall histories
 //! (keyed by ids), the ghosts are chosen again and each rank builds its list. The rebuilds fall
@@ -48,6 +50,9 @@ pub(crate) struct Decomposition {
     history: bool,
     /// What this rank has sent so far.
     stats: DomainStats,
+    /// Whether the ghosts lag behind their particles (a step within `advance` left them so:
+    /// nobody looks at them before the next evaluation refreshes them).
+    stale: bool,
     /// The particles held in place, by id, with the positions they are held at (every
     /// rank's: a ghost of a held particle is held too, as the pair law sees it).
     held: HashMap<u32, Vec3>,
@@ -125,6 +130,7 @@ impl Simulation {
             reach,
             history,
             stats: DomainStats::default(),
+            stale: false,
             held: self.motion.iter().map(|r| (self.particles.id[r.slot], r.anchor())).collect(),
         }));
         // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
@@ -241,8 +247,9 @@ impl Simulation {
         let due = d.comm.all_gather(&[moved as u64]).iter().any(|w| w[0] != 0);
         if due {
             self.redistribute(false);
-        } else if self.drifted {
-            // Velocity Verlet's drift moved the particles since the end of the last step.
+        } else if self.drifted || d.stale {
+            // The particles moved since the ghosts were last refreshed (velocity Verlet's
+            // drift, or a step whose end left them behind).
             self.refresh_ghosts();
         }
     }
@@ -267,9 +274,13 @@ impl Simulation {
 
     /// At the end of a step: the ghosts take their owners' new state, so that between steps
     /// (for diagnostics, contacts and the next evaluation) every ghost equals its particle.
-    pub(super) fn end_of_step_ghosts(&mut self) {
-        if self.domain.is_some() {
-            self.refresh_ghosts();
+    /// With `more` (another step of the same `advance` follows, which nobody looks at before),
+    /// they are only marked as lagging, for the next evaluation to refresh.
+    pub(super) fn end_of_step_ghosts(&mut self, more: bool) {
+        match self.domain.as_mut() {
+            Some(d) if more => d.stale = true,
+            Some(_) => self.refresh_ghosts(),
+            None => {}
         }
     }
 
@@ -277,6 +288,7 @@ impl Simulation {
     /// this rank's particles, and takes this rank's ghosts' from their owners.
     fn refresh_ghosts(&mut self) {
         let Some(d) = self.domain.as_mut() else { return };
+        d.stale = false;
         let p = &mut self.particles;
         let out = d
             .sends
@@ -448,7 +460,7 @@ impl Simulation {
             // The state was made from a valid list: only a defect can break it.
             panic!("internal error: the ranks' histories do not fit the particles: {e}");
         }
-        (d.owned, d.sends, d.ghosts) = (owned, sends, ghosts);
+        (d.owned, d.sends, d.ghosts, d.stale) = (owned, sends, ghosts, false);
         self.motion = (0..owned)
             .filter_map(|i| {
                 d.held.get(&self.particles.id[i]).map(|&x| crate::motion::ResolvedMotion::hold(i, x))
