@@ -553,7 +553,7 @@ pub fn main(args: RunArgs) -> ExitCode {
             eprintln!("error: {e}");
             ExitCode::from(EXIT_BAD_INPUT)
         }
-        Err(e @ RunError::Unhealthy { .. }) => {
+        Err(e @ (RunError::Unhealthy { .. } | RunError::UnhealthyOnRanks { .. })) => {
             eprintln!("error: the run went wrong and was stopped: {e}");
             ExitCode::FAILURE
         }

@@ -18,7 +18,9 @@ fn grainflow() -> &'static str {
 
 /// `grainflow run CASE --out OUT -j J -q`, on `ranks` MPI ranks (None: without mpirun).
 fn run(case: &Path, out: &Path, ranks: Option<usize>, threads: usize) -> Output {
-    assert!(cfg!(feature = "mpi"), "build with --features mpi: without it mpirun starts unrelated processes");
+    if !cfg!(feature = "mpi") {
+        panic!("build with --features mpi: without it mpirun starts unrelated processes");
+    }
     let args = ["run".into(), case.display().to_string(), "--out".into(), out.display().to_string()];
     let more = ["-j".to_string(), threads.to_string(), "-q".into()];
     let mut cmd = match ranks {

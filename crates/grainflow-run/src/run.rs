@@ -192,6 +192,15 @@ pub enum RunError {
         /// Where it was saved.
         saved: PathBuf,
     },
+    /// The run, spread over ranks, went numerically wrong (no last good state is kept there
+    /// yet).
+    #[error(
+        "{message}\nOn more than one rank no last good state is kept yet: run the case again with the fix."
+    )]
+    UnhealthyOnRanks {
+        /// What went wrong, where, why and what to do.
+        message: String,
+    },
 }
 
 /// Runs `case` to its end (or until `options.stop` is raised), writing into the folder `out`
@@ -277,7 +286,9 @@ pub fn run_case(
     let status = match &result {
         Ok(s) if s.interrupted => "interrupted",
         Ok(_) => "completed",
-        Err(RunError::Unhealthy { .. }) => "failed: numerical health check",
+        Err(RunError::Unhealthy { .. } | RunError::UnhealthyOnRanks { .. }) => {
+            "failed: numerical health check"
+        }
         Err(_) => "failed",
     };
     let written = info
@@ -1197,16 +1208,7 @@ fn run_simulation(
         let output_now = step.is_multiple_of(every) || end;
         if step.is_multiple_of(HEALTH_EVERY) || output_now {
             if let Some(message) = health_problem(sim, health, checked) {
-                folder.record(Path::new(LAST_GOOD_FILE))?;
-                let Some(last_good) = &last_good else {
-                    ts.finish().map_err(io_err(&ts_path))?;
-                    return Err(RunError::Engine(grainflow::EngineError::BadReference(format!(
-                        "{message}\n(On more than one rank no last good state is kept yet.)"
-                    ))));
-                };
-                let (good_step, saved) = last_good.save()?;
-                ts.finish().map_err(io_err(&ts_path))?;
-                return Err(RunError::Unhealthy { message, good_step, saved });
+                return Err(unhealthy(message, last_good.as_ref(), folder, ts, &ts_path));
             }
             checked = Checked::after(sim);
             // Keeping a copy of the state costs a pass over it: refresh it at outputs and
@@ -1231,12 +1233,7 @@ fn run_simulation(
             Some(CheckpointEvery::WallTime(d)) => last_checkpoint.elapsed() >= d,
             None => false,
         };
-        let stop = options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
-        // The ranks stop together, at the step the first of them was told to.
-        let stop = match sim.comm() {
-            Some(comm) => comm.all_gather(&[stop as u64]).iter().any(|w| w[0] != 0),
-            None => stop,
-        };
+        let stop = stop_requested(sim, options);
         if stop && !end && !output_now {
             // The rows of an interrupted run end at the step it stopped at.
             last = emit(sim, &mut ts, folder, &mut files, true, false)?;
@@ -1298,6 +1295,40 @@ fn run_simulation(
         run_id: sim.run_id().to_string(),
         ranks: (sim.ranks(), sim.domain_stats()),
     })
+}
+
+/// Whether the run was asked to stop; on ranks, whether any rank was (so that they stop
+/// together, at the step the first of them was told to).
+fn stop_requested(sim: &Simulation, options: &RunOptions) -> bool {
+    let stop = options.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
+    match sim.comm() {
+        Some(comm) => comm.all_gather(&[stop as u64]).iter().any(|w| w[0] != 0),
+        None => stop,
+    }
+}
+
+/// The error of a run that failed its health check with `message`: the last good state saved
+/// (none on ranks) and the time series closed.
+fn unhealthy(
+    message: String,
+    last_good: Option<&LastGood>,
+    folder: &mut OutputFolder,
+    ts: TimeSeriesWriter,
+    ts_path: &Path,
+) -> RunError {
+    let saved = match last_good {
+        Some(kept) => {
+            folder.record(Path::new(LAST_GOOD_FILE)).map_err(RunError::from).and_then(|()| Ok(kept.save()?))
+        }
+        None => Err(RunError::UnhealthyOnRanks { message: message.clone() }),
+    };
+    if let Err(e) = ts.finish() {
+        return RunError::Output(io_err(ts_path)(e));
+    }
+    match saved {
+        Ok((good_step, saved)) => RunError::Unhealthy { message, good_step, saved },
+        Err(e) => e,
+    }
 }
 
 /// The VTK series of a run that writes one (`vtk_interval`), with the files it records, and
