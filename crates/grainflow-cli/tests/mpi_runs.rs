@@ -1,5 +1,5 @@
-//! `mpirun -np N grainflow run` writes the bytes one process writes: the time series and the
-//! snapshots of a settling bed (the shipped example: Euler, walls), a walled Hertz–Mindlin bed
+//! `mpirun -np N grainflow run` writes the bytes one process writes: the time series, the
+//! snapshots and the VTK series of a settling bed (the shipped example: Euler, walls), a walled Hertz–Mindlin bed
 //! (velocity Verlet) and a chute periodic in x and y on a held base (Adams–Bashforth) equal
 //! those of a run without MPI, on 1, 2, 3 and 4 ranks (oversubscribed) × 1 and 2 threads.
 //! That the comparison has teeth: a 10⁻¹⁰ change of one particle's initial velocity changes
@@ -42,6 +42,9 @@ fn outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
         .expect("snapshots")
         .map(|e| e.expect("entry").path())
         .collect();
+    if let Ok(vtk) = std::fs::read_dir(out.join("vtk")) {
+        snaps.extend(vtk.map(|e| e.expect("entry").path()));
+    }
     snaps.sort();
     for s in snaps {
         files.push((
@@ -92,7 +95,7 @@ fn lattice(n: usize, lx: f64, ly: f64, d: f64, z0: f64, speed: f64, nudge: bool,
 fn cases(dir: &Path, nudge: bool) -> Vec<PathBuf> {
     std::fs::create_dir_all(dir).expect("case dir");
     let mut out = Vec::new();
-    // The shipped settling bed, shortened, without VTK (not yet written on ranks).
+    // The shipped settling bed, shortened, with its VTK series (particles, contacts, walls).
     let bed = dir.join("settling-bed");
     let made = Command::new(grainflow())
         .args(["example", "settling-bed", "--dir"])
@@ -103,10 +106,11 @@ fn cases(dir: &Path, nudge: bool) -> Vec<PathBuf> {
     let text = std::fs::read_to_string(bed.join("case.toml")).expect("case");
     let text: String = text
         .lines()
-        .filter(|l| !l.starts_with("vtk_interval"))
         .map(|l| {
             if l.starts_with("t_stop") {
                 "t_stop = 0.06"
+            } else if l.starts_with("vtk_interval") {
+                "vtk_interval = 0.01"
             } else if l.starts_with("interval") {
                 "interval = 0.01"
             } else {
@@ -283,14 +287,14 @@ fn a_bad_case_on_two_ranks_exits_2_at_once_with_one_message() {
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{stderr}");
     assert_eq!(stderr.matches("diameter").count(), 1, "the message once, from rank 0: {stderr}");
-    // What ranks cannot run yet is refused the same way (a VTK series).
+    // What ranks cannot run yet is refused the same way (a turning mesh).
     let made = Command::new(grainflow())
-        .args(["example", "settling-bed", "--dir"])
-        .arg(dir.path().join("bed"))
+        .args(["example", "rotating-drum", "--dir"])
+        .arg(dir.path().join("drum"))
         .output();
     assert!(made.expect("runs").status.success());
-    let r = run(&dir.path().join("bed/case.toml"), &dir.path().join("out2"), Some(2), 1);
+    let r = run(&dir.path().join("drum/case.toml"), &dir.path().join("out2"), Some(2), 1);
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("vtk_interval") && stderr.contains("more than one rank"), "{stderr}");
+    assert!(stderr.contains("mesh walls") && stderr.contains("more than one rank"), "{stderr}");
 }

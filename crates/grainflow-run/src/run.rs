@@ -246,9 +246,6 @@ pub fn run_case(
         if options.checkpoint_every.is_some() {
             return refuse("--checkpoint-every");
         }
-        if output.vtk_interval.is_some() {
-            return refuse("[output] vtk_interval");
-        }
         sim.decompose(comm)?;
     }
     let intent = match &options.restart {
@@ -1141,7 +1138,7 @@ fn run_simulation(
             for file in frame_files(sim.step_index(), &moving) {
                 folder.record(&Path::new("vtk").join(file))?;
             }
-            let (particles, contacts) = sim.in_id_order();
+            let (particles, contacts) = sim.gathered_in_id_order_with_contacts();
             series
                 .write(sim.step_index(), sim.time(), &particles, &contacts, &moving)
                 .map_err(io_err(&vtk_dir))?;

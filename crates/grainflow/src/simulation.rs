@@ -994,13 +994,7 @@ impl Simulation {
                 c.other = ContactPartner::Particle(new_of[j]);
             }
         }
-        let key = |c: &ContactInfo| match c.other {
-            ContactPartner::Wall(w) => (c.particle, 0, w, 0),
-            ContactPartner::Mesh { mesh, triangle } => (c.particle, 1, mesh, triangle),
-            ContactPartner::Cylinder(m) => (c.particle, 2, m, 0),
-            ContactPartner::Particle(j) => (c.particle, 3, j, 0),
-        };
-        contacts.sort_unstable_by_key(key);
+        contacts.sort_unstable_by_key(contact_order);
         (p.gathered(&order), contacts)
     }
 
@@ -1144,6 +1138,17 @@ pub struct ContactInfo {
 /// The blocks by which the per-particle stages share the `n` slots out over the threads: the
 /// force stage's ([`ForcePlan::blocks_for`]), so that each particle is integrated on the thread
 /// that computes its contacts; none (one thread) without `par` or before the first plan.
+/// The order of contacts in outputs: by particle, then walls, meshes, cylinders and particles,
+/// each by its index.
+fn contact_order(c: &ContactInfo) -> (usize, u8, usize, usize) {
+    match c.other {
+        ContactPartner::Wall(w) => (c.particle, 0, w, 0),
+        ContactPartner::Mesh { mesh, triangle } => (c.particle, 1, mesh, triangle),
+        ContactPartner::Cylinder(m) => (c.particle, 2, m, 0),
+        ContactPartner::Particle(j) => (c.particle, 3, j, 0),
+    }
+}
+
 /// The mass all particles have, if they have the same; the mass and moment of inertia all
 /// integrated particles have, if they have the same.
 type Common = (Option<f64>, Option<(f64, f64)>);

@@ -22,7 +22,7 @@
 //! Periodic axes need no shifted images: every rank measures distances by the nearest image
 //! of the whole box, as one process does, so a ghost is sent as it is.
 
-use super::{Common, ResortRule, Simulation};
+use super::{Common, ContactInfo, ContactPartner, ResortRule, Simulation};
 use crate::domain::{Boxes, Comm, Weighted};
 use crate::error::EngineError;
 use crate::math::Vec3;
@@ -76,6 +76,8 @@ const MOVING: usize = 20;
 /// Words of a ghost as first sent, and of its refreshed state.
 const GHOST: usize = 14;
 const REFRESH: usize = 9;
+/// Words of a contact gathered for output.
+const CONTACT: usize = 13;
 
 impl Simulation {
     /// Spreads the run over the ranks of `comm`, keeping on this rank the particles of its box
@@ -193,6 +195,50 @@ impl Simulation {
         };
         all = all.gathered(&all.id_order());
         all
+    }
+
+    /// [`in_id_order`](Simulation::in_id_order) over every rank: the particles and the
+    /// contacts of the whole run in id order, on every rank (a contact's slots are those of
+    /// the returned particles). Collective: every rank must call it.
+    pub fn gathered_in_id_order_with_contacts(&self) -> (Particles, Vec<ContactInfo>) {
+        let Some(d) = &self.domain else { return self.in_id_order() };
+        let all = self.gathered_in_id_order();
+        let p = &self.particles;
+        let mut mine = Vec::new();
+        for c in self.contacts() {
+            let (kind, a, b) = match c.other {
+                ContactPartner::Wall(w) => (0, w as u64, 0),
+                ContactPartner::Mesh { mesh, triangle } => (1, mesh as u64, triangle as u64),
+                ContactPartner::Cylinder(m) => (2, m as u64, 0),
+                ContactPartner::Particle(j) => (3, p.id[j] as u64, 0),
+            };
+            mine.extend([p.id[c.particle] as u64, kind, a, b]);
+            push_vecs(&mut mine, &[c.point, c.normal]);
+            mine.extend([c.overlap.to_bits(), c.normal_force.to_bits(), c.tangential_force.to_bits()]);
+        }
+        let slot = |id: u64| all.id.binary_search(&(id as u32)).unwrap_or(usize::MAX);
+        let mut contacts = Vec::new();
+        for words in d.comm.all_gather(&mine) {
+            for w in words.chunks_exact(CONTACT) {
+                let other = match w[1] {
+                    0 => ContactPartner::Wall(w[2] as usize),
+                    1 => ContactPartner::Mesh { mesh: w[2] as usize, triangle: w[3] as usize },
+                    2 => ContactPartner::Cylinder(w[2] as usize),
+                    _ => ContactPartner::Particle(slot(w[2])),
+                };
+                contacts.push(ContactInfo {
+                    particle: slot(w[0]),
+                    other,
+                    point: vec_at(w, 4),
+                    normal: vec_at(w, 7),
+                    overlap: f64::from_bits(w[10]),
+                    normal_force: f64::from_bits(w[11]),
+                    tangential_force: f64::from_bits(w[12]),
+                });
+            }
+        }
+        contacts.sort_unstable_by_key(super::contact_order);
+        (all, contacts)
     }
 
     /// The boxes of `ranks` ranks for the particles as they are, weighted by 1 + their
