@@ -833,7 +833,8 @@ impl PairSearch<'_> {
     }
 }
 
-/// True unless every component of `h` is +0.0 (a negative zero counts as a value).
-fn nonzero(h: Vec3) -> bool {
+/// True unless every component of `h` is +0.0 (a negative zero counts as a value): whether a
+/// stored history is a contact.
+pub(crate) fn nonzero(h: Vec3) -> bool {
     h.to_array().iter().any(|v| v.to_bits() != 0)
 }

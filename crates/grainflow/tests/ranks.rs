@@ -14,7 +14,6 @@ mod common;
 use common::*;
 use grainflow::domain::{Comm, LocalComm};
 use grainflow::motion::{MotionRule, PrescribedMotion};
-use grainflow::state::ParticleInit;
 use grainflow::{Integrator, Simulation, Vec3, Wall};
 use std::sync::Arc;
 
@@ -95,34 +94,6 @@ fn check_rank_counts(
     let (nudged, _, _) = run(perturbed, 2, steps);
     let differing = want.iter().zip(&nudged).filter(|(a, b)| a != b).count();
     assert!(differing > 100, "{name}: a 1e-10 change left the state alone ({differing} values differ)");
-}
-
-/// 10⁻¹⁰ more x-velocity, relative, for the topmost particle.
-fn nudge(init: &mut [ParticleInit]) {
-    let top = (0..init.len()).max_by(|&a, &b| init[a].position.z.total_cmp(&init[b].position.z)).unwrap();
-    let v = &mut init[top].velocity;
-    v.x += 1e-10 * v.length().max(1e-3);
-}
-
-fn walled_bed(nudged: bool) -> Simulation {
-    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
-    let (law, elastic) = lammps_mindlin();
-    let mut cfg = config(
-        law,
-        vec![elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3)],
-        vec![wall_material("wall", Some(5.0e6), Some(0.3))],
-        Wall::domain_box(lo, hi, 0),
-        vec![elastic],
-        vec![elastic],
-        Integrator::VelocityVerlet,
-        2.0e-5,
-    );
-    cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
-    let mut init = bed(3000, lo, hi, 0.001, 11);
-    if nudged {
-        nudge(&mut init);
-    }
-    simulation(cfg, &init)
 }
 
 /// The chute of `common`, on a floor and a rough base held in place (whose pairs with each

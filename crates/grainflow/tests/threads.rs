@@ -18,8 +18,7 @@ mod common;
 
 use common::*;
 use grainflow::motion::{MotionRule, PrescribedMotion};
-use grainflow::state::ParticleInit;
-use grainflow::{Integrator, Simulation, Vec3, Wall};
+use grainflow::{Integrator, Simulation};
 
 /// Everything a step depends on or produces, as bits.
 fn fingerprint(sim: &Simulation) -> Vec<u64> {
@@ -71,34 +70,6 @@ fn check_thread_counts(
     let nudged = fingerprint(&run(perturbed, 2, steps));
     let differing = want.iter().zip(&nudged).filter(|(a, b)| a != b).count();
     assert!(differing > 100, "{name}: a 1e-10 change left the state alone ({differing} values differ)");
-}
-
-/// 10⁻¹⁰ more x-velocity, relative, for the topmost particle (never part of a held base).
-fn nudge(init: &mut [ParticleInit]) {
-    let top = (0..init.len()).max_by(|&a, &b| init[a].position.z.total_cmp(&init[b].position.z)).unwrap();
-    let v = &mut init[top].velocity;
-    v.x += 1e-10 * v.length().max(1e-3);
-}
-
-fn walled_bed(nudged: bool) -> Simulation {
-    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
-    let (law, elastic) = lammps_mindlin();
-    let mut cfg = config(
-        law,
-        vec![elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3)],
-        vec![wall_material("wall", Some(5.0e6), Some(0.3))],
-        Wall::domain_box(lo, hi, 0),
-        vec![elastic],
-        vec![elastic],
-        Integrator::VelocityVerlet,
-        2.0e-5,
-    );
-    cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
-    let mut init = bed(3000, lo, hi, 0.001, 11);
-    if nudged {
-        nudge(&mut init);
-    }
-    simulation(cfg, &init)
 }
 
 fn periodic_chute(nudged: bool) -> Simulation {

@@ -26,7 +26,7 @@ use super::{Common, ContactInfo, ContactPartner, ResortRule, Simulation};
 use crate::domain::{Boxes, Comm, Weighted};
 use crate::error::EngineError;
 use crate::math::Vec3;
-use crate::neighbor::NeighborState;
+use crate::neighbor::{NeighborState, nonzero};
 use crate::state::Particles;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -72,7 +72,7 @@ pub struct DomainStats {
 }
 
 /// Words of a particle that moves to another rank (without its Adams–Bashforth history).
-const MOVING: usize = 20;
+const MOVING: usize = GHOST + 6;
 /// Words of a ghost as first sent, and of its refreshed state.
 const GHOST: usize = 14;
 const REFRESH: usize = 9;
@@ -176,7 +176,7 @@ impl Simulation {
     /// write, the same however the run is spread. Collective: every rank must call it.
     pub fn gathered_in_id_order(&self) -> Particles {
         let p = &self.particles;
-        let mut all = match &self.domain {
+        let all = match &self.domain {
             None => p.clone(),
             Some(d) => {
                 let mut mine = Vec::with_capacity(d.owned * d.moving());
@@ -193,8 +193,7 @@ impl Simulation {
                 all
             }
         };
-        all = all.gathered(&all.id_order());
-        all
+        all.gathered(&all.id_order())
     }
 
     /// [`in_id_order`](Simulation::in_id_order) over every rank: the particles and the
@@ -539,16 +538,11 @@ impl Decomposition {
         MOVING + if self.history { 6 } else { 0 }
     }
 
-    /// Appends particle `i` of `p` with everything it carries.
+    /// Appends particle `i` of `p` with everything it carries: its ghost's words, then its
+    /// accumulators and Adams–Bashforth history.
     fn push_moving(&self, out: &mut Vec<u64>, p: &Particles, i: usize) {
-        out.extend([
-            p.id[i] as u64,
-            p.phase[i] as u64,
-            p.radius[i].to_bits(),
-            p.mass[i].to_bits(),
-            p.inertia[i].to_bits(),
-        ]);
-        push_vecs(out, &[p.position[i], p.velocity[i], p.omega[i], p.force[i], p.torque[i]]);
+        push_ghost(out, p, i);
+        push_vecs(out, &[p.force[i], p.torque[i]]);
         if self.history {
             push_vecs(out, &[p.accel_prev[i], p.alpha_prev[i]]);
         }
@@ -558,14 +552,7 @@ impl Decomposition {
     fn read_moving(&self, w: &[u64], at: &mut usize, p: &mut Particles) {
         let w = &w[*at..*at + self.moving()];
         *at += self.moving();
-        p.id.push(w[0] as u32);
-        p.phase.push(w[1] as u32);
-        p.radius.push(f64::from_bits(w[2]));
-        p.mass.push(f64::from_bits(w[3]));
-        p.inertia.push(f64::from_bits(w[4]));
-        p.position.push(vec_at(w, 5));
-        p.velocity.push(vec_at(w, 8));
-        p.omega.push(vec_at(w, 11));
+        read_ghost_state(w, p);
         p.force.push(vec_at(w, 14));
         p.torque.push(vec_at(w, 17));
         if self.history {
@@ -671,7 +658,19 @@ fn push_ghost(out: &mut Vec<u64>, p: &Particles, i: usize) {
     push_vecs(out, &[p.position[i], p.velocity[i], p.omega[i]]);
 }
 
+/// Reads a ghost written by [`push_ghost`], with zero accumulators and history.
 fn read_ghost(w: &[u64], p: &mut Particles, history: bool) {
+    read_ghost_state(w, p);
+    p.force.push(Vec3::ZERO);
+    p.torque.push(Vec3::ZERO);
+    if history {
+        p.accel_prev.push(Vec3::ZERO);
+        p.alpha_prev.push(Vec3::ZERO);
+    }
+}
+
+/// Appends to `p` the fields [`push_ghost`] wrote (the first [`GHOST`] words of `w`).
+fn read_ghost_state(w: &[u64], p: &mut Particles) {
     p.id.push(w[0] as u32);
     p.phase.push(w[1] as u32);
     p.radius.push(f64::from_bits(w[2]));
@@ -680,12 +679,6 @@ fn read_ghost(w: &[u64], p: &mut Particles, history: bool) {
     p.position.push(vec_at(w, 5));
     p.velocity.push(vec_at(w, 8));
     p.omega.push(vec_at(w, 11));
-    p.force.push(Vec3::ZERO);
-    p.torque.push(Vec3::ZERO);
-    if history {
-        p.accel_prev.push(Vec3::ZERO);
-        p.alpha_prev.push(Vec3::ZERO);
-    }
 }
 
 fn push_history(out: &mut Vec<u64>, ids: [u32; 2], h: Vec3) {
@@ -695,9 +688,4 @@ fn push_history(out: &mut Vec<u64>, ids: [u32; 2], h: Vec3) {
 
 fn read_history(w: &[u64]) -> ([u32; 2], Vec3) {
     ([w[0] as u32, w[1] as u32], vec_at(w, 2))
-}
-
-/// True unless every component of `h` is +0.0 (as the neighbour list tells a contact).
-fn nonzero(h: Vec3) -> bool {
-    h.to_array().iter().any(|v| v.to_bits() != 0)
 }

@@ -232,3 +232,33 @@ pub fn lammps_mindlin() -> (ContactLaw, ContactParams) {
     };
     (law, ContactParams { etat_fac: 1.0, ..hertz_params(0.9, 0.9, 0.5) })
 }
+
+/// 10⁻¹⁰ more x-velocity, relative, for the topmost particle (never part of a held base).
+pub fn nudge(init: &mut [ParticleInit]) {
+    let top = (0..init.len()).max_by(|&a, &b| init[a].position.z.total_cmp(&init[b].position.z)).unwrap();
+    let v = &mut init[top].velocity;
+    v.x += 1e-10 * v.length().max(1e-3);
+}
+
+/// 3 000 beads in a walled 30 × 30 × 60 mm box, LAMMPS's Hertz–Mindlin law, velocity Verlet
+/// (with `nudged`, the topmost one nudged).
+pub fn walled_bed(nudged: bool) -> Simulation {
+    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
+    let (law, elastic) = lammps_mindlin();
+    let mut cfg = config(
+        law,
+        vec![elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3)],
+        vec![wall_material("wall", Some(5.0e6), Some(0.3))],
+        Wall::domain_box(lo, hi, 0),
+        vec![elastic],
+        vec![elastic],
+        Integrator::VelocityVerlet,
+        2.0e-5,
+    );
+    cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
+    let mut init = bed(3000, lo, hi, 0.001, 11);
+    if nudged {
+        nudge(&mut init);
+    }
+    simulation(cfg, &init)
+}
