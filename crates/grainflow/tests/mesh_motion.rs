@@ -31,24 +31,6 @@ fn floor(n: usize, a: f64) -> Mesh {
     Mesh::from_indexed("floor", &v, &t, &MeshTransform::default()).expect("a valid floor")
 }
 
-/// A tube of `n` flat facets about the z axis, corners on the circle of radius `r`, for
-/// |z| ≤ `h`, normals inwards.
-fn tube(n: usize, r: f64, h: f64) -> Mesh {
-    let mut v = Vec::new();
-    for k in 0..n {
-        let a = TAU * k as f64 / n as f64;
-        v.push(Vec3::new(r * a.cos(), r * a.sin(), -h));
-        v.push(Vec3::new(r * a.cos(), r * a.sin(), h));
-    }
-    let (lo, hi) = (|k: usize| (2 * (k % n)) as u32, |k: usize| (2 * (k % n) + 1) as u32);
-    let mut t = Vec::new();
-    for k in 0..n {
-        t.push([lo(k), hi(k + 1), lo(k + 1)]);
-        t.push([lo(k), hi(k), hi(k + 1)]);
-    }
-    Mesh::from_indexed("drum", &v, &t, &MeshTransform::default()).expect("a valid tube")
-}
-
 const KN: f64 = 500.0;
 
 /// One phase of 1 mm glass beads, LSD (k_n = 500 N/m, e = 0.8, μ = 0.3) or Hertz; `meshes`.

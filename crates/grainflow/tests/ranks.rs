@@ -3,7 +3,9 @@
 //! (positions, velocities, spins, forces, torques, by id) and the same diagnostics as without
 //! ranks — for a walled bed with the Hertz–Mindlin law (velocity Verlet) and for a chute
 //! periodic in x and y on a held base with the linear law (Adams–Bashforth), where the boxes
-//! wrap onto each other and onto themselves.
+//! wrap onto each other and onto themselves — and for a bed thrown at the wall of a turning
+//! drum, once a mesh of flat facets and once an exact cylinder, whose loads are summed over the
+//! ranks and whose contact histories travel with their particles.
 //!
 //! Equality is exact: each pair's load is the same bits on either rank, and the sums do not
 //! depend on their order. The comparison has teeth: a 10⁻¹⁰ change in one particle's initial
@@ -12,13 +14,25 @@
 mod common;
 
 use common::*;
+use grainflow::contact::{ContactLaw, NormalModel};
 use grainflow::domain::{Comm, LocalComm};
+use grainflow::mesh::{MeshMotion, MeshWall};
 use grainflow::motion::{MotionRule, PrescribedMotion};
-use grainflow::{Integrator, Simulation, Vec3, Wall};
+use grainflow::state::ParticleInit;
+use grainflow::{Cylinder, CylinderSide, Integrator, Simulation, SimulationConfig, Vec3, Wall};
 use std::sync::Arc;
 
-/// Everything a step produces, by particle id, and the diagnostics, as bits.
+/// Everything a step produces, by particle id, the diagnostics and the load on every mesh and
+/// cylinder, as bits.
 fn fingerprint(sim: &Simulation) -> Vec<u64> {
+    let about = Vec3::new(0.001, -0.002, 0.003);
+    let loads: Vec<_> = (0..sim.meshes().len())
+        .map(|m| sim.mesh_load(m, about))
+        .chain((0..sim.cylinders().len()).map(|c| sim.cylinder_load(c, about)))
+        .flat_map(|l| [l.force, l.torque])
+        .flat_map(|v| v.to_array())
+        .map(f64::to_bits)
+        .collect();
     let p = sim.gathered_in_id_order();
     let d = sim.diagnostics();
     let vecs = [&p.position, &p.velocity, &p.omega, &p.force, &p.torque];
@@ -27,6 +41,7 @@ fn fingerprint(sim: &Simulation) -> Vec<u64> {
     ids.chain(vecs.iter().flat_map(|v| v.iter()).flat_map(|v| v.to_array()).map(f64::to_bits))
         .chain(diag.iter().map(|x| x.to_bits()))
         .chain([d.contacts as u64, d.step])
+        .chain(loads)
         .collect()
 }
 
@@ -99,6 +114,11 @@ fn check_rank_counts(
 /// The chute of `common`, on a floor and a rough base held in place (whose pairs with each
 /// other are left out, and with the free particles not).
 fn periodic_chute(nudged: bool) -> Simulation {
+    let (cfg, init) = periodic_chute_case(nudged);
+    simulation(cfg, &init)
+}
+
+fn periodic_chute_case(nudged: bool) -> (SimulationConfig, Vec<ParticleInit>) {
     let (lo, hi) = CHUTE_BOX;
     let (law, params) = lammps_hooke();
     let mut cfg = chute_config(
@@ -119,7 +139,7 @@ fn periodic_chute(nudged: bool) -> Simulation {
         .map(|q| PrescribedMotion { particle: q.id, rule: MotionRule::Hold })
         .collect();
     assert!(cfg.motion.len() > 300, "a base of {} particles", cfg.motion.len());
-    simulation(cfg, &init)
+    (cfg, init)
 }
 
 #[test]
@@ -130,4 +150,149 @@ fn walled_hertz_bed_is_bit_identical_on_any_rank_count() {
 #[test]
 fn periodic_chute_is_bit_identical_on_any_rank_count() {
     check_rank_counts("periodic chute", &|| periodic_chute(false), &|| periodic_chute(true), 400);
+}
+
+/// 2 500 beads of 1 mm (Hertz–Mindlin) thrown at 1 m/s at the lower half of a drum of radius
+/// 28 mm turning at 30 rad/s about z, its ends two planes: the drum a mesh of 64 flat facets
+/// (`mesh`) or an exact cylinder.
+fn thrown_at_a_drum(nudged: bool, mesh: bool) -> Simulation {
+    let (cfg, init) = thrown_at_a_drum_case(nudged, mesh);
+    simulation(cfg, &init)
+}
+
+fn thrown_at_a_drum_case(nudged: bool, mesh: bool) -> (SimulationConfig, Vec<ParticleInit>) {
+    let law = ContactLaw::mfix(NormalModel::Hertz);
+    let mut cfg = config(
+        law,
+        vec![elastic_phase("glass", 1e-3, 2500.0, 1e7, 0.3)],
+        vec![wall_material("steel", Some(1e7), Some(0.3))],
+        vec![
+            Wall::plane("back", Vec3::new(0.0, 0.0, -5e-3), Vec3::Z, 0),
+            Wall::plane("front", Vec3::new(0.0, 0.0, 5e-3), -Vec3::Z, 0),
+        ],
+        vec![hertz_params(0.8, 0.9, 0.3)],
+        vec![hertz_params(0.8, 0.9, 0.3)],
+        Integrator::VelocityVerlet,
+        5e-6,
+    );
+    cfg.gravity = Vec3::new(0.0, -9.81, 0.0);
+    let (r, omega) = (0.028, 30.0);
+    if mesh {
+        let motion = MeshMotion::Rotate { origin: Vec3::ZERO, axis: Vec3::Z, omega, ramp: 0.0 };
+        cfg.meshes = vec![MeshWall { motion, ..MeshWall::fixed(tube(64, r, 5e-3), 0) }];
+    } else {
+        cfg.cylinders = vec![Cylinder::new("drum", Vec3::ZERO, Vec3::Z, r, CylinderSide::Inside, 0, omega)];
+    }
+    let mut init = bed(2_500, Vec3::new(-0.019, -0.019, -4e-3), Vec3::new(0.019, 0.0, 4e-3), 5e-4, 11);
+    for b in &mut init {
+        b.velocity = Vec3::new(0.0, -1.0, 0.0);
+    }
+    if nudged {
+        nudge(&mut init);
+    }
+    (cfg, init)
+}
+
+#[test]
+fn a_bed_thrown_at_a_turning_mesh_drum_is_bit_identical_on_any_rank_count() {
+    let touching = |s: &Simulation| {
+        s.contacts().iter().filter(|c| matches!(c.other, grainflow::ContactPartner::Mesh { .. })).count()
+    };
+    let mut one = thrown_at_a_drum(false, true);
+    one.advance(2_500);
+    assert!(touching(&one) > 50, "only {} beads touch the drum", touching(&one));
+    check_rank_counts(
+        "mesh drum",
+        &|| thrown_at_a_drum(false, true),
+        &|| thrown_at_a_drum(true, true),
+        2_500,
+    );
+}
+
+#[test]
+fn a_bed_thrown_at_a_turning_cylinder_is_bit_identical_on_any_rank_count() {
+    let touching = |s: &Simulation| {
+        s.contacts().iter().filter(|c| matches!(c.other, grainflow::ContactPartner::Cylinder(_))).count()
+    };
+    let mut one = thrown_at_a_drum(false, false);
+    one.advance(2_500);
+    assert!(touching(&one) > 50, "only {} beads touch the drum", touching(&one));
+    check_rank_counts(
+        "cylinder drum",
+        &|| thrown_at_a_drum(false, false),
+        &|| thrown_at_a_drum(true, false),
+        2_500,
+    );
+}
+
+/// `f` on each of `ranks` ranks (threads joined by a [`LocalComm`]), their results by rank.
+fn on_ranks<T: Send>(ranks: usize, f: &(dyn Fn(Arc<dyn Comm>) -> T + Sync)) -> Vec<T> {
+    std::thread::scope(|s| {
+        let handles: Vec<_> =
+            LocalComm::team(ranks).into_iter().map(|comm| s.spawn(move || f(Arc::new(comm)))).collect();
+        handles.into_iter().map(|h| h.join().expect("rank")).collect()
+    })
+}
+
+/// A run over 2 ranks checkpointed after `at` steps goes on from the checkpoint on 3 ranks
+/// and in one process to the bits of the run that never stopped, for `steps` steps in all;
+/// the checkpoint is the same bytes written from 2, 3 or 4 ranks (the whole run gathered in id
+/// order), and it carries the contacts' histories (pairs, and walls, meshes or cylinders:
+/// `walls` of them at least), without which the run would go on otherwise.
+fn check_restarts(
+    name: &str,
+    case: &(dyn Fn() -> (SimulationConfig, Vec<ParticleInit>) + Sync),
+    at: u64,
+    steps: u64,
+    walls: usize,
+) {
+    let make = || {
+        let (cfg, init) = case();
+        simulation(cfg, &init)
+    };
+    let mut whole = make();
+    whole.advance(steps);
+    let want = fingerprint(&whole);
+    let checkpoint = |ranks: usize| -> Vec<u8> {
+        let mut written = on_ranks(ranks, &|comm| {
+            let mut sim = make();
+            sim.decompose(comm).expect("spread over ranks");
+            sim.advance(at);
+            sim.gathered_whole().map(|w| {
+                let (pairs, others) = w.contacts().iter().fold((0, 0), |(p, o), c| match c.other {
+                    grainflow::ContactPartner::Particle(_) => (p + 1, o),
+                    _ => (p, o + 1),
+                });
+                assert!(pairs > 100 && others >= walls, "{name}: {pairs} pairs and {others} wall contacts");
+                w.checkpoint("case")
+            })
+        });
+        assert!(written[1..].iter().all(Option::is_none), "{name}: a rank other than 0 holds the whole");
+        written.swap_remove(0).expect("rank 0 holds the whole")
+    };
+    let bytes = checkpoint(2);
+    for ranks in [3, 4] {
+        assert!(
+            bytes == checkpoint(ranks),
+            "{name}: the checkpoint from {ranks} ranks differs from 2 ranks'"
+        );
+    }
+    let restored = || Simulation::restore(case().0, &bytes, Some("case")).expect("a restart");
+    let mut one = restored();
+    one.advance(steps - at);
+    assert!(fingerprint(&one) == want, "{name}: restarted in one process, the run departs");
+    let got = on_ranks(3, &|comm| {
+        let mut sim = restored();
+        sim.decompose(comm).expect("spread over ranks");
+        sim.advance(steps - at);
+        fingerprint(&sim)
+    });
+    assert!(got.iter().all(|g| *g == want), "{name}: restarted on 3 ranks, the run departs");
+}
+
+#[test]
+fn a_checkpoint_over_ranks_restarts_on_any_rank_count_with_the_same_bits() {
+    check_restarts("mesh drum", &|| thrown_at_a_drum_case(false, true), 2_300, 2_700, 30);
+    check_restarts("cylinder drum", &|| thrown_at_a_drum_case(false, false), 2_300, 2_700, 30);
+    check_restarts("periodic chute", &|| periodic_chute_case(false), 200, 400, 0);
 }

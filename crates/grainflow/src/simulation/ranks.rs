@@ -56,6 +56,8 @@ pub(crate) struct Decomposition {
     /// The particles held in place, by id, with the positions they are held at (every
     /// rank's: a ghost of a held particle is held too, as the pair law sees it).
     held: HashMap<u32, Vec3>,
+    /// Their ids in the order of the rules (the case's), which a checkpoint keeps.
+    held_order: Vec<u32>,
 }
 
 /// What a rank has sent to the others so far (collectives with itself left out).
@@ -82,8 +84,8 @@ const CONTACT: usize = 13;
 impl Simulation {
     /// Spreads the run over the ranks of `comm`, keeping on this rank the particles of its box
     /// and their ghosts. Every rank must call it with the same simulation (as set up from the
-    /// same case), before the first step. Refused for what ranks cannot run yet: mesh and
-    /// cylinder walls, insertions and outlets, prescribed motion.
+    /// same case), before the first step. Refused for what ranks cannot run yet: insertions and
+    /// outlets, and prescribed motion that follows a leader.
     pub fn decompose(&mut self, comm: Arc<dyn Comm>) -> Result<(), EngineError> {
         let refuse = |what: &str| {
             Err(EngineError::BadReference(format!("{what} cannot yet run on more than one rank")))
@@ -92,12 +94,6 @@ impl Simulation {
             return refuse("a run already spread over ranks");
         }
         if comm.size() > 1 {
-            if !self.sources.meshes.walls.is_empty() {
-                return refuse("mesh walls");
-            }
-            if !self.sources.cylinders.walls.is_empty() {
-                return refuse("cylinder walls");
-            }
             if !self.flow.is_empty() {
                 return refuse("insertions and outlets");
             }
@@ -134,6 +130,7 @@ impl Simulation {
             stats: DomainStats::default(),
             stale: false,
             held: self.motion.iter().map(|r| (self.particles.id[r.slot], r.anchor())).collect(),
+            held_order: self.motion.iter().map(|r| self.particles.id[r.slot]).collect(),
         }));
         // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
         self.sort.rule = ResortRule::Never;
@@ -357,6 +354,141 @@ impl Simulation {
         }
     }
 
+    /// The list's histories by ids: pairs (lower id first, seen from it, with their slots in
+    /// that order) and walls (id, wall, history, slot); those that are zero left out.
+    #[allow(clippy::type_complexity)]
+    fn histories_by_id(&self) -> (Vec<([u32; 2], [u32; 2], Vec3)>, Vec<(u32, u32, Vec3, u32)>) {
+        let (p, state) = (&self.particles, self.neighbors.state());
+        let mut pairs = Vec::new();
+        for (&[a, b], &h) in state.pairs.iter().zip(&state.pair_history) {
+            if nonzero(h) {
+                let (ia, ib) = (p.id[a as usize], p.id[b as usize]);
+                pairs.push(if ia < ib { ([ia, ib], [a, b], h) } else { ([ib, ia], [b, a], -h) });
+            }
+        }
+        let walls = state
+            .wall_pairs
+            .iter()
+            .zip(&state.wall_history)
+            .filter(|(_, h)| nonzero(**h))
+            .map(|(&[i, w], &h)| (p.id[i as usize], w, h, i))
+            .collect();
+        (pairs, walls)
+    }
+
+    /// The whole run as one process would hold it, on rank 0 (`None` on the others; in one
+    /// process a copy): every rank's particles in id order with their pair, wall and other
+    /// sources' histories, the list built afresh. What a checkpoint of a run over ranks is
+    /// written from; restored on any number of ranks it goes on with the same bits.
+    /// Collective: every rank must call it.
+    pub fn gathered_whole(&self) -> Option<Simulation> {
+        let Some(d) = &self.domain else { return Some(self.clone()) };
+        let (me, ranks, owned) = (d.comm.rank(), d.comm.size(), d.owned);
+        let p = &self.particles;
+        // This rank's particles and the histories of their contacts, by ids: [particles,
+        // count, particle words.., pairs, pair words.., walls, wall words.., per source:
+        // length, records..]. A pair across two ranks comes from both, the same bits.
+        let (pairs, walls) = self.histories_by_id();
+        let mut mine = vec![owned as u64];
+        for i in 0..owned {
+            d.push_moving(&mut mine, p, i);
+        }
+        let pairs: Vec<_> =
+            pairs.iter().filter(|(_, [a, b], _)| (*a as usize) < owned || (*b as usize) < owned).collect();
+        mine.push(pairs.len() as u64);
+        for (ids, _, h) in pairs {
+            push_history(&mut mine, *ids, *h);
+        }
+        let walls: Vec<_> = walls.iter().filter(|w| (w.3 as usize) < owned).collect();
+        mine.push(walls.len() as u64);
+        for &&(id, w, h, _) in &walls {
+            push_history(&mut mine, [id, w], h);
+        }
+        for (words, records) in self.sources.carry() {
+            let kept: Vec<&[u64]> =
+                records.chunks_exact(words.max(1)).filter(|r| (r[0] as usize) < owned).collect();
+            mine.push((kept.len() * words) as u64);
+            for r in kept {
+                mine.push(p.id[r[0] as usize] as u64);
+                mine.extend_from_slice(&r[1..]);
+            }
+        }
+        let mut out = vec![Vec::new(); ranks];
+        out[0] = mine;
+        let got = d.comm.exchange(out);
+        if me != 0 {
+            return None;
+        }
+        let mut all = Particles::default();
+        let mut table: HashMap<[u32; 2], Vec3> = HashMap::new();
+        let mut wall_table: Vec<(u32, u32, Vec3)> = Vec::new();
+        let mut records: Vec<Vec<u64>> = Vec::new();
+        for words in &got {
+            let mut at = 1;
+            for _ in 0..words[0] {
+                d.read_moving(words, &mut at, &mut all);
+            }
+            for k in 0..words[at] as usize {
+                let (ids, h) = read_history(&words[at + 1 + 5 * k..]);
+                table.entry(ids).or_insert(h);
+            }
+            at += 1 + 5 * words[at] as usize;
+            for k in 0..words[at] as usize {
+                let ([id, w], h) = read_history(&words[at + 1 + 5 * k..]);
+                wall_table.push((id, w, h));
+            }
+            at += 1 + 5 * words[at] as usize;
+            for k in 0.. {
+                if at == words.len() {
+                    break;
+                }
+                let len = words[at] as usize;
+                if records.len() <= k {
+                    records.push(Vec::new());
+                }
+                records[k].extend_from_slice(&words[at + 1..at + 1 + len]);
+                at += 1 + len;
+            }
+        }
+        let all = all.gathered(&all.id_order());
+        let slot = |id: u32| all.id.binary_search(&id).expect("a gathered particle") as u32;
+        let mut list = NeighborState { skin: self.neighbors.skin(), built: false, ..Default::default() };
+        // In id order, so that the whole does not depend on how the run was spread.
+        let mut table: Vec<_> = table.into_iter().collect();
+        table.sort_unstable_by_key(|e| e.0);
+        for (ids, h) in table {
+            list.pairs.push([slot(ids[0]), slot(ids[1])]);
+            list.pair_history.push(h);
+        }
+        wall_table.sort_unstable_by_key(|e| (e.0, e.1));
+        for (id, w, h) in wall_table {
+            list.wall_pairs.push([slot(id), w]);
+            list.wall_history.push(h);
+        }
+        // In the case's order: a checkpoint lists the rules' anchors so.
+        let motion = d
+            .held_order
+            .iter()
+            .map(|&id| crate::motion::ResolvedMotion::hold(slot(id) as usize, d.held[&id]));
+        let mut whole = self.clone();
+        whole.motion = motion.collect();
+        whole.domain = None;
+        let n = all.len();
+        whole.particles = all;
+        whole.common = None;
+        let broken =
+            |e: String| panic!("internal error: the gathered histories do not fit the particles: {e}");
+        whole.neighbors.set_state(list, n, whole.walls.len()).unwrap_or_else(broken);
+        whole.sources.take_carried(&whole.particles.id, &records).unwrap_or_else(broken);
+        whole.derive_slot_facts();
+        whole.neighbors.set_ghosts_from(None);
+        whole.neighbors.build_on(&whole.particles, &whole.walls, false);
+        // As one process keeps them (and a restart lays them out): the held particles last.
+        whole.put_prescribed_last().unwrap_or_else(|e| broken(e.to_string()));
+        whole.common();
+        Some(whole)
+    }
+
     /// Moves every particle to the rank of its box with its pair and wall histories, chooses
     /// the ghosts again and builds the list. With `initial`, every rank holds every particle
     /// (the set-up's), so none has to travel.
@@ -368,22 +500,20 @@ impl Simulation {
         let owned_before = if initial { p.len() } else { d.owned };
         let dest: Vec<usize> =
             (0..owned_before).map(|i| d.boxes.owner(per.wrap(p.position[i])).unwrap_or(me)).collect();
-        // The histories by ids: pairs (lower id first, seen from it), walls (id, wall).
-        let state = self.neighbors.state();
-        let mut pairs: Vec<([u32; 2], [u32; 2], Vec3)> = Vec::new();
-        for (&[a, b], &h) in state.pairs.iter().zip(&state.pair_history) {
-            if nonzero(h) {
-                let (ia, ib) = (p.id[a as usize], p.id[b as usize]);
-                pairs.push(if ia < ib { ([ia, ib], [a, b], h) } else { ([ib, ia], [b, a], -h) });
+        let (pairs, walls) = self.histories_by_id();
+        // The other sources' histories, by ids, kept here or sent with their particles.
+        let carried = self.sources.carry();
+        let mut kept_records: Vec<Vec<u64>> = vec![Vec::new(); carried.len()];
+        let mut sent_records: Vec<Vec<Vec<u64>>> = vec![vec![Vec::new(); carried.len()]; ranks];
+        for (k, (words, records)) in carried.iter().enumerate() {
+            for r in records.chunks_exact((*words).max(1)) {
+                let slot = r[0] as usize;
+                let to =
+                    if dest[slot] == me { &mut kept_records[k] } else { &mut sent_records[dest[slot]][k] };
+                to.push(p.id[slot] as u64);
+                to.extend_from_slice(&r[1..]);
             }
         }
-        let walls: Vec<(u32, u32, Vec3, u32)> = state
-            .wall_pairs
-            .iter()
-            .zip(&state.wall_history)
-            .filter(|(_, h)| nonzero(**h))
-            .map(|(&[i, w], &h)| (p.id[i as usize], w, h, i))
-            .collect();
         let mut table: HashMap<[u32; 2], Vec3> = HashMap::with_capacity(pairs.len());
         let mut wall_table: Vec<(u32, u32, Vec3)> = Vec::new();
         let kept: Vec<usize> = (0..owned_before).filter(|&i| dest[i] == me).collect();
@@ -432,7 +562,12 @@ impl Simulation {
                 o.extend(particles);
                 o.push((pw.len() / 5) as u64);
                 o.extend(pw);
+                o.push((ww.len() / 5) as u64);
                 o.extend(ww);
+                for records in std::mem::take(&mut sent_records[r]) {
+                    o.push(records.len() as u64);
+                    o.extend(records);
+                }
             }
             for words in d.exchange(out) {
                 if words.is_empty() {
@@ -449,10 +584,17 @@ impl Simulation {
                     table.entry(ids).or_insert(h);
                 }
                 at += 5 * n_pairs;
-                while at < words.len() {
-                    let ([id, w], h) = read_history(&words[at..]);
+                let n_walls = words[at] as usize;
+                at += 1;
+                for k in 0..n_walls {
+                    let ([id, w], h) = read_history(&words[at + 5 * k..]);
                     wall_table.push((id, w, h));
-                    at += 5;
+                }
+                at += 5 * n_walls;
+                for records in &mut kept_records {
+                    let len = words[at] as usize;
+                    records.extend_from_slice(&words[at + 1..at + 1 + len]);
+                    at += 1 + len;
                 }
             }
         }
@@ -512,11 +654,34 @@ impl Simulation {
             })
             .collect();
         self.domain = Some(d);
+        if let Err(e) = self.sources.take_carried(&self.particles.id, &kept_records) {
+            // The records were made from valid histories: only a defect can break them.
+            panic!("internal error: the ranks' wall histories do not fit the particles: {e}");
+        }
         self.derive_slot_facts();
         self.neighbors.set_ghosts_from(Some(owned));
         self.neighbors.build_on(&self.particles, &self.walls, false);
         // The common mass is found now, by every rank at once.
         self.common();
+    }
+}
+
+impl Simulation {
+    /// The load a wall takes from its contacts' loads on this rank's particles (see
+    /// [`wall_load_terms`](crate::forces::source::wall_load_terms)), summed over every rank
+    /// when spread over ranks (collective then).
+    pub(crate) fn wall_load_over_ranks(
+        &self,
+        parts: &[(Vec3, Vec3, Vec3)],
+        about: Vec3,
+    ) -> crate::forces::source::MeshLoad {
+        use crate::forces::source::{wall_load, wall_load_terms};
+        use crate::observe::order_free_sum;
+        let t = wall_load_terms(parts, about);
+        wall_load(match &self.domain {
+            None => t.each_ref().map(|v| order_free_sum(v)),
+            Some(d) => d.order_free_sums(t.each_ref().map(|v| &v[..])),
+        })
     }
 }
 

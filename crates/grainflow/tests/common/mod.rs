@@ -262,3 +262,22 @@ pub fn walled_bed(nudged: bool) -> Simulation {
     }
     simulation(cfg, &init)
 }
+
+/// A tube of `n` flat facets about the z axis, corners on the circle of radius `r`, for
+/// |z| ≤ `h`, normals inwards.
+pub fn tube(n: usize, r: f64, h: f64) -> grainflow::mesh::Mesh {
+    let mut v = Vec::new();
+    for k in 0..n {
+        let a = std::f64::consts::TAU * k as f64 / n as f64;
+        v.push(Vec3::new(r * a.cos(), r * a.sin(), -h));
+        v.push(Vec3::new(r * a.cos(), r * a.sin(), h));
+    }
+    let (lo, hi) = (|k: usize| (2 * (k % n)) as u32, |k: usize| (2 * (k % n) + 1) as u32);
+    let mut t = Vec::new();
+    for k in 0..n {
+        t.push([lo(k), hi(k + 1), lo(k + 1)]);
+        t.push([lo(k), hi(k), hi(k + 1)]);
+    }
+    grainflow::mesh::Mesh::from_indexed("drum", &v, &t, &grainflow::mesh::MeshTransform::default())
+        .expect("a valid tube")
+}

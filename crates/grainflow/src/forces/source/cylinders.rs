@@ -112,7 +112,8 @@ impl Cylinders {
         mut visit: impl FnMut(usize, usize, &CylinderContact, f64, &ContactCoeffs, Vec3),
     ) {
         let (p, reaches) = (v.particles, v.law.normal.reaches());
-        for i in 0..p.len() {
+        // Ghosts' contacts are their owners' ranks' to evaluate.
+        for i in 0..v.owned.min(p.len()) {
             for (m, cyl) in self.walls.iter().enumerate() {
                 let c = &wall_coeffs_of(v.coeffs, &v.law, p, i, cyl.material);
                 let reach = if reaches { c.pull_off } else { 0.0 };
@@ -147,16 +148,10 @@ impl Cylinders {
         });
     }
 
-    /// The load the particles exerted on cylinder `m` at the last force evaluation: the
-    /// force, and the torque about `about`.
-    fn load_on(&self, m: usize, about: Vec3) -> MeshLoad {
-        let parts: Vec<_> = self
-            .loads
-            .iter()
-            .filter(|l| l.cylinder == m as u32)
-            .map(|l| (l.centre, l.force, l.torque))
-            .collect();
-        super::wall_load(&parts, about)
+    /// The loads on the particles from cylinder `m` at the last force evaluation, each (the
+    /// particle's centre, the force, the torque about the centre).
+    fn loads_of(&self, m: usize) -> Vec<(Vec3, Vec3, Vec3)> {
+        self.loads.iter().filter(|l| l.cylinder == m as u32).map(|l| (l.centre, l.force, l.torque)).collect()
     }
 
     /// Restores the cylinder contacts' histories of a checkpoint: (particle id, cylinder) and
@@ -262,7 +257,8 @@ impl ContactSource for Cylinders {
             peak: [0.0; 2],
         };
         part.loads.clear();
-        let n = run.particles.len();
+        // Ghosts' contacts are their owners' ranks' to evaluate.
+        let n = run.owned.min(run.particles.len());
         let settings = (run.coeffs, law, quanta, advance, dt);
         match run.pool.filter(|_| n >= crate::threads::MIN_PARALLEL_SLOTS) {
             Some(pool) => {
@@ -333,6 +329,25 @@ impl ContactSource for Cylinders {
             + self.loads.capacity() * std::mem::size_of::<LoadPart>()
     }
 
+    /// (slot, cylinder, history).
+    const CARRIED: usize = 5;
+
+    fn carry(&self, out: &mut Vec<u64>) {
+        for h in &self.history {
+            out.extend([h.slot as u64, h.cylinder as u64]);
+            out.extend(h.h.to_array().map(f64::to_bits));
+        }
+    }
+
+    fn take_carried(&mut self, ids: &[u32], records: &[u64]) -> Result<(), String> {
+        let (mut owners, mut h) = (Vec::new(), Vec::new());
+        for r in records.chunks_exact(Self::CARRIED) {
+            owners.push([r[0] as u32, r[1] as u32]);
+            h.push(Vec3::from_array([r[2], r[3], r[4]].map(f64::from_bits)));
+        }
+        self.set_histories(ids, (owners, h))
+    }
+
     const SURFACES: &'static [SurfaceKind] = &[CYLINDERS];
 
     /// The cylinders (if any) as tubes of [`TUBE_FACETS`] quadrilaterals each, of finite
@@ -384,8 +399,9 @@ impl Simulation {
     /// The load the particles exerted on cylinder `m` at the last force evaluation (zero
     /// before the first): the force, and the torque about `about`. The sums do not depend on
     /// the particles' order; the force is exactly minus the sum of the particles' loads from it.
+    /// Spread over ranks, the sums are over every rank's contacts: collective.
     pub fn cylinder_load(&self, m: usize, about: Vec3) -> MeshLoad {
-        self.sources.cylinders.load_on(m, about)
+        self.wall_load_over_ranks(&self.sources.cylinders.loads_of(m), about)
     }
 
     /// Restores the cylinder contacts' histories of a checkpoint: (particle id, cylinder) and

@@ -384,12 +384,10 @@ impl Meshes {
         Ok(())
     }
 
-    /// The load the particles exerted on mesh `m` at the last force evaluation (see
-    /// [`Simulation::mesh_load`]).
-    fn load_on(&self, m: usize, about: Vec3) -> MeshLoad {
-        let parts: Vec<_> =
-            self.loads.iter().filter(|l| l.mesh == m as u32).map(|l| (l.centre, l.force, l.torque)).collect();
-        super::wall_load(&parts, about)
+    /// The loads on the particles from mesh `m` at the last force evaluation, each (the
+    /// particle's centre, the force, the torque about the centre).
+    fn loads_of(&self, m: usize) -> Vec<(Vec3, Vec3, Vec3)> {
+        self.loads.iter().filter(|l| l.mesh == m as u32).map(|l| (l.centre, l.force, l.torque)).collect()
     }
 
     /// (anchor time since the start, s; anchor pose; pose at `t`) of every mesh.
@@ -565,11 +563,13 @@ impl Meshes {
                 .any(|m| (relative(i, m) - self.centres[i * n_meshes + m]).length_squared() > limit)
         };
         let pool = pool.filter(|_| n >= threads::MIN_PARALLEL_SLOTS);
+        // Ghosts have no candidates: their contacts are their owners' ranks' to evaluate.
+        let owned = v.owned.min(n);
         let stale: Vec<usize> = match pool {
             Some(pool) => pool.install(|| {
-                threads::in_runs(n, |r| r.filter(|&i| stale(i)).collect::<Vec<usize>>()).concat()
+                threads::in_runs(owned, |r| r.filter(|&i| stale(i)).collect::<Vec<usize>>()).concat()
             }),
-            None => (0..n).filter(|&i| stale(i)).collect(),
+            None => (0..owned).filter(|&i| stale(i)).collect(),
         };
         if stale.is_empty() {
             return;
@@ -834,6 +834,30 @@ impl ContactSource for Meshes {
         self.bytes()
     }
 
+    /// (slot, mesh, triangle, normal, history).
+    const CARRIED: usize = 9;
+
+    fn carry(&self, out: &mut Vec<u64>) {
+        for h in &self.history {
+            out.extend([h.slot as u64, h.mesh as u64, h.triangle as u64]);
+            out.extend(h.normal.to_array().into_iter().chain(h.h.to_array()).map(f64::to_bits));
+        }
+    }
+
+    fn take_carried(&mut self, ids: &[u32], records: &[u64]) -> Result<(), String> {
+        let mut lists = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let v = |w: &[u64]| Vec3::from_array([w[0], w[1], w[2]].map(f64::from_bits));
+        for r in records.chunks_exact(Self::CARRIED) {
+            lists.0.push([r[0] as u32, r[1] as u32]);
+            lists.1.push(r[2] as u32);
+            lists.2.push(v(&r[3..6]));
+            lists.3.push(v(&r[6..9]));
+        }
+        // The slots changed: the candidates are found again.
+        self.built = false;
+        self.set_histories(ids, lists)
+    }
+
     const SURFACES: &'static [SurfaceKind] = &[FIXED_MESHES, MOVING_MESHES];
 
     /// The meshes that do not move (if any), then those that do (if any), as triangles where
@@ -905,8 +929,9 @@ impl Simulation {
     /// The load the particles exerted on mesh `m` at the last force evaluation (zero before
     /// the first): the force, and the torque about `about`. The sums do not depend on the
     /// particles' order; the force is exactly minus the sum of the particles' loads from it.
+    /// Spread over ranks, the sums are over every rank's contacts: collective.
     pub fn mesh_load(&self, m: usize, about: Vec3) -> MeshLoad {
-        self.sources.meshes.load_on(m, about)
+        self.wall_load_over_ranks(&self.sources.meshes.loads_of(m), about)
     }
 
     /// Restores each mesh's motion state of a checkpoint (anchor time since the start, s;

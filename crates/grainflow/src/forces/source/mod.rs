@@ -148,6 +148,22 @@ pub(crate) trait ContactSource {
         0
     }
 
+    /// Words of each history record the source keeps outside the neighbour list (0: it keeps
+    /// none), which travels with its particle to another rank.
+    const CARRIED: usize = 0;
+
+    /// Appends the source's histories kept outside the neighbour list, as records of
+    /// [`CARRIED`](Self::CARRIED) words each, the slot of its particle first.
+    fn carry(&self, _out: &mut Vec<u64>) {}
+
+    /// Takes over histories written by [`carry`](Self::carry), with each record's first word
+    /// the id of its particle instead of its slot (`ids`: the particles' ids by slot, after
+    /// the particles moved between ranks); the candidates are found again at the next
+    /// evaluation.
+    fn take_carried(&mut self, _ids: &[u32], _records: &[u64]) -> Result<(), String> {
+        Ok(())
+    }
+
     /// The kinds of surface the source can show, in the order [`surfaces`](Self::surfaces)
     /// gives them (none: a source without a surface, like the particle pairs).
     const SURFACES: &'static [SurfaceKind] = &[];
@@ -289,6 +305,26 @@ impl Sources {
         bytes
     }
 
+    /// Every source's carried histories (see [`ContactSource::carry`]), one list per source
+    /// in the sources' order, with the words per record of each.
+    pub(crate) fn carry(&self) -> Vec<(usize, Vec<u64>)> {
+        let mut out = Vec::new();
+        each_source!(ref self, |s| {
+            let mut words = Vec::new();
+            s.carry(&mut words);
+            out.push((carried_words(s), words));
+        });
+        out
+    }
+
+    /// Every source takes its carried histories (see [`ContactSource::take_carried`]), given
+    /// in the order [`carry`](Self::carry) gives them.
+    pub(crate) fn take_carried(&mut self, ids: &[u32], lists: &[Vec<u64>]) -> Result<(), String> {
+        let mut lists = lists.iter();
+        each_source!(self, |s| s.take_carried(ids, lists.next().map_or(&[][..], |l| &l[..]))?);
+        Ok(())
+    }
+
     /// See [`ContactSource::heap_bytes`].
     pub(crate) fn heap_bytes(&self) -> usize {
         let mut bytes = 0;
@@ -312,16 +348,30 @@ impl Sources {
     }
 }
 
-/// The load a wall takes from its contacts' loads on the particles, each (the particle's
-/// centre, the force and the torque about the centre on it): minus their sums, the torque about
-/// `about`. The sums do not depend on the contacts' order.
-pub(crate) fn wall_load(parts: &[(Vec3, Vec3, Vec3)], about: Vec3) -> MeshLoad {
-    use crate::observe::order_free_sum;
-    let sum = |f: &dyn Fn(&(Vec3, Vec3, Vec3)) -> Vec3| {
-        let c = |k: usize| order_free_sum(&parts.iter().map(|l| f(l).to_array()[k]).collect::<Vec<f64>>());
-        Vec3::new(c(0), c(1), c(2))
-    };
-    MeshLoad { force: -sum(&|&(_, f, _)| f), torque: -sum(&|&(x, f, t)| (x - about).cross(f) + t) }
+/// [`ContactSource::CARRIED`] of the source `_s`.
+fn carried_words<S: ContactSource>(_s: &S) -> usize {
+    S::CARRIED
+}
+
+/// The terms whose sums, negated, are the load a wall takes from its contacts' loads on the
+/// particles, each (the particle's centre, the force and the torque about the centre on it):
+/// the force's components, then those of the torque about `about`.
+pub(crate) fn wall_load_terms(parts: &[(Vec3, Vec3, Vec3)], about: Vec3) -> [Vec<f64>; 6] {
+    let mut terms: [Vec<f64>; 6] = Default::default();
+    for &(x, f, t) in parts {
+        let m = (x - about).cross(f) + t;
+        for (k, v) in f.to_array().into_iter().chain(m.to_array()).enumerate() {
+            terms[k].push(v);
+        }
+    }
+    terms
+}
+
+/// The load a wall takes from its contacts' loads on the particles (see
+/// [`wall_load_terms`]), from the sums of its terms: minus the force's sum, minus the torque's
+/// about `about`. The sums do not depend on the contacts' order.
+pub(crate) fn wall_load(sums: [f64; 6]) -> MeshLoad {
+    MeshLoad { force: -Vec3::new(sums[0], sums[1], sums[2]), torque: -Vec3::new(sums[3], sums[4], sums[5]) }
 }
 
 /// The coefficients of slot `i`'s contacts with wall material `material`: its phase's,
