@@ -85,6 +85,14 @@ pub struct Ranks {
     pub comm: Arc<dyn Comm>,
 }
 
+impl Ranks {
+    /// Ends every rank of the run with `code` (MPI_Abort): for a failure that may have struck
+    /// this rank alone, while the others wait for it in a collective.
+    pub fn abort(&self, code: u8) -> ! {
+        self._universe.world().abort(i32::from(code))
+    }
+}
+
 /// Starts MPI; on ranks other than 0 the terminal output goes to /dev/null, so that a
 /// message is printed once.
 pub fn start() -> Result<Ranks, String> {

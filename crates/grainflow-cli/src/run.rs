@@ -436,6 +436,18 @@ pub fn main(args: RunArgs) -> ExitCode {
         let _ = std::fs::remove_dir_all(dir);
     }
     let missed: u64 = flow.books.as_ref().map_or(0, |b| b.missed.iter().sum());
+    // A failure of one rank's own (its folder, its files) ends every rank: the others may
+    // wait for it in a collective. The engine's refusals and the health check's verdict are
+    // every rank's at once, and end each by itself.
+    let alone = matches!(&result, Err(e) if !matches!(e, RunError::Engine(_) | RunError::Unhealthy { .. }));
+    let fail = |code: u8| -> ExitCode {
+        #[cfg(feature = "mpi")]
+        if alone && rank_count > 1 {
+            mpi.abort(code);
+        }
+        let _ = alone;
+        ExitCode::from(code)
+    };
     match result {
         Ok(s) => {
             println!("{}", s.time_step_explanation);
@@ -551,19 +563,19 @@ pub fn main(args: RunArgs) -> ExitCode {
         }
         Err(e @ (RunError::Restart { .. } | RunError::Folder(_) | RunError::TooMuchOutput(_))) => {
             eprintln!("error: {e}");
-            ExitCode::from(EXIT_BAD_INPUT)
+            fail(EXIT_BAD_INPUT)
         }
-        Err(e @ (RunError::Unhealthy { .. } | RunError::UnhealthyOnRanks { .. })) => {
+        Err(e @ RunError::Unhealthy { .. }) => {
             eprintln!("error: the run went wrong and was stopped: {e}");
-            ExitCode::FAILURE
+            fail(1)
         }
         Err(RunError::Engine(e)) => {
             eprintln!("error: {}: {e}", args.case.display());
-            ExitCode::from(EXIT_BAD_INPUT)
+            fail(EXIT_BAD_INPUT)
         }
         Err(e @ RunError::Output(_)) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            fail(1)
         }
     }
 }

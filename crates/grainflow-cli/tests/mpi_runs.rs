@@ -1,15 +1,19 @@
 //! `mpirun -np N grainflow run` writes the bytes one process writes: the time series, the
-//! snapshots and the VTK series of a settling bed (the shipped example: Euler, walls), a walled Hertz–Mindlin bed
-//! (velocity Verlet) and a chute periodic in x and y on a held base (Adams–Bashforth) equal
-//! those of a run without MPI, on 1, 2, 3 and 4 ranks (oversubscribed) × 1 and 2 threads.
+//! snapshots and the VTK series of a settling bed (the shipped example: Euler, walls), the
+//! shipped drum (a turning mesh whose torque is in the time series), a walled Hertz–Mindlin
+//! bed (velocity Verlet) and a chute periodic in x and y on a held base (Adams–Bashforth)
+//! equal those of a run without MPI, on 1, 2, 3 and 4 ranks (oversubscribed) × 1 and 2 threads.
 //! That the comparison has teeth: a 10⁻¹⁰ change of one particle's initial velocity changes
-//! the files. A bad case on 2 ranks is refused once and every rank exits 2, within seconds.
+//! the files. A run interrupted on 2 ranks (SIGINT to mpirun) and continued on 3, and a run
+//! whose rank was killed (SIGKILL) continued from its last checkpoint in one process, write
+//! the bytes of one process that never stopped. A bad case on 2 ranks is refused once and
+//! every rank exits 2, within seconds, and so does a failure of rank 0 alone.
 //!
 //! These need OpenMPI's `mpirun` and a build with `--features mpi` (`.ci/run` installs and
 //! runs them): `cargo test --release -p grainflow-cli --features mpi --test mpi_runs -- --ignored`.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 fn grainflow() -> &'static str {
@@ -18,6 +22,11 @@ fn grainflow() -> &'static str {
 
 /// `grainflow run CASE --out OUT -j J -q`, on `ranks` MPI ranks (None: without mpirun).
 fn run(case: &Path, out: &Path, ranks: Option<usize>, threads: usize) -> Output {
+    command(case, out, ranks, threads, &[]).output().expect("mpirun (OpenMPI) is installed")
+}
+
+/// The command of [`run`], with `extra` arguments.
+fn command(case: &Path, out: &Path, ranks: Option<usize>, threads: usize, extra: &[&str]) -> Command {
     if !cfg!(feature = "mpi") {
         panic!("build with --features mpi: without it mpirun starts unrelated processes");
     }
@@ -31,7 +40,8 @@ fn run(case: &Path, out: &Path, ranks: Option<usize>, threads: usize) -> Output 
             c
         }
     };
-    cmd.args(args).args(more).output().expect("mpirun (OpenMPI) is installed")
+    cmd.args(args).args(more).args(extra);
+    cmd
 }
 
 /// The time series and every snapshot, by name.
@@ -92,44 +102,58 @@ fn lattice(n: usize, lx: f64, ly: f64, d: f64, z0: f64, speed: f64, nudge: bool,
 }
 
 /// The three cases, written into `dir` (with `nudge`, each with one particle nudged).
-fn cases(dir: &Path, nudge: bool) -> Vec<PathBuf> {
-    std::fs::create_dir_all(dir).expect("case dir");
-    let mut out = Vec::new();
-    // The shipped settling bed, shortened, with its VTK series (particles, contacts, walls).
-    let bed = dir.join("settling-bed");
-    let made = Command::new(grainflow())
-        .args(["example", "settling-bed", "--dir"])
-        .arg(&bed)
-        .output()
-        .expect("runs");
+/// A shipped example written to `dir/name`, its case's lines that start with a key replaced,
+/// and with `nudge` the first particle's x velocity changed by 1e-10 of itself.
+fn example(dir: &Path, name: &str, edits: &[(&str, &str)], nudge: bool) -> PathBuf {
+    let at = dir.join(name);
+    let made = Command::new(grainflow()).args(["example", name, "--dir"]).arg(&at).output().expect("runs");
     assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
-    let text = std::fs::read_to_string(bed.join("case.toml")).expect("case");
+    let text = std::fs::read_to_string(at.join("case.toml")).expect("case");
     let text: String = text
         .lines()
-        .map(|l| {
-            if l.starts_with("t_stop") {
-                "t_stop = 0.06"
-            } else if l.starts_with("vtk_interval") {
-                "vtk_interval = 0.01"
-            } else if l.starts_with("interval") {
-                "interval = 0.01"
-            } else {
-                l
-            }
-        })
+        .map(|l| edits.iter().find(|(key, _)| l.starts_with(key)).map_or(l, |(_, line)| line))
         .collect::<Vec<_>>()
         .join("\n");
-    std::fs::write(bed.join("case.toml"), text).expect("case");
+    std::fs::write(at.join("case.toml"), text).expect("case");
     if nudge {
-        let p = std::fs::read_to_string(bed.join("particles.csv")).expect("particles");
+        let p = std::fs::read_to_string(at.join("particles.csv")).expect("particles");
         let mut lines: Vec<String> = p.lines().map(String::from).collect();
         let mut f: Vec<String> = lines[1].split(',').map(String::from).collect();
         let u: f64 = f[6].parse().expect("u");
         f[6] = format!("{:.17e}", u + 1e-10 * u.abs().max(1e-3));
         lines[1] = f.join(",");
-        std::fs::write(bed.join("particles.csv"), lines.join("\n") + "\n").expect("particles");
+        std::fs::write(at.join("particles.csv"), lines.join("\n") + "\n").expect("particles");
     }
-    out.push(bed.join("case.toml"));
+    at.join("case.toml")
+}
+
+fn cases(dir: &Path, nudge: bool) -> Vec<PathBuf> {
+    std::fs::create_dir_all(dir).expect("case dir");
+    let mut out = Vec::new();
+    // The shipped settling bed, shortened, with its VTK series (particles, contacts, walls).
+    out.push(example(
+        dir,
+        "settling-bed",
+        &[
+            ("t_stop", "t_stop = 0.06"),
+            ("vtk_interval", "vtk_interval = 0.01"),
+            ("interval", "interval = 0.01"),
+        ],
+        nudge,
+    ));
+    // The shipped drum, a turning mesh, shortened and turning from the start.
+    out.push(example(
+        dir,
+        "rotating-drum",
+        &[
+            ("t_stop", "t_stop = 0.04"),
+            ("ramp", "ramp = 0.0"),
+            ("rpm", "rpm = 30.0"),
+            ("vtk_interval", "vtk_interval = 0.01"),
+            ("interval", "interval = 0.01"),
+        ],
+        nudge,
+    ));
     // A walled Hertz–Mindlin bed, velocity Verlet.
     std::fs::write(dir.join("hertz.csv"), lattice(2000, 0.03, 0.03, 0.002, 0.0, 0.3, nudge, 11))
         .expect("csv");
@@ -287,14 +311,150 @@ fn a_bad_case_on_two_ranks_exits_2_at_once_with_one_message() {
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{stderr}");
     assert_eq!(stderr.matches("diameter").count(), 1, "the message once, from rank 0: {stderr}");
-    // What ranks cannot run yet is refused the same way (a turning mesh).
+    // What ranks cannot run yet is refused the same way (an insertion and an outlet).
     let made = Command::new(grainflow())
-        .args(["example", "rotating-drum", "--dir"])
-        .arg(dir.path().join("drum"))
+        .args(["example", "hopper-fill-discharge", "--dir"])
+        .arg(dir.path().join("hopper"))
         .output();
     assert!(made.expect("runs").status.success());
-    let r = run(&dir.path().join("drum/case.toml"), &dir.path().join("out2"), Some(2), 1);
+    let r = run(&dir.path().join("hopper/case.toml"), &dir.path().join("out2"), Some(2), 1);
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("mesh walls") && stderr.contains("more than one rank"), "{stderr}");
+    assert!(stderr.contains("insertions") && stderr.contains("more than one rank"), "{stderr}");
+    // A failure of rank 0 alone (its output folder holds another run's results, which the
+    // other ranks' scratch folders do not) ends every rank: none waits for it in a collective.
+    let drum = example(dir.path(), "rotating-drum", &[("t_stop", "t_stop = 0.01")], false);
+    let taken = dir.path().join("taken");
+    assert!(run(&drum, &taken, None, 1).status.success());
+    let start = Instant::now();
+    let r = run(&drum, &taken, Some(2), 1);
+    assert!(start.elapsed() < Duration::from_secs(30), "took {:?}", start.elapsed());
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.matches("holds the results of an earlier run").count(), 1, "{stderr}");
+}
+
+/// The shipped drum turning at 30 rpm from the start for 1 s (20 000 steps), long enough to
+/// be caught mid-way, with its outputs every 0.1 s.
+fn long_drum(dir: &Path) -> PathBuf {
+    example(
+        dir,
+        "rotating-drum",
+        &[
+            ("t_stop", "t_stop = 1.0"),
+            ("ramp", "ramp = 0.0"),
+            ("rpm", "rpm = 30.0"),
+            ("vtk_interval", "vtk_interval = 0.1"),
+            ("interval", "interval = 0.1"),
+        ],
+        false,
+    )
+}
+
+/// Starts `cmd` and waits for `file` to appear (the run's first checkpoint).
+fn start_until(mut cmd: Command, file: &Path) -> std::process::Child {
+    let child =
+        cmd.stdout(Stdio::null()).stderr(Stdio::piped()).spawn().expect("mpirun (OpenMPI) is installed");
+    let t0 = Instant::now();
+    while !file.exists() {
+        assert!(t0.elapsed() < Duration::from_secs(120), "no {} after 2 minutes", file.display());
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child
+}
+
+/// Waits at most `limit` for `child` to end; its output.
+fn wait_at_most(mut child: std::process::Child, limit: Duration) -> Output {
+    let t0 = Instant::now();
+    while child.try_wait().expect("waits").is_none() {
+        if t0.elapsed() > limit {
+            let _ = child.kill();
+            panic!("still running {limit:?} after the signal");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("waits")
+}
+
+/// A SIGINT to mpirun saves one checkpoint of the whole run (gathered on rank 0); that run,
+/// continued on 3 ranks, writes the bytes of one process that never stopped: the time
+/// series, the snapshots and the VTK series with the drum.
+#[test]
+#[ignore = "needs MPI (OpenMPI's mpirun, a build with --features mpi)"]
+fn interrupted_on_two_ranks_and_continued_on_three_a_run_writes_one_process_bytes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let case = long_drum(dir.path());
+    let r = run(&case, &dir.path().join("one"), None, 1);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let want = outputs(&dir.path().join("one"));
+    let part = dir.path().join("part");
+    let ckpt = part.join("checkpoint.gfc");
+    let child = start_until(command(&case, &part, Some(2), 1, &["--checkpoint-every", "500"]), &ckpt);
+    let killed = Command::new("kill").arg("-INT").arg(child.id().to_string()).status().expect("kill");
+    assert!(killed.success());
+    let out = wait_at_most(child, Duration::from_secs(60));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "the run ended before the signal: make it longer. {stderr}");
+    assert!(stderr.contains("interrupted at step") && stderr.contains("--restart"), "{stderr}");
+    let info = std::fs::read_to_string(part.join("run-info.toml")).expect("run info");
+    assert!(info.contains("status = \"interrupted\""), "{info}");
+    let resumed = command(&case, &part, Some(3), 1, &["--restart", ckpt.to_str().expect("utf-8")])
+        .output()
+        .expect("runs");
+    assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
+    let got = outputs(&part);
+    let names = |f: &[(String, Vec<u8>)]| f.iter().map(|f| f.0.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&got), names(&want));
+    for (a, b) in want.iter().zip(&got) {
+        assert!(a.1 == b.1, "{} differs after the restart on 3 ranks", a.0);
+    }
+}
+
+/// The processes mpirun started (its children), by pid.
+fn children(pid: u32) -> Vec<u32> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir("/proc").expect("/proc").flatten() {
+        let Ok(stat) = std::fs::read_to_string(entry.path().join("stat")) else { continue };
+        // pid (comm) state ppid …: the name may hold spaces, so read after its ')'.
+        let after = &stat[stat.rfind(')').map_or(0, |k| k + 1)..];
+        let ppid = after.split_whitespace().nth(1).and_then(|p| p.parse::<u32>().ok());
+        if ppid == Some(pid)
+            && let Ok(child) = entry.file_name().to_string_lossy().parse()
+        {
+            found.push(child);
+        }
+    }
+    found
+}
+
+/// A rank killed with SIGKILL ends the run within seconds with mpirun's message naming the
+/// signal, and the last checkpoint stays whole: continued in one process, the run writes the
+/// bytes of one that never stopped.
+#[test]
+#[ignore = "needs MPI (OpenMPI's mpirun, a build with --features mpi)"]
+fn a_rank_killed_ends_the_run_and_its_last_checkpoint_goes_on() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let case = long_drum(dir.path());
+    let r = run(&case, &dir.path().join("one"), None, 1);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let want = outputs(&dir.path().join("one"));
+    let part = dir.path().join("part");
+    let ckpt = part.join("checkpoint.gfc");
+    let child = start_until(command(&case, &part, Some(2), 1, &["--checkpoint-every", "500"]), &ckpt);
+    let ranks = children(child.id());
+    assert_eq!(ranks.len(), 2, "mpirun's children: {ranks:?}");
+    let killed = Command::new("kill").arg("-KILL").arg(ranks[1].to_string()).status().expect("kill");
+    assert!(killed.success());
+    let out = wait_at_most(child, Duration::from_secs(30));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "the run ended before the signal: make it longer. {stderr}");
+    assert!(stderr.contains("signal 9"), "{stderr}");
+    let resumed =
+        command(&case, &part, None, 1, &["--restart", ckpt.to_str().expect("utf-8")]).output().expect("runs");
+    assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
+    let got = outputs(&part);
+    assert_eq!(got.len(), want.len());
+    for (a, b) in want.iter().zip(&got) {
+        assert!(a.0 == b.0 && a.1 == b.1, "{} differs after the restart", a.0);
+    }
 }

@@ -192,15 +192,6 @@ pub enum RunError {
         /// Where it was saved.
         saved: PathBuf,
     },
-    /// The run, spread over ranks, went numerically wrong (no last good state is kept there
-    /// yet).
-    #[error(
-        "{message}\nOn more than one rank no last good state is kept yet: run the case again with the fix."
-    )]
-    UnhealthyOnRanks {
-        /// What went wrong, where, why and what to do.
-        message: String,
-    },
 }
 
 /// Runs `case` to its end (or until `options.stop` is raised), writing into the folder `out`
@@ -234,18 +225,8 @@ pub fn run_case(
         }
     };
     check_output_volume(&sim, &output, mesh_loads.columns.len())?;
+    // A restart spreads the checkpoint's whole state as a fresh run spreads the case's.
     if let Some(comm) = options.ranks.clone().filter(|c| c.size() > 1) {
-        let refuse = |what: &str| {
-            Err(RunError::Engine(grainflow::EngineError::BadReference(format!(
-                "{what} cannot yet be used on more than one rank"
-            ))))
-        };
-        if options.restart.is_some() {
-            return refuse("--restart");
-        }
-        if options.checkpoint_every.is_some() {
-            return refuse("--checkpoint-every");
-        }
         sim.decompose(comm)?;
     }
     let intent = match &options.restart {
@@ -283,9 +264,7 @@ pub fn run_case(
     let status = match &result {
         Ok(s) if s.interrupted => "interrupted",
         Ok(_) => "completed",
-        Err(RunError::Unhealthy { .. } | RunError::UnhealthyOnRanks { .. }) => {
-            "failed: numerical health check"
-        }
+        Err(RunError::Unhealthy { .. }) => "failed: numerical health check",
         Err(_) => "failed",
     };
     let written = info
@@ -518,7 +497,10 @@ impl<'a> LastGood<'a> {
         out: &'a Path,
         max_in_memory: usize,
     ) -> Result<Self, OutputError> {
-        let in_memory = sim.checkpoint_size(hash) <= max_in_memory;
+        // On ranks, the whole state is about this rank's share times the ranks.
+        // (The ranks other than 0 keep nothing, in memory.)
+        let in_memory = sim.comm().is_some_and(|c| c.rank() > 0)
+            || sim.checkpoint_size(hash).saturating_mul(sim.ranks()) <= max_in_memory;
         let mut kept = LastGood { step: 0, hash, out, bytes: in_memory.then(Vec::new) };
         kept.keep(sim)?;
         Ok(kept)
@@ -528,9 +510,16 @@ impl<'a> LastGood<'a> {
         self.out.join(format!(".{LAST_GOOD_FILE}.rolling"))
     }
 
-    /// Keeps the current state.
+    /// Keeps the current state; on ranks, the whole run's, gathered on rank 0 (the others
+    /// keep nothing: only rank 0's folder is the user's). Collective on ranks.
     fn keep(&mut self, sim: &Simulation) -> Result<(), OutputError> {
         self.step = sim.step_index();
+        let whole = if sim.ranks() > 1 { sim.gathered_whole() } else { None };
+        let sim = match (&whole, sim.ranks() > 1) {
+            (Some(w), _) => w,
+            (None, true) => return Ok(()),
+            (None, false) => sim,
+        };
         match &mut self.bytes {
             Some(b) => sim.checkpoint_into(self.hash, b),
             None => {
@@ -1092,6 +1081,9 @@ fn run_simulation(
             .map(|w| (w, false))
             .map_err(io_err(&ts_path))?
     };
+    // Rank 0's folder is the user's (the others write into scratch folders): its time series
+    // decides whether the restart's first row is written, on every rank.
+    let row_kept = agree_with_rank_0(sim, row_kept);
     let flow_from = if folder.continues() && !row_kept { note.as_ref().and_then(|n| n.flow) } else { None };
     mesh_loads.start_flow(sim, options.restart.is_none(), flow_from);
     let mut files = vec![ts_path.clone()];
@@ -1158,14 +1150,9 @@ fn run_simulation(
     };
     sim.set_checkpoint_note(note(&ts, sim.step_index()));
     let mut checked = Checked::after(sim);
-    // Spread over ranks, a state is not yet saved (a checkpoint holds one process's state).
     let ranks = sim.ranks() > 1;
-    let mut last_good = match ranks {
-        false => {
-            Some(LastGood::new(sim, hash, &out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?)
-        }
-        true => None,
-    };
+    let mut last_good =
+        LastGood::new(sim, hash, &out, options.last_good_in_memory.unwrap_or(LAST_GOOD_IN_MEMORY))?;
     // A fresh run writes its initial state; a restarted one continues the output schedule of
     // the run it continues (whose rows up to here were kept), so its files match an
     // uninterrupted run's.
@@ -1205,16 +1192,14 @@ fn run_simulation(
         let output_now = step.is_multiple_of(every) || end;
         if step.is_multiple_of(HEALTH_EVERY) || output_now {
             if let Some(message) = health_problem(sim, health, checked) {
-                return Err(unhealthy(message, last_good.as_ref(), folder, ts, &ts_path));
+                return Err(unhealthy(message, &last_good, folder, ts, &ts_path));
             }
             checked = Checked::after(sim);
             // Keeping a copy of the state costs a pass over it: refresh it at outputs and
             // every tenth check, not at every check.
             if output_now || step.is_multiple_of(10 * HEALTH_EVERY) {
                 sim.set_checkpoint_note(note(&ts, step));
-                if let Some(last_good) = &mut last_good {
-                    last_good.keep(sim)?;
-                }
+                last_good.keep(sim)?;
             }
         }
         let t_out = Instant::now();
@@ -1227,7 +1212,8 @@ fn run_simulation(
         on_progress(sim);
         let due = match options.checkpoint_every {
             Some(CheckpointEvery::Steps(n)) => n > 0 && step.is_multiple_of(n),
-            Some(CheckpointEvery::WallTime(d)) => last_checkpoint.elapsed() >= d,
+            // On ranks, by rank 0's clock: the ranks write it together.
+            Some(CheckpointEvery::WallTime(d)) => agree_with_rank_0(sim, last_checkpoint.elapsed() >= d),
             None => false,
         };
         let stop = stop_requested(sim, options);
@@ -1239,15 +1225,19 @@ fn run_simulation(
         // With checkpoints on, the last step has one too: a chained restart (a longer t_stop,
         // with --accept-changed-case) goes on from the end, not from an earlier checkpoint.
         let last_checkpoint_due = end && options.checkpoint_every.is_some();
-        if (((due || stop) && !end) || last_checkpoint_due) && !ranks {
+        if ((due || stop) && !end) || last_checkpoint_due {
             // The rows and the list of files up to the checkpoint are on the disk before it is:
             // a restart from it finds them all.
             ts.sync().map_err(io_err(&ts_path))?;
             folder.record(Path::new(CHECKPOINT_FILE))?;
             folder.sync()?;
             sim.set_checkpoint_note(note(&ts, step));
-            write_atomic_with(&checkpoint_path, |w| sim.write_checkpoint(hash, w))
-                .map_err(io_err(&checkpoint_path))?;
+            // On ranks, the whole run gathered on rank 0 (which alone writes it): one file.
+            let whole = if ranks { sim.gathered_whole() } else { None };
+            if let Some(sim) = if ranks { whole.as_ref() } else { Some(&*sim) } {
+                write_atomic_with(&checkpoint_path, |w| sim.write_checkpoint(hash, w))
+                    .map_err(io_err(&checkpoint_path))?;
+            }
             checkpoint = Some(checkpoint_path.clone());
             last_checkpoint = Instant::now();
         }
@@ -1294,6 +1284,14 @@ fn run_simulation(
     })
 }
 
+/// `yes` on one process; on ranks, rank 0's `yes` on every rank.
+fn agree_with_rank_0(sim: &Simulation, yes: bool) -> bool {
+    match sim.comm() {
+        Some(comm) => comm.all_gather(&[yes as u64])[0][0] != 0,
+        None => yes,
+    }
+}
+
 /// Whether the run was asked to stop; on ranks, whether any rank was (so that they stop
 /// together, at the step the first of them was told to).
 fn stop_requested(sim: &Simulation, options: &RunOptions) -> bool {
@@ -1305,20 +1303,16 @@ fn stop_requested(sim: &Simulation, options: &RunOptions) -> bool {
 }
 
 /// The error of a run that failed its health check with `message`: the last good state saved
-/// (none on ranks) and the time series closed.
+/// and the time series closed.
 fn unhealthy(
     message: String,
-    last_good: Option<&LastGood>,
+    kept: &LastGood,
     folder: &mut OutputFolder,
     ts: TimeSeriesWriter,
     ts_path: &Path,
 ) -> RunError {
-    let saved = match last_good {
-        Some(kept) => {
-            folder.record(Path::new(LAST_GOOD_FILE)).map_err(RunError::from).and_then(|()| Ok(kept.save()?))
-        }
-        None => Err(RunError::UnhealthyOnRanks { message: message.clone() }),
-    };
+    let saved =
+        folder.record(Path::new(LAST_GOOD_FILE)).map_err(RunError::from).and_then(|()| Ok(kept.save()?));
     if let Err(e) = ts.finish() {
         return RunError::Output(io_err(ts_path)(e));
     }
