@@ -458,3 +458,36 @@ fn a_rank_killed_ends_the_run_and_its_last_checkpoint_goes_on() {
         assert!(a.0 == b.0 && a.1 == b.1, "{} differs after the restart", a.0);
     }
 }
+
+/// A run on 2 ranks that fails its health check (a forced time step far beyond the stable
+/// one) exits 1 with the diagnosis once and saves the last good state of the whole run; that
+/// state, continued in one process with the case fixed, writes the bytes the last good state
+/// of the same run in one process does.
+#[test]
+#[ignore = "needs MPI (OpenMPI's mpirun, a build with --features mpi)"]
+fn a_failed_health_check_on_two_ranks_saves_the_whole_last_good_state() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let good = example(dir.path(), "settling-bed", &[("t_stop", "t_stop = 0.05")], false);
+    let text = std::fs::read_to_string(&good).expect("case");
+    let bad = good.with_file_name("bad.toml");
+    let broken = text.replace("integrator = \"euler\"", "integrator = \"euler\"\ndt = 4e-4\nforce_dt = true");
+    assert_ne!(text, broken);
+    std::fs::write(&bad, broken).expect("case");
+    let mut resumed = Vec::new();
+    for (name, ranks) in [("one", None), ("two", Some(2))] {
+        let out = dir.path().join(name);
+        let r = run(&bad, &out, ranks, 1);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(1), "{name}: {stderr}");
+        assert_eq!(stderr.matches("Likely cause").count(), 1, "{name}: {stderr}");
+        let saved = out.join("checkpoint-last-good.gfc");
+        let again = dir.path().join(format!("{name}-resumed"));
+        let saved = saved.to_str().expect("utf-8");
+        let r = command(&good, &again, None, 1, &["--accept-changed-case", "--restart", saved])
+            .output()
+            .expect("runs");
+        assert!(r.status.success(), "{name}: {}", String::from_utf8_lossy(&r.stderr));
+        resumed.push(outputs(&again));
+    }
+    assert!(resumed[0].len() > 1 && resumed[0] == resumed[1], "the two last good states go on differently");
+}
