@@ -1185,8 +1185,8 @@ fn run_simulation(
         let ahead =
             periods.iter().flatten().filter(|&&p| p > 0).fold(MAX_STEPS_UNSEEN, |k, &p| k.min(p - step % p));
         sim.advance(ahead);
-        let n = if ranks { n_start } else { sim.particles().len() };
-        particle_steps += (sim.step_index() - step) as f64 * n as f64;
+        // Collective on ranks: every rank takes each look at the same step.
+        particle_steps += (sim.step_index() - step) as f64 * sim.total_particles() as f64;
         let step = sim.step_index();
         let end = sim.finished();
         let output_now = step.is_multiple_of(every) || end;

@@ -322,6 +322,62 @@ impl FlowStage {
     }
 }
 
+/// A rank's part of the flow state (what it caught and removed): the rest every rank holds
+/// alike.
+impl FlowStage {
+    /// This rank's caught particles and its outlets' removals, as words: the caught count,
+    /// (id, outlet) pairs, then per outlet its tally's three words.
+    pub(super) fn rank_words(&self) -> Vec<u64> {
+        let mut w = vec![self.pending.len() as u64];
+        w.extend(self.pending.iter().flat_map(|(&id, &o)| [id as u64, o as u64]));
+        for t in &self.removed {
+            w.extend([t.count, t.units as u128 as u64, (t.units as u128 >> 64) as u64]);
+        }
+        w
+    }
+
+    /// Adds a rank's [`rank_words`](Self::rank_words) at the start of `w` to this state;
+    /// returns how many words they were.
+    pub(super) fn add_rank_words(&mut self, w: &[u64]) -> usize {
+        let caught = w[0] as usize;
+        for c in w[1..1 + 2 * caught].chunks_exact(2) {
+            self.pending.insert(c[0] as u32, c[1] as u32);
+        }
+        let at = 1 + 2 * caught;
+        for (k, t) in self.removed.iter_mut().enumerate() {
+            let c = &w[at + 3 * k..];
+            t.count += c[0];
+            t.units += (c[1] as u128 | (c[2] as u128) << 64) as i128;
+        }
+        at + 3 * self.removed.len()
+    }
+
+    /// Keeps this rank's part of a whole run's flow state: the caught particles among `own`
+    /// (sorted ids); the removals on rank 0 only, where they are counted once.
+    pub(super) fn keep_rank_part(&mut self, own: &[u32], rank: usize) {
+        self.pending.retain(|id, _| own.binary_search(id).is_ok());
+        if rank != 0 {
+            self.removed.iter_mut().for_each(|t| *t = Tally::default());
+        }
+    }
+
+    /// Forgets this rank's part (to add every rank's after).
+    pub(super) fn clear_rank_part(&mut self) {
+        self.keep_rank_part(&[], 1);
+    }
+
+    /// The outlet that caught particle `id`, taken out of this rank's caught particles (it
+    /// moves to another rank).
+    pub(super) fn take_caught(&mut self, id: u32) -> Option<u32> {
+        self.pending.remove(&id)
+    }
+
+    /// Particle `id`, which came from another rank, was caught by `outlet` there.
+    pub(super) fn put_caught(&mut self, id: u32, outlet: u32) {
+        self.pending.insert(id, outlet);
+    }
+}
+
 /// The engine's checks of an insertion (the case layer names the keys).
 fn check_insertion(ins: &Insertion, n_phases: usize) -> Result<(), EngineError> {
     let bad = |what: String| EngineError::BadReference(format!("insertion '{}': {what}", ins.name));
@@ -384,15 +440,33 @@ fn check_insertion(ins: &Insertion, n_phases: usize) -> Result<(), EngineError> 
 
 impl Simulation {
     /// The mass books: initial, inserted, removed and present particles, each counted and
-    /// weighed exactly (see [`FlowBooks`]).
+    /// weighed exactly (see [`FlowBooks`]). Collective on ranks: every rank must call it.
     pub fn flow_books(&self) -> FlowBooks {
         let st = &self.flow;
+        let mut present = st.tally(self.particles.mass[..self.owned()].iter().copied());
+        let mut removed = st.removed.clone();
+        if let Some(comm) = self.comm() {
+            // Each rank counts its own particles and what its outlets removed; what was
+            // inserted every rank counts alike (each places every batch).
+            let mut mine = Vec::with_capacity(3 * (1 + removed.len()));
+            for t in std::iter::once(&present).chain(&removed) {
+                mine.extend([t.count, t.units as u128 as u64, (t.units as u128 >> 64) as u64]);
+            }
+            let all = comm.all_gather(&mine);
+            for (k, t) in std::iter::once(&mut present).chain(&mut removed).enumerate() {
+                *t = Tally::default();
+                for w in &all {
+                    t.count += w[3 * k];
+                    t.units += (w[3 * k + 1] as u128 | (w[3 * k + 2] as u128) << 64) as i128;
+                }
+            }
+        }
         FlowBooks {
             quantum: 2f64.powi(st.quantum_exp),
             initial: st.initial,
             inserted: st.feeds.iter().map(|f| f.placed).collect(),
-            removed: st.removed.clone(),
-            present: st.tally(self.particles.mass.iter().copied()),
+            removed,
+            present,
             missed: st.feeds.iter().map(|f| f.missed).collect(),
             asked: st.feeds.iter().map(|f| f.drawn.0).collect(),
             asked_mass: st.feeds.iter().map(|f| f.drawn.2).collect(),
@@ -453,7 +527,9 @@ impl Simulation {
         if !self.flow.outlets.is_empty() {
             self.catch_leaving();
         }
-        let drain = !self.flow.pending.is_empty() && self.step.is_multiple_of(DRAIN_EVERY);
+        let drain = !self.flow.outlets.is_empty()
+            && self.step.is_multiple_of(DRAIN_EVERY)
+            && self.on_any_rank(!self.flow.pending.is_empty());
         if due.is_empty() && !drain {
             return Ok(());
         }
@@ -490,6 +566,8 @@ impl Simulation {
     /// all positions in one tight loop: this runs at every step.
     fn catch_leaving(&mut self) {
         let p = &self.particles;
+        // A rank's own particles (its ghosts are caught by their owners).
+        let own = &p.position[..self.owned()];
         let FlowStage { outlets, pending, .. } = &mut self.flow;
         for (o, outlet) in outlets.iter().enumerate() {
             let mut catch = |i: usize| {
@@ -498,14 +576,14 @@ impl Simulation {
             match &outlet.shape {
                 // The test of `has_left`, written out so that the loop stays simple.
                 &OutletShape::Plane { point, normal } => {
-                    for (i, &x) in p.position.iter().enumerate() {
+                    for (i, &x) in own.iter().enumerate() {
                         if (x - point).dot(normal) > 0.0 {
                             catch(i);
                         }
                     }
                 }
                 shape => {
-                    for (i, &x) in p.position.iter().enumerate() {
+                    for (i, &x) in own.iter().enumerate() {
                         if shape.has_left(x) {
                             catch(i);
                         }
@@ -520,13 +598,18 @@ impl Simulation {
         let p = &self.particles;
         let pending = std::mem::take(&mut self.flow.pending);
         let gone: Vec<(usize, usize)> =
-            (0..p.len()).filter_map(|i| pending.get(&p.id[i]).map(|&o| (i, o as usize))).collect();
-        if gone.is_empty() {
-            return Ok(());
-        }
+            (0..self.owned()).filter_map(|i| pending.get(&p.id[i]).map(|&o| (i, o as usize))).collect();
         for &(i, o) in &gone {
             let u = self.flow.units(self.particles.mass[i]);
             self.flow.removed[o].add(u);
+        }
+        if self.comm().is_some() {
+            // Every rank removes its own and the ghosts of the others'.
+            let ids: Vec<u32> = gone.iter().map(|&(i, _)| self.particles.id[i]).collect();
+            return self.remove_over_ranks(&ids).map(|_| ());
+        }
+        if gone.is_empty() {
+            return Ok(());
         }
         let mut leaving = vec![false; p.len()];
         for &(i, _) in &gone {
@@ -566,10 +649,25 @@ impl Simulation {
             let v = std::f64::consts::FRAC_PI_6 * (2.0 * p.radius).powi(3);
             feed.drawn = (feed.drawn.0 + 1, feed.drawn.1 + v, feed.drawn.2 + p.density * v);
         }
-        self.check_given_against_present(ins, &new)?;
-        let first = self.particles.len();
-        self.insert(&new)?;
-        let units: Vec<i128> = self.particles.mass[first..].iter().map(|&m| self.flow.units(m)).collect();
+        // On ranks, against every rank's particles (all of them: a given set comes once).
+        let near = self.particles_near(None);
+        let p = &self.particles;
+        let present = match &near {
+            Some(n) => (&n.0[..], &n.1[..], &n.2[..]),
+            None => (&p.id[..], &p.position[..], &p.radius[..]),
+        };
+        if let Some(notice) = self.check_given_against_present(ins, &new, present)? {
+            self.flow.notices.push(notice);
+        }
+        self.add_inserted(k, &new)
+    }
+
+    /// Appends the particles `new` of insertion `k` (every rank places every batch alike and
+    /// keeps those in its box) and counts them in its books.
+    fn add_inserted(&mut self, k: usize, new: &[ParticleInit]) -> Result<(), EngineError> {
+        let units: Vec<i128> =
+            crate::state::Particles::from_init(new).mass.iter().map(|&m| self.flow.units(m)).collect();
+        self.insert(new)?;
         for u in units {
             self.flow.feeds[k].placed.add(u);
         }
@@ -580,23 +678,23 @@ impl Simulation {
     /// particle's centre is an error (the contact has no normal), the largest overlap above
     /// the insertion's limit a notice. Through the nearest periodic image.
     fn check_given_against_present(
-        &mut self,
+        &self,
         ins: &Insertion,
         new: &[ParticleInit],
-    ) -> Result<(), EngineError> {
-        let p = &self.particles;
-        if p.is_empty() || new.is_empty() {
-            return Ok(());
+        (ids, positions, radii): (&[u32], &[Vec3], &[f64]),
+    ) -> Result<Option<String>, EngineError> {
+        if ids.is_empty() || new.is_empty() {
+            return Ok(None);
         }
-        let r_max = p.radius.iter().chain(new.iter().map(|q| &q.radius)).copied().fold(0.0, f64::max);
+        let r_max = radii.iter().chain(new.iter().map(|q| &q.radius)).copied().fold(0.0, f64::max);
         let cell = (2.0 * r_max).max(f64::MIN_POSITIVE);
         let key = |x: Vec3| {
             let c = (x / cell).floor();
             (c.x as i64, c.y as i64, c.z as i64)
         };
         let mut grid: std::collections::HashMap<(i64, i64, i64), Vec<usize>> = Default::default();
-        for i in 0..p.len() {
-            grid.entry(key(self.periodic.wrap(p.position[i]))).or_default().push(i);
+        for (i, &x) in positions.iter().enumerate() {
+            grid.entry(key(self.periodic.wrap(x))).or_default().push(i);
         }
         let images = self.periodic.any();
         let mut worst: Option<(f64, u32, usize)> = None;
@@ -607,7 +705,7 @@ impl Simulation {
             // On a periodic axis, the cells across the face hold the images' neighbours: all
             // cells are searched then (a given set is inserted once).
             let candidates: Vec<usize> = if images {
-                (0..p.len()).collect()
+                (0..ids.len()).collect()
             } else {
                 let mut c = Vec::new();
                 for dx in -1..=1 {
@@ -620,28 +718,27 @@ impl Simulation {
                 c
             };
             for i in candidates {
-                let d = self.periodic.nearest(x - p.position[i]);
+                let d = self.periodic.nearest(x - positions[i]);
                 if d == Vec3::ZERO {
                     return Err(EngineError::BadReference(format!(
                         "insertion '{}': its particle {} (the file's particle {}) comes in at the centre ({:e}, {:e}, {:e}) m of particle {}: their contact has no normal direction; move one of them",
-                        ins.name, q.id, ins.given[j].id, q.position.x, q.position.y, q.position.z, p.id[i]
+                        ins.name, q.id, ins.given[j].id, q.position.x, q.position.y, q.position.z, ids[i]
                     )));
                 }
-                let overlap = q.radius + p.radius[i] - d.length();
-                let ratio = overlap / q.radius.min(p.radius[i]);
+                let overlap = q.radius + radii[i] - d.length();
+                let ratio = overlap / q.radius.min(radii[i]);
                 if ratio > ins.max_initial_overlap && worst.is_none_or(|w| ratio > w.0) {
                     worst = Some((ratio, q.id, i));
                 }
             }
         }
-        if let Some((ratio, id, i)) = worst {
+        Ok(worst.map(|(ratio, id, i)| {
             let t = self.time();
-            self.flow.notices.push(format!(
+            format!(
                 "insertion '{}' at t = {t:.6e} s: its particle {id} overlaps particle {} by {ratio:.3} of the smaller radius (the largest overlap of the file's particles with those present), above max_initial_overlap = {}; the contact starts with a burst of elastic energy",
-                ins.name, self.particles.id[i], ins.max_initial_overlap
-            ));
-        }
-        Ok(())
+                ins.name, ids[i], ins.max_initial_overlap
+            )
+        }))
     }
 
     /// The mesh wall whose inside `region` is (the same triangles where the mesh was
@@ -784,10 +881,17 @@ impl Simulation {
         let solids = self.solids_for(region, own, margin);
         let solids: Vec<&InsideMesh> = solids.iter().map(|s| s.as_ref()).collect();
         let periodic = self.periodic.any().then_some(self.periodic);
+        // On ranks, every rank's particles near the region (the placement looks no further
+        // than 1.5 new radii and a present one's radius beyond it).
+        let (lo, hi) = region.bounds();
+        let near = self.particles_near(Some((lo, hi, 2.0 * margin)));
         let p = &self.particles;
-        let radii = &p.radius;
+        let (positions, radii) = match &near {
+            Some(n) => (&n.1[..], &n.2[..]),
+            None => (&p.position[..], &p.radius[..]),
+        };
         let obstacles = Obstacles {
-            positions: &p.position,
+            positions,
             radii,
             walls: &self.walls,
             cylinders: &self.sources.cylinders.walls,
@@ -826,13 +930,7 @@ impl Simulation {
         if new.is_empty() {
             return Ok(());
         }
-        let first = self.particles.len();
-        self.insert(&new)?;
-        let units: Vec<i128> = self.particles.mass[first..].iter().map(|&m| self.flow.units(m)).collect();
-        for u in units {
-            self.flow.feeds[k].placed.add(u);
-        }
-        Ok(())
+        self.add_inserted(k, &new)
     }
 
     /// The mesh walls' triangles, where they are now, whose bounding boxes come within

@@ -122,26 +122,20 @@ impl Simulation {
     /// would (with Adams–Bashforth, it takes its first step as the run's first step was
     /// taken). Overlaps with particles or walls are not checked: an overlapping particle is
     /// pushed out by the contact law.
+    ///
+    /// On ranks every rank must call it with the same particles: each keeps those in its box.
     pub fn insert(&mut self, new: &[ParticleInit]) -> Result<(), EngineError> {
+        if self.comm().is_some() { self.insert_over_ranks(new) } else { self.append_new(new) }
+    }
+
+    /// Appends the particles `new` (checked) to this rank's slots.
+    pub(super) fn append_new(&mut self, new: &[ParticleInit]) -> Result<(), EngineError> {
         if self.kick_pending {
             return Err(EngineError::BadReference(
                 "internal error: insertion with a half kick pending".into(),
             ));
         }
-        let mut ids: Vec<u32> = self.particles.id.iter().chain(new.iter().map(|q| &q.id)).copied().collect();
-        ids.sort_unstable();
-        if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
-            return Err(EngineError::BadReference(format!("particle id {} is used twice", w[0])));
-        }
-        let mut added = crate::state::Particles::from_init(new);
-        super::check_particles(&added, self.phases.len())?;
-        if let Some(q) = new.iter().find(|q| !(q.density.is_finite() && q.density > 0.0)) {
-            return Err(EngineError::invalid(
-                format!("particle {} density", q.id),
-                q.density,
-                "a density must be positive, in kg/m³",
-            ));
-        }
+        let mut added = self.check_new(new)?;
         let ab = !self.particles.accel_prev.is_empty();
         if ab {
             // No history yet: the first step is taken as the run's first (see `integrate`).
@@ -154,7 +148,28 @@ impl Simulation {
         // The forces held are those of the particles before: evaluated again before they act.
         self.forces_current = false;
         self.derive_slot_facts();
-        self.put_prescribed_last()
+        // On ranks the domain stage lays the slots out (`insert_over_ranks`).
+        if self.comm().is_some() { Ok(()) } else { self.put_prescribed_last() }
+    }
+
+    /// The particles `new` checked as [`insert`](Self::insert) takes them: ids unused, and
+    /// valid states.
+    pub(super) fn check_new(&self, new: &[ParticleInit]) -> Result<crate::state::Particles, EngineError> {
+        let mut ids: Vec<u32> = self.particles.id.iter().chain(new.iter().map(|q| &q.id)).copied().collect();
+        ids.sort_unstable();
+        if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+            return Err(EngineError::BadReference(format!("particle id {} is used twice", w[0])));
+        }
+        let added = crate::state::Particles::from_init(new);
+        super::check_particles(&added, self.phases.len())?;
+        if let Some(q) = new.iter().find(|q| !(q.density.is_finite() && q.density > 0.0)) {
+            return Err(EngineError::invalid(
+                format!("particle {} density", q.id),
+                q.density,
+                "a density must be positive, in kg/m³",
+            ));
+        }
+        Ok(added)
     }
 
     /// Slots `order` with the particles under prescribed motion moved after the others, each
@@ -183,10 +198,16 @@ impl Simulation {
 
     /// Removes the particles with the given ids between steps (with their contacts'
     /// histories); returns how many there were. Particles under prescribed motion cannot be
-    /// removed.
+    /// removed. On ranks every rank must call it with the same ids.
     pub fn remove_ids(&mut self, ids: &[u32]) -> Result<usize, EngineError> {
         let mut gone: Vec<u32> = ids.to_vec();
         gone.sort_unstable();
+        if self.comm().is_some() {
+            let p = &self.particles;
+            let mine: Vec<u32> =
+                (0..self.owned()).map(|i| p.id[i]).filter(|id| gone.binary_search(id).is_ok()).collect();
+            return self.remove_over_ranks(&mine);
+        }
         self.remove_where(|p, i| gone.binary_search(&p.id[i]).is_ok())
     }
 

@@ -27,7 +27,7 @@ use crate::domain::{Boxes, Comm, Weighted};
 use crate::error::EngineError;
 use crate::math::Vec3;
 use crate::neighbor::{NeighborState, nonzero};
-use crate::state::Particles;
+use crate::state::{ParticleInit, Particles};
 use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::Arc;
@@ -84,8 +84,8 @@ const CONTACT: usize = 13;
 impl Simulation {
     /// Spreads the run over the ranks of `comm`, keeping on this rank the particles of its box
     /// and their ghosts. Every rank must call it with the same simulation (as set up from the
-    /// same case), before the first step. Refused for what ranks cannot run yet: insertions and
-    /// outlets, and prescribed motion that follows a leader.
+    /// same case), before the first step. Refused for what ranks cannot run yet: prescribed
+    /// motion that follows a leader.
     pub fn decompose(&mut self, comm: Arc<dyn Comm>) -> Result<(), EngineError> {
         let refuse = |what: &str| {
             Err(EngineError::BadReference(format!("{what} cannot yet run on more than one rank")))
@@ -93,13 +93,8 @@ impl Simulation {
         if self.domain.is_some() {
             return refuse("a run already spread over ranks");
         }
-        if comm.size() > 1 {
-            if !self.flow.is_empty() {
-                return refuse("insertions and outlets");
-            }
-            if self.motion.iter().any(|r| r.leader.is_some()) {
-                return refuse("prescribed motion that follows a leader");
-            }
+        if comm.size() > 1 && self.motion.iter().any(|r| r.leader.is_some()) {
+            return refuse("prescribed motion that follows a leader");
         }
         if self.kick_pending || self.particles.len() != self.slot_count {
             return Err(EngineError::BadReference(
@@ -134,8 +129,120 @@ impl Simulation {
         }));
         // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
         self.sort.rule = ResortRule::Never;
-        self.redistribute(true);
+        let rank = self.domain.as_ref().map_or(0, |d| d.comm.rank());
+        self.redistribute(true, 0..0);
+        // Each rank keeps the caught particles of its own, and rank 0 the outlets' books.
+        let mut own: Vec<u32> = self.particles.id[..self.owned()].to_vec();
+        own.sort_unstable();
+        self.flow.keep_rank_part(&own, rank);
         Ok(())
+    }
+
+    /// Whether `yes` holds on any rank (`yes` in one process). Collective on ranks.
+    pub(super) fn on_any_rank(&self, yes: bool) -> bool {
+        match &self.domain {
+            None => yes,
+            Some(d) => d.comm.all_gather(&[yes as u64]).iter().any(|w| w[0] != 0),
+        }
+    }
+
+    /// Every rank's particles (ghosts left out) in id order, as (ids, positions, radii), on
+    /// every rank; with `near` = (lo, hi, reach), only those whose centres come within reach
+    /// and their radius of the box lo..hi (all of them on a periodic run, whose images wrap).
+    /// `None` in one process. Collective on ranks.
+    #[allow(clippy::type_complexity)]
+    pub(super) fn particles_near(
+        &self,
+        near: Option<(Vec3, Vec3, f64)>,
+    ) -> Option<(Vec<u32>, Vec<Vec3>, Vec<f64>)> {
+        let d = self.domain.as_ref()?;
+        let p = &self.particles;
+        let close = |i: usize| match near {
+            Some((lo, hi, reach)) if !self.periodic.any() => {
+                let r = Vec3::splat(reach + p.radius[i]);
+                let x = p.position[i];
+                x.cmpge(lo - r).all() && x.cmple(hi + r).all()
+            }
+            _ => true,
+        };
+        let mut mine = Vec::new();
+        for i in (0..d.owned).filter(|&i| close(i)) {
+            mine.extend([p.id[i] as u64, p.radius[i].to_bits()]);
+            push_vecs(&mut mine, &[p.position[i]]);
+        }
+        let mut all: Vec<(u32, Vec3, f64)> = Vec::new();
+        for words in d.comm.all_gather(&mine) {
+            for w in words.chunks_exact(5) {
+                all.push((w[0] as u32, vec_at(w, 2), f64::from_bits(w[1])));
+            }
+        }
+        all.sort_unstable_by_key(|e| e.0);
+        Some((
+            all.iter().map(|e| e.0).collect(),
+            all.iter().map(|e| e.1).collect(),
+            all.iter().map(|e| e.2).collect(),
+        ))
+    }
+
+    /// [`insert`](Simulation::insert) on ranks: every rank checks all of `new` (a refusal is
+    /// every rank's), appends those in its box and lays out its slots again, the list built
+    /// as one process builds it after an insertion.
+    pub(super) fn insert_over_ranks(&mut self, new: &[ParticleInit]) -> Result<(), EngineError> {
+        let Some(d) = &self.domain else { return self.append_new(new) };
+        self.check_new(new)?;
+        let (me, per) = (d.comm.rank(), self.periodic);
+        // A particle outside every box (which only a non-finite position is) goes to rank 0.
+        let mine: Vec<ParticleInit> =
+            new.iter().filter(|q| d.boxes.owner(per.wrap(q.position)).unwrap_or(0) == me).copied().collect();
+        let before = self.particles.len();
+        self.append_new(&mine)?;
+        self.redistribute(false, before..self.particles.len());
+        Ok(())
+    }
+
+    /// Removes the particles `mine` of this rank's own (ids) and, on every rank, the ghosts
+    /// of those the others remove, keeping the slots' layout and the list as it is, as one
+    /// process removes them; returns how many were removed over all ranks. Collective.
+    pub(super) fn remove_over_ranks(&mut self, mine: &[u32]) -> Result<usize, EngineError> {
+        let Some(d) = self.domain.as_mut() else {
+            return Err(EngineError::BadReference(
+                "internal error: a removal over ranks in one process".into(),
+            ));
+        };
+        let words: Vec<u64> = mine.iter().map(|&id| id as u64).collect();
+        let mut gone: Vec<u32> = d.comm.all_gather(&words).into_iter().flatten().map(|w| w as u32).collect();
+        if gone.is_empty() {
+            return Ok(0);
+        }
+        gone.sort_unstable();
+        // Refused alike on every rank, before anything changes.
+        if let Some(id) = gone.iter().find(|id| d.held.contains_key(id)) {
+            return Err(EngineError::BadReference(format!(
+                "particle {id} is under prescribed motion (or leads a particle that is): it cannot be removed"
+            )));
+        }
+        let p = &self.particles;
+        let n = p.len();
+        let order: Vec<usize> = (0..n).filter(|&i| gone.binary_search(&p.id[i]).is_err()).collect();
+        let mut new_of = vec![u32::MAX; n];
+        for (k, &i) in order.iter().enumerate() {
+            new_of[i] = k as u32;
+        }
+        let before = |s: usize| order.partition_point(|&i| i < s);
+        d.owned = before(d.owned);
+        for sends in &mut d.sends {
+            sends.retain(|&i| new_of[i as usize] != u32::MAX);
+            sends.iter_mut().for_each(|i| *i = new_of[*i as usize]);
+        }
+        for g in &mut d.ghosts {
+            *g = before(g.start)..before(g.end);
+        }
+        let owned = d.owned;
+        self.rearrange(&order)?;
+        self.neighbors.set_ghosts_from(Some(owned));
+        // The remaining particles' forces are those with the removed ones.
+        self.forces_current = false;
+        Ok(gone.len())
     }
 
     /// The number of this rank's own particles (slots `0..owned()`; ghosts follow): all of
@@ -288,7 +395,7 @@ impl Simulation {
         let moved = self.neighbors.any_moved(&self.particles.position[..d.owned]);
         let due = d.comm.all_gather(&[moved as u64]).iter().any(|w| w[0] != 0);
         if due {
-            self.redistribute(false);
+            self.redistribute(false, 0..0);
         } else if self.drifted || d.stale {
             // The particles moved since the ghosts were last refreshed (velocity Verlet's
             // drift, or a step whose end left them behind).
@@ -404,6 +511,7 @@ impl Simulation {
         for &&(id, w, h, _) in &walls {
             push_history(&mut mine, [id, w], h);
         }
+        mine.extend(self.flow.rank_words());
         for (words, records) in self.sources.carry() {
             let kept: Vec<&[u64]> =
                 records.chunks_exact(words.max(1)).filter(|r| (r[0] as usize) < owned).collect();
@@ -423,6 +531,8 @@ impl Simulation {
         let mut table: HashMap<[u32; 2], Vec3> = HashMap::new();
         let mut wall_table: Vec<(u32, u32, Vec3)> = Vec::new();
         let mut records: Vec<Vec<u64>> = Vec::new();
+        let mut flow = self.flow.clone();
+        flow.clear_rank_part();
         for words in &got {
             let mut at = 1;
             for _ in 0..words[0] {
@@ -438,6 +548,7 @@ impl Simulation {
                 wall_table.push((id, w, h));
             }
             at += 1 + 5 * words[at] as usize;
+            at += flow.add_rank_words(&words[at..]);
             for k in 0.. {
                 if at == words.len() {
                     break;
@@ -471,6 +582,7 @@ impl Simulation {
             .iter()
             .map(|&id| crate::motion::ResolvedMotion::hold(slot(id) as usize, d.held[&id]));
         let mut whole = self.clone();
+        whole.flow = flow;
         whole.motion = motion.collect();
         whole.domain = None;
         let n = all.len();
@@ -489,17 +601,28 @@ impl Simulation {
         Some(whole)
     }
 
-    /// Moves every particle to the rank of its box with its pair and wall histories, chooses
-    /// the ghosts again and builds the list. With `initial`, every rank holds every particle
-    /// (the set-up's), so none has to travel.
-    fn redistribute(&mut self, initial: bool) {
+    /// Moves every particle to the rank of its box with its pair and wall histories (and the
+    /// outlet that caught it), chooses the ghosts again and builds the list. With `initial`,
+    /// every rank holds every particle (the set-up's), so none has to travel; `extra` are
+    /// slots after the ghosts that are this rank's own too (particles just inserted).
+    fn redistribute(&mut self, initial: bool, extra: Range<usize>) {
         let Some(mut d) = self.domain.take() else { return };
         let (me, ranks) = (d.comm.rank(), d.comm.size());
         let per = self.periodic;
         let p = &self.particles;
         let owned_before = if initial { p.len() } else { d.owned };
-        let dest: Vec<usize> =
-            (0..owned_before).map(|i| d.boxes.owner(per.wrap(p.position[i])).unwrap_or(me)).collect();
+        // Each own slot's rank; a ghost's is none.
+        const NONE: usize = usize::MAX;
+        let dest: Vec<usize> = (0..p.len())
+            .map(|i| {
+                if i < owned_before || extra.contains(&i) {
+                    d.boxes.owner(per.wrap(p.position[i])).unwrap_or(me)
+                } else {
+                    NONE
+                }
+            })
+            .collect();
+        let leaves = |i: usize| dest[i] != me && dest[i] != NONE;
         let (pairs, walls) = self.histories_by_id();
         // The other sources' histories, by ids, kept here or sent with their particles.
         let carried = self.sources.carry();
@@ -508,15 +631,18 @@ impl Simulation {
         for (k, (words, records)) in carried.iter().enumerate() {
             for r in records.chunks_exact((*words).max(1)) {
                 let slot = r[0] as usize;
-                let to =
-                    if dest[slot] == me { &mut kept_records[k] } else { &mut sent_records[dest[slot]][k] };
+                let to = match dest[slot] {
+                    NONE => continue,
+                    r if r == me => &mut kept_records[k],
+                    r => &mut sent_records[r][k],
+                };
                 to.push(p.id[slot] as u64);
                 to.extend_from_slice(&r[1..]);
             }
         }
         let mut table: HashMap<[u32; 2], Vec3> = HashMap::with_capacity(pairs.len());
         let mut wall_table: Vec<(u32, u32, Vec3)> = Vec::new();
-        let kept: Vec<usize> = (0..owned_before).filter(|&i| dest[i] == me).collect();
+        let kept: Vec<usize> = (0..p.len()).filter(|&i| dest[i] == me).collect();
         let mut next = p.gathered(&kept);
         for (ids, _, h) in &pairs {
             table.insert(*ids, *h);
@@ -530,18 +656,20 @@ impl Simulation {
             // The particles that left this box, each followed by its histories.
             let mut out: Vec<Vec<u64>> = vec![Vec::new(); ranks];
             let mut count = vec![0usize; ranks];
-            for i in 0..owned_before {
-                if dest[i] != me {
-                    d.push_moving(&mut out[dest[i]], p, i);
-                    count[dest[i]] += 1;
-                    d.stats.migrated += 1;
+            let mut caught: Vec<Vec<u64>> = vec![Vec::new(); ranks];
+            for i in (0..p.len()).filter(|&i| leaves(i)) {
+                d.push_moving(&mut out[dest[i]], p, i);
+                count[dest[i]] += 1;
+                d.stats.migrated += 1;
+                if let Some(o) = self.flow.take_caught(p.id[i]) {
+                    caught[dest[i]].extend([p.id[i] as u64, o as u64]);
                 }
             }
             let mut histories: Vec<Vec<u64>> = vec![Vec::new(); ranks];
             for (ids, [a, b], h) in &pairs {
                 let mut sent = usize::MAX;
                 for s in [*a as usize, *b as usize] {
-                    if s < owned_before && dest[s] != me && dest[s] != sent {
+                    if leaves(s) && dest[s] != sent {
                         sent = dest[s];
                         push_history(&mut histories[sent], *ids, *h);
                     }
@@ -549,9 +677,8 @@ impl Simulation {
             }
             let mut wall_words: Vec<Vec<u64>> = vec![Vec::new(); ranks];
             for &(id, w, h, i) in &walls {
-                let r = dest[i as usize];
-                if r != me {
-                    push_history(&mut wall_words[r], [id, w], h);
+                if leaves(i as usize) {
+                    push_history(&mut wall_words[dest[i as usize]], [id, w], h);
                 }
             }
             for r in 0..ranks {
@@ -564,6 +691,8 @@ impl Simulation {
                 o.extend(pw);
                 o.push((ww.len() / 5) as u64);
                 o.extend(ww);
+                o.push((caught[r].len() / 2) as u64);
+                o.append(&mut caught[r]);
                 for records in std::mem::take(&mut sent_records[r]) {
                     o.push(records.len() as u64);
                     o.extend(records);
@@ -591,6 +720,11 @@ impl Simulation {
                     wall_table.push((id, w, h));
                 }
                 at += 5 * n_walls;
+                let n_caught = words[at] as usize;
+                for c in words[at + 1..at + 1 + 2 * n_caught].chunks_exact(2) {
+                    self.flow.put_caught(c[0] as u32, c[1] as u32);
+                }
+                at += 1 + 2 * n_caught;
                 for records in &mut kept_records {
                     let len = words[at] as usize;
                     records.extend_from_slice(&words[at + 1..at + 1 + len]);
