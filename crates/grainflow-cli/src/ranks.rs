@@ -105,10 +105,41 @@ pub fn start() -> Result<Ranks, String> {
     }
     let world = universe.world();
     let (rank, size) = (world.rank() as usize, world.size() as usize);
+    abort_on_panic(rank);
     if rank > 0 {
         silence();
     }
     Ok(Ranks { _universe: universe, comm: Arc::new(MpiComm { world, rank, size }) })
+}
+
+/// Makes a panic (an internal error) on any rank end every rank through MPI_Abort, exit code
+/// 101 as a panic's, instead of leaving the others waiting for it in a collective; a rank
+/// other than 0 prints its message to the terminal it started with, named by its rank.
+fn abort_on_panic(rank: usize) {
+    use std::io::Write;
+    use std::os::fd::{AsRawFd, FromRawFd};
+    // SAFETY: dup of the open standard error gives a descriptor this process owns; the file
+    // built from it is leaked into the hook, which lives as long as the process.
+    #[allow(unsafe_code)]
+    let terminal = unsafe {
+        let fd = libc::dup(std::io::stderr().as_raw_fd());
+        (fd >= 0).then(|| std::fs::File::from_raw_fd(fd))
+    };
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        match (&terminal, rank) {
+            (Some(t), r) if r > 0 => {
+                let _ = writeln!(&*t, "grainflow rank {r}: internal error: {info}");
+            }
+            _ => default(info),
+        }
+        // SAFETY: MPI is initialised (this hook is set after it) and the world communicator
+        // outlives every rank's work; MPI_Abort does not return.
+        #[allow(unsafe_code)]
+        unsafe {
+            mpi::ffi::MPI_Abort(mpi::ffi::RSMPI_COMM_WORLD, 101);
+        }
+    }));
 }
 
 /// Points standard output and error at /dev/null.

@@ -571,13 +571,6 @@ impl Meshes {
             }),
             None => (0..owned).filter(|&i| stale(i)).collect(),
         };
-        if stale.is_empty() {
-            return;
-        }
-        if self.grids.len() != self.walls.len() {
-            let cell = 2.0 * v.r_max + margin;
-            self.grids = self.walls.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
-        }
         if full {
             self.centres.clear();
             self.centres.resize(n * n_meshes, Vec3::ZERO);
@@ -585,6 +578,18 @@ impl Meshes {
             self.span.resize(n, Span::default());
             self.candidates.clear();
             self.garbage = 0;
+        }
+        if stale.is_empty() {
+            // A rank whose own particles are all gone still holds a list of its slots.
+            if full {
+                self.built = true;
+                self.built_n = n;
+            }
+            return;
+        }
+        if self.grids.len() != self.walls.len() {
+            let cell = 2.0 * v.r_max + margin;
+            self.grids = self.walls.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
         }
         // Each run of the stale slots is searched on its own; the runs' finds are then placed
         // in slot order, as one search of them all would place them.
