@@ -46,6 +46,9 @@ pub struct RawCase {
     /// Output.
     #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
     pub output: RawOutput,
+    /// A run spread over MPI ranks.
+    #[serde(default, skip_serializing_if = "crate::mfix::is_empty_table")]
+    pub parallel: RawParallel,
     /// The particles. Required.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub particles: Option<RawParticles>,
@@ -450,6 +453,19 @@ pub struct RawNeighbor {
     /// Verlet-list skin, m, >= 0. Default 0.2 × the largest radius.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub skin: Option<f64>,
+}
+
+/// `[parallel]`
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawParallel {
+    /// Cut the ranks' boxes again when the slowest rank's work exceeds the mean by more
+    /// than `threshold`. Default true.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rebalance: Option<bool>,
+    /// That excess, as a fraction of the mean, >= 0. Default 0.1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub threshold: Option<f64>,
 }
 
 /// `[output]`

@@ -45,6 +45,7 @@ fn every_case_file_key_is_documented_and_every_documented_key_exists() {
         "time",
         "neighbor",
         "output",
+        "parallel",
         "particles",
         "list",
         "motion",

@@ -496,6 +496,11 @@ pub fn main(args: RunArgs) -> ExitCode {
                     st.domain,
                     if s.wall_seconds > 0.0 { 100.0 * st.domain / s.wall_seconds } else { 0.0 }
                 );
+                println!(
+                    "balance: the slowest rank's work {:.3} × the mean over the run (work: particles and their list partners); boxes cut again {} times",
+                    d.imbalance(s.ranks.0),
+                    d.recuts
+                );
             }
             if let Some(line) = thread_choice_line(&s.thread_report) {
                 println!("{line}");

@@ -569,3 +569,41 @@ fn a_hopper_drained_on_two_ranks_and_continued_on_three_writes_one_process_bytes
         assert!(a.1 == b.1, "{} differs after the restart on 3 ranks", a.0);
     }
 }
+
+/// The shipped hopper, filled and drained dry (3 000 beads, 3.5 s), on 3 ranks without
+/// rebalancing: the first cut of the empty domain leaves one rank half of the beads and the
+/// other two a quarter each, and every rank loses its last particle to the outlet, some
+/// while the others still hold theirs and the meshes are still in the step. The outputs are
+/// one process's; with rebalancing (the default) the slowest rank's work over the run is
+/// nearer the mean than without (the figures on `balance:` lines of the summaries).
+#[test]
+#[ignore = "needs MPI (OpenMPI's mpirun, a build with --features mpi)"]
+fn a_hopper_drained_dry_on_three_ranks_equals_one_process_and_rebalancing_evens_it() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let case = example(dir.path(), "hopper-fill-discharge", &[], false);
+    let text = std::fs::read_to_string(&case).expect("case");
+    let fixed = case.with_file_name("fixed.toml");
+    std::fs::write(&fixed, format!("{text}\n[parallel]\nrebalance = false\n")).expect("case");
+    let r = run(&case, &dir.path().join("one"), None, 1);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let want = outputs(&dir.path().join("one"));
+    let balance = |stdout: &str| -> f64 {
+        let line = stdout.lines().find(|l| l.starts_with("balance:")).expect("a balance line");
+        line.split_whitespace().nth(5).and_then(|w| w.parse().ok()).expect("slowest ÷ mean")
+    };
+    let mut slowest = Vec::new();
+    for (name, c) in [("without rebalancing", &fixed), ("with rebalancing", &case)] {
+        let out = dir.path().join(name.replace(' ', "-"));
+        let r = command(c, &out, Some(3), 1, &[]).output().expect("runs");
+        let stdout = String::from_utf8_lossy(&r.stdout).to_string();
+        assert!(r.status.success(), "{name}: {}", String::from_utf8_lossy(&r.stderr));
+        assert!(stdout.contains("= 0 present + 3000 removed"), "{name}: not drained dry: {stdout}");
+        let got = outputs(&out);
+        assert_eq!(got.len(), want.len(), "{name}");
+        for (a, b) in want.iter().zip(&got) {
+            assert!(a.1 == b.1, "{name}: {} differs from one process's", a.0);
+        }
+        slowest.push(balance(&stdout));
+    }
+    assert!(slowest[0] > 1.1 && slowest[1] < slowest[0], "slowest ÷ mean without, with: {slowest:?}");
+}

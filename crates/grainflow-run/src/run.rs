@@ -206,7 +206,7 @@ pub fn run_case(
     mut on_progress: impl FnMut(&Simulation) + Send,
 ) -> Result<RunSummary, RunError> {
     let (output, domain, hash) = (case.output, case.domain, case.hash.clone());
-    let max_overlap = case.max_overlap;
+    let (max_overlap, rebalance) = (case.max_overlap, case.rebalance);
     let mesh_loads = MeshLoads::new(&case);
     let mut sim = match &options.restart {
         None => Simulation::new(case.config, case.particles)?,
@@ -227,7 +227,7 @@ pub fn run_case(
     check_output_volume(&sim, &output, mesh_loads.columns.len())?;
     // A restart spreads the checkpoint's whole state as a fresh run spreads the case's.
     if let Some(comm) = options.ranks.clone().filter(|c| c.size() > 1) {
-        sim.decompose(comm)?;
+        sim.decompose(comm, rebalance)?;
     }
     let intent = match &options.restart {
         None => Intent::Fresh,
@@ -444,6 +444,15 @@ impl RunInfo<'_> {
         s.push_str(&format!("ranks = {}\n", sim.ranks()));
         if status != "running" {
             s.push_str(&format!("ended = {}\n", q(&crate::outdir::utc_now())));
+            if sim.ranks() > 1 {
+                // The balance over the run: the slowest rank's work ÷ the mean, and re-cuts.
+                let d = sim.domain_stats();
+                s.push_str(&format!(
+                    "slowest_work_over_mean = {:.4}\nrecuts = {}\n",
+                    d.imbalance(sim.ranks()),
+                    d.recuts
+                ));
+            }
         }
         if let Some(r) = &self.options.restart {
             s.push_str(&format!("restarted_from = {}\n", q(&r.display().to_string())));

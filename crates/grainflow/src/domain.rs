@@ -4,12 +4,13 @@
 //! A region of `r` ranks is cut across its longest side (the lowest axis of equally long
 //! ones) into a part for `⌊r/2⌋` ranks and one for the rest, where the work before the cut is
 //! the share of the first part; each part is then cut the same way until every part has one
-//! rank. The particles are taken in the order of their coordinate along the cut and their id,
-//! so the cut depends only on the particles, never on the order they are held in: every rank
-//! that cuts the same particles finds the same boxes, to the bit.
+//! rank. A cut is found by histograms of the work along its axis, each narrowing the bracket
+//! the cut lies in to the bin where the share is reached: the histograms are sums of integers,
+//! so the cut depends only on the particles, never on the order they are held in or on how
+//! they are shared among the ranks that find it ([`bisect_over`]): every rank finds the same
+//! boxes, to the bit.
 //!
-//! A particle belongs to the box with `lo ≤ x < hi` on every axis ([`Boxes::owner`]); a cut
-//! lies halfway between the last particle before it and the first after it.
+//! A particle belongs to the box with `lo ≤ x < hi` on every axis ([`Boxes::owner`]).
 
 use crate::boundary::Periodic;
 use crate::math::Vec3;
@@ -86,12 +87,12 @@ impl Comm for LocalComm {
     }
 }
 
-/// A particle as the cut sees it: its position, its work (any positive measure, e.g. 1 + its
+/// A particle as the cut sees it: its position, its work (any positive count, e.g. 1 + its
 /// contacts) and its id.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Weighted {
     pub position: Vec3,
-    pub work: f64,
+    pub work: u64,
     pub id: u64,
 }
 
@@ -157,54 +158,144 @@ impl Boxes {
 /// Cuts the domain `lo`..`hi` into `ranks` boxes (at least one) of about equal work of
 /// `particles` (see the module doc).
 pub fn bisect(lo: Vec3, hi: Vec3, particles: &[Weighted], ranks: usize) -> Boxes {
-    let mut items = particles.to_vec();
-    let mut boxes = Vec::with_capacity(ranks.max(1));
-    cut(lo, hi, &mut items, ranks.max(1), &mut boxes);
-    Boxes { boxes, domain: [lo, hi] }
+    bisect_over(lo, hi, particles, ranks, &mut |counts| counts)
 }
 
-/// Cuts the region `lo`..`hi` holding `items` into `ranks` boxes, appended to `out` in rank
-/// order.
-fn cut(lo: Vec3, hi: Vec3, items: &mut [Weighted], ranks: usize, out: &mut Vec<[Vec3; 2]>) {
-    if ranks == 1 {
-        out.push([lo, hi]);
-        return;
-    }
-    let extent = hi - lo;
-    let axis = (0..3).fold(0, |best, k| if extent[k] > extent[best] { k } else { best });
-    items.sort_unstable_by(|a, b| a.position[axis].total_cmp(&b.position[axis]).then(a.id.cmp(&b.id)));
-    let first = ranks / 2;
-    let total: f64 = items.iter().map(|p| p.work).sum();
-    let target = total * first as f64 / ranks as f64;
-    // The first particle with at least the first part's share of the work before it.
-    let mut before = 0.0;
-    let mut k = items.len();
-    for (i, p) in items.iter().enumerate() {
-        if before >= target {
-            k = i;
+/// Bins of a bracket's histogram, and the rounds that narrow a cut's bracket: a cut lies
+/// within 64⁻⁴ ≈ 6·10⁻⁸ of its side's length of the best place between two particles.
+const BINS: usize = 64;
+const ROUNDS: usize = 4;
+
+/// [`bisect`] of particles held by several ranks, each with its share: `sum` adds a list of
+/// counts element by element over the ranks (every rank calls this alike, and `sum` as often,
+/// with lists of the same length). The sums are of integers, so every rank finds the same
+/// boxes whatever the order the ranks answer in.
+pub fn bisect_over(
+    lo: Vec3,
+    hi: Vec3,
+    particles: &[Weighted],
+    ranks: usize,
+    sum: &mut dyn FnMut(Vec<u64>) -> Vec<u64>,
+) -> Boxes {
+    // The parts so far, in rank order: corners and ranks; and each particle's part.
+    let mut parts: Vec<([Vec3; 2], usize)> = vec![([lo, hi], ranks.max(1))];
+    let mut part_of = vec![0usize; particles.len()];
+    loop {
+        let cutting: Vec<usize> = (0..parts.len()).filter(|&k| parts[k].1 > 1).collect();
+        if cutting.is_empty() {
             break;
         }
-        before += p.work;
+        // Per part being cut: its axis, its row among those cut (or none).
+        let axis = |k: usize| {
+            let e = parts[k].0[1] - parts[k].0[0];
+            (0..3).fold(0, |best, a| if e[a] > e[best] { a } else { best })
+        };
+        let mut row = vec![usize::MAX; parts.len()];
+        for (r, &k) in cutting.iter().enumerate() {
+            row[k] = r;
+        }
+        let mut totals = vec![0u64; cutting.len()];
+        for (p, &k) in particles.iter().zip(&part_of) {
+            if row[k] != usize::MAX {
+                totals[row[k]] += p.work;
+            }
+        }
+        let totals = sum(totals);
+        // The bracket [a, b) each cut lies in, the work below a, and the work in [a, b).
+        let mut bracket: Vec<(f64, f64)> =
+            cutting.iter().map(|&k| (parts[k].0[0][axis(k)], parts[k].0[1][axis(k)])).collect();
+        let mut below = vec![0u64; cutting.len()];
+        let mut inside = totals.clone();
+        // Whether `w` of a part's work before the cut reaches its first ranks' share.
+        let reaches = |w: u64, r: usize, k: usize| {
+            let (n, first) = (parts[k].1 as u128, (parts[k].1 / 2) as u128);
+            w as u128 * n >= totals[r] as u128 * first
+        };
+        for _ in 0..ROUNDS {
+            let mut hist = vec![0u64; cutting.len() * BINS];
+            for (p, &k) in particles.iter().zip(&part_of) {
+                let r = row[k];
+                if r != usize::MAX
+                    && let Some(bin) = bin_of(p.position[axis(k)], bracket[r])
+                {
+                    hist[r * BINS + bin] += p.work;
+                }
+            }
+            let hist = sum(hist);
+            for (r, &k) in cutting.iter().enumerate() {
+                let bins = &hist[r * BINS..(r + 1) * BINS];
+                let mut before = below[r];
+                let mut at = BINS - 1;
+                for (bin, &w) in bins.iter().enumerate() {
+                    if reaches(before + w, r, k) {
+                        at = bin;
+                        break;
+                    }
+                    before += w;
+                }
+                below[r] = before;
+                inside[r] = bins[at];
+                bracket[r] = (edge(bracket[r], at), edge(bracket[r], at + 1));
+            }
+        }
+        // Each part's first part next, and where it was cut (axis, coordinate).
+        let mut next = Vec::with_capacity(parts.len() + cutting.len());
+        let mut renumber = vec![(0usize, None); parts.len()];
+        for (k, &([l, h], n)) in parts.iter().enumerate() {
+            let r = row[k];
+            if r == usize::MAX {
+                renumber[k] = (next.len(), None);
+                next.push(([l, h], n));
+                continue;
+            }
+            let (a, first) = (axis(k), n / 2);
+            let at = if totals[r] == 0 {
+                l[a] + (h[a] - l[a]) * first as f64 / n as f64
+            } else {
+                // The bracket's end whose work before it is nearer the share.
+                let share = totals[r] as f64 * first as f64 / n as f64;
+                let (w_lo, w_hi) = (below[r] as f64, (below[r] + inside[r]) as f64);
+                if share - w_lo <= w_hi - share { bracket[r].0 } else { bracket[r].1 }
+            };
+            let at = at.clamp(l[a], h[a]);
+            let (mut low_hi, mut high_lo) = (h, l);
+            low_hi[a] = at;
+            high_lo[a] = at;
+            renumber[k] = (next.len(), Some((a, at)));
+            next.push(([l, low_hi], first));
+            next.push(([high_lo, h], n - first));
+        }
+        for (p, k) in particles.iter().zip(part_of.iter_mut()) {
+            let (low, cut) = renumber[*k];
+            *k = match cut {
+                Some((a, at)) if p.position[a] >= at => low + 1,
+                _ => low,
+            };
+        }
+        parts = next;
     }
-    let coordinate = |i: usize| items[i].position[axis];
-    let at = if items.is_empty() {
-        lo[axis] + extent[axis] * first as f64 / ranks as f64
-    } else if k == 0 {
-        lo[axis].min(coordinate(0))
-    } else if k == items.len() {
-        hi[axis].max(coordinate(k - 1))
-    } else {
-        0.5 * (coordinate(k - 1) + coordinate(k))
-    };
-    let at = at.clamp(lo[axis], hi[axis]);
-    // The particles before the cut plane (those at the plane's coordinate belong above it).
-    let split = items.partition_point(|p| p.position[axis] < at);
-    let (low, high) = items.split_at_mut(split);
-    let (mut low_hi, mut high_lo) = (hi, lo);
-    low_hi[axis] = at;
-    high_lo[axis] = at;
-    cut(lo, low_hi, low, first, out);
-    cut(high_lo, hi, high, ranks - first, out);
+    Boxes { boxes: parts.into_iter().map(|(b, _)| b).collect(), domain: [lo, hi] }
+}
+
+/// The `k`th of the `BINS + 1` edges of the bins of `[a, b)`.
+fn edge((a, b): (f64, f64), k: usize) -> f64 {
+    if k == BINS { b } else { a + (b - a) * (k as f64 / BINS as f64) }
+}
+
+/// The bin of `[a, b)` that holds `x` (`edge(k) ≤ x < edge(k + 1)`), or none outside it.
+fn bin_of(x: f64, bracket: (f64, f64)) -> Option<usize> {
+    let (a, b) = bracket;
+    if !(x >= a && x < b) {
+        return None;
+    }
+    let mut k = (((x - a) / (b - a) * BINS as f64) as usize).min(BINS - 1);
+    while k > 0 && x < edge(bracket, k) {
+        k -= 1;
+    }
+    while k + 1 < BINS && x >= edge(bracket, k + 1) {
+        k += 1;
+    }
+    Some(k)
 }
 
 #[cfg(test)]
@@ -212,7 +303,7 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
-    fn cloud(n: usize, seed: u64, work: impl Fn(Vec3) -> f64) -> Vec<Weighted> {
+    fn cloud(n: usize, seed: u64, work: impl Fn(Vec3) -> u64) -> Vec<Weighted> {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         (0..n)
             .map(|i| {
@@ -230,7 +321,7 @@ mod tests {
     fn boxes_tile_the_domain_and_share_the_work() {
         let (lo, hi) = (Vec3::ZERO, Vec3::new(4.0, 2.0, 1.0));
         for (ranks, seed) in [(1, 1), (2, 2), (3, 3), (4, 4), (7, 5), (16, 6)] {
-            let particles = cloud(5_000, seed, |x| 1.0 + (x.x * 3.0).floor());
+            let particles = cloud(5_000, seed, |x| 1 + (x.x * 3.0) as u64);
             let cut = bisect(lo, hi, &particles, ranks);
             assert_eq!(cut.boxes.len(), ranks);
             let volume: f64 =
@@ -248,10 +339,10 @@ mod tests {
                     .collect();
                 assert_eq!(inside.len(), 1, "{ranks} ranks: particle {} in boxes {inside:?}", p.id);
                 assert_eq!(cut.owner(p.position), Some(inside[0]));
-                work[inside[0]] += p.work;
+                work[inside[0]] += p.work as f64;
             }
-            let total: f64 = particles.iter().map(|p| p.work).sum();
-            let w_max = particles.iter().map(|p| p.work).fold(0.0, f64::max);
+            let total = particles.iter().map(|p| p.work).sum::<u64>() as f64;
+            let w_max = particles.iter().map(|p| p.work).max().unwrap_or(0) as f64;
             // A cut misses its target by less than one particle's work, and a part's target
             // follows the work it was given: the errors add up over the levels of cuts. (Twice
             // that, for a particle on either side of a cut's midpoint.)
@@ -270,11 +361,41 @@ mod tests {
     #[test]
     fn the_cut_does_not_depend_on_the_order_of_the_particles() {
         let (lo, hi) = (Vec3::ZERO, Vec3::new(4.0, 2.0, 1.0));
-        let particles = cloud(2_000, 9, |x| 1.0 + x.y);
+        let particles = cloud(2_000, 9, |x| 1 + (x.y * 4.0) as u64);
         let mut reversed = particles.clone();
         reversed.reverse();
         for ranks in [2, 3, 5, 8] {
             assert_eq!(bisect(lo, hi, &particles, ranks), bisect(lo, hi, &reversed, ranks));
+        }
+    }
+
+    /// Shared among ranks (three threads, each holding every third particle), the particles
+    /// are cut into the boxes one holder of them all finds, to the bit.
+    #[test]
+    fn ranks_holding_shares_find_the_boxes_of_one_holder() {
+        let (lo, hi) = (Vec3::ZERO, Vec3::new(4.0, 2.0, 1.0));
+        let particles = cloud(3_000, 13, |x| 1 + (x.x * 5.0) as u64);
+        for ranks in [2, 3, 5] {
+            let whole = bisect(lo, hi, &particles, ranks);
+            let shares: Vec<Boxes> = std::thread::scope(|s| {
+                let handles: Vec<_> = LocalComm::team(3)
+                    .into_iter()
+                    .map(|comm| {
+                        let mine: Vec<Weighted> =
+                            particles.iter().skip(comm.rank()).step_by(3).copied().collect();
+                        s.spawn(move || {
+                            bisect_over(lo, hi, &mine, ranks, &mut |counts| {
+                                let all = comm.all_gather(&counts);
+                                (0..counts.len()).map(|k| all.iter().map(|c| c[k]).sum()).collect()
+                            })
+                        })
+                    })
+                    .collect();
+                handles.into_iter().map(|h| h.join().expect("a rank")).collect()
+            });
+            for b in &shares {
+                assert_eq!(b, &whole, "{ranks} boxes");
+            }
         }
     }
 
@@ -288,7 +409,7 @@ mod tests {
         let particles: Vec<Weighted> = (0..4_000)
             .map(|i| {
                 let x = (i as f64 + 0.5) / 1000.0;
-                Weighted { position: Vec3::new(x, 0.5, 0.5), work: if x < 1.0 { 9.0 } else { 1.0 }, id: i }
+                Weighted { position: Vec3::new(x, 0.5, 0.5), work: if x < 1.0 { 9 } else { 1 }, id: i }
             })
             .collect();
         let cut = bisect(lo, hi, &particles, 2);
@@ -305,7 +426,7 @@ mod tests {
     fn every_pair_within_reach_across_ranks_has_its_ghosts() {
         let (lo, hi) = (Vec3::ZERO, Vec3::new(4.0, 2.0, 1.0));
         let periodic = Periodic { lo, hi, axes: [true, false, true] };
-        let particles = cloud(600, 11, |_| 1.0);
+        let particles = cloud(600, 11, |_| 1);
         let reach = 0.3;
         for ranks in [1, 2, 3, 5] {
             let cut = bisect(lo, hi, &particles, ranks);

@@ -62,7 +62,9 @@ fn run(make: &(dyn Fn() -> Simulation + Sync), ranks: usize, steps: usize) -> (V
                 s.spawn(move || {
                     let comm: Arc<dyn Comm> = Arc::new(comm);
                     let mut sim = make();
-                    sim.decompose(comm).expect("spread over ranks");
+                    // Boxes cut again at every rebuild whose work is uneven at all, so that
+                    // particles also move between ranks by the re-cuts.
+                    sim.decompose(comm, Some(0.0)).expect("spread over ranks");
                     let mut most = sim.owned();
                     // Steps one at a time and in calls of several (whose inner steps leave
                     // the ghosts behind until the next evaluation).
@@ -256,7 +258,7 @@ fn check_restarts(
     let checkpoint = |ranks: usize| -> Vec<u8> {
         let mut written = on_ranks(ranks, &|comm| {
             let mut sim = make();
-            sim.decompose(comm).expect("spread over ranks");
+            sim.decompose(comm, Some(0.1)).expect("spread over ranks");
             sim.advance(at);
             sim.gathered_whole().map(|w| {
                 let (pairs, others) = w.contacts().iter().fold((0, 0), |(p, o), c| match c.other {
@@ -283,7 +285,7 @@ fn check_restarts(
     assert!(fingerprint(&one) == want, "{name}: restarted in one process, the run departs");
     let got = on_ranks(3, &|comm| {
         let mut sim = restored();
-        sim.decompose(comm).expect("spread over ranks");
+        sim.decompose(comm, Some(0.1)).expect("spread over ranks");
         sim.advance(steps - at);
         fingerprint(&sim)
     });
@@ -295,4 +297,143 @@ fn a_checkpoint_over_ranks_restarts_on_any_rank_count_with_the_same_bits() {
     check_restarts("mesh drum", &|| thrown_at_a_drum_case(false, true), 2_300, 2_700, 30);
     check_restarts("cylinder drum", &|| thrown_at_a_drum_case(false, false), 2_300, 2_700, 30);
     check_restarts("periodic chute", &|| periodic_chute_case(false), 200, 400, 0);
+}
+
+/// 1 200 beads of 2 mm thrown down at 1 m/s from a column 24 mm tall, 40 mm above the floor
+/// of a walled 20 × 20 × 80 mm box (LAMMPS's Hertz–Mindlin law, restitution 0.3): two ranks
+/// first cut the column across its height, and as it lands on the floor the upper rank's box
+/// empties.
+fn falling_column(nudged: bool) -> Simulation {
+    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.02, 0.02, 0.08));
+    let mut cfg = walled_config(lo, hi);
+    cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
+    let mut init = bed(1_200, Vec3::new(0.0, 0.0, 0.04), Vec3::new(0.02, 0.02, 0.08), 0.001, 17);
+    for b in &mut init {
+        b.velocity.z -= 1.0;
+    }
+    if nudged {
+        nudge(&mut init);
+    }
+    simulation(cfg, &init)
+}
+
+/// A walled box of [`lo`, `hi`] with LAMMPS's Hertz–Mindlin law at restitution 0.3, 2·10⁻⁵ s.
+fn walled_config(lo: Vec3, hi: Vec3) -> SimulationConfig {
+    let (law, elastic) = lammps_mindlin();
+    let elastic = grainflow::ContactParams { en: 0.3, ..elastic };
+    config(
+        law,
+        vec![elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3)],
+        vec![wall_material("wall", Some(5.0e6), Some(0.3))],
+        Wall::domain_box(lo, hi, 0),
+        vec![elastic],
+        vec![elastic],
+        Integrator::VelocityVerlet,
+        2.0e-5,
+    )
+}
+
+/// Rebalancing follows the particles: without it the column's landing leaves one of two
+/// ranks with all the work (slowest ÷ mean → 2 once the column has passed the first cut, 550
+/// of the 3 000 steps in); with a re-cut whenever the slowest rank has more than 10 % over
+/// the mean, it is back near 1 after each re-cut, and only the rebuild intervals in which
+/// the work shifts count above 1.1. Either way, and on 3 ranks, the run is the one
+/// process's to the bit; a nudge of 10⁻¹⁰ shows the comparison can fail.
+#[test]
+fn a_landing_column_is_rebalanced_and_keeps_the_one_process_bits() {
+    let steps = 3_000;
+    let mut one = falling_column(false);
+    one.advance(steps);
+    let want = fingerprint(&one);
+    let top = one.particles().position.iter().map(|x| x.z).fold(0.0, f64::max);
+    assert!(top < 0.03, "the column has not landed: a bead at z = {top} m");
+    let spread = |make: &(dyn Fn() -> Simulation + Sync), ranks: usize, rebalance: Option<f64>| {
+        let got = on_ranks(ranks, &|comm| {
+            let mut sim = make();
+            sim.decompose(comm, rebalance).expect("spread over ranks");
+            sim.advance(steps);
+            (fingerprint(&sim), sim.domain_stats())
+        });
+        // The work and the re-cuts are the ranks' common knowledge (what each sent is not).
+        let same = |g: &(Vec<u64>, grainflow::DomainStats)| {
+            let (a, b) = (&g.1, &got[0].1);
+            g.0 == got[0].0
+                && (a.work_slowest, a.work_total, a.recuts) == (b.work_slowest, b.work_total, b.recuts)
+        };
+        assert!(got.iter().all(same), "the ranks disagree");
+        got.into_iter().next().expect("rank 0")
+    };
+    let (fixed, without) = spread(&|| falling_column(false), 2, None);
+    let (balanced, with) = spread(&|| falling_column(false), 2, Some(0.1));
+    let (three, _) = spread(&|| falling_column(false), 3, Some(0.1));
+    assert!(fixed == want, "2 ranks without rebalancing depart from one process");
+    assert!(balanced == want, "2 ranks with rebalancing depart from one process");
+    assert!(three == want, "3 ranks with rebalancing depart from one process");
+    let (slow_without, slow_with) = (without.imbalance(2), with.imbalance(2));
+    assert_eq!(without.recuts, 0);
+    assert!(with.recuts >= 1, "never re-cut");
+    assert!(slow_without > 1.6, "without rebalancing, slowest ÷ mean {slow_without}");
+    assert!(slow_with < 1.25, "with rebalancing, slowest ÷ mean {slow_with} ({} re-cuts)", with.recuts);
+    let (nudged, _) = spread(&|| falling_column(true), 2, Some(0.1));
+    let differing = want.iter().zip(&nudged).filter(|(a, b)| a != b).count();
+    assert!(differing > 100, "a 1e-10 change left the state alone ({differing} values differ)");
+}
+
+/// 600 beads resting on a mesh floor (two triangles, 2 mm above the box's) of a walled 40 ×
+/// 20 × 30 mm box, cut across x by two ranks. The second rank's own particles are removed, so
+/// that it holds only ghosts for a while, and then the first rank's particles near the cut,
+/// its last ghosts: a rank left with no slots at all still takes part in the mesh stage. Each
+/// stage's state is the one process's with the same removals, to the bit.
+#[test]
+fn a_rank_emptied_beside_a_mesh_goes_on_with_the_one_process_bits() {
+    let make = || {
+        let (lo, hi) = (Vec3::ZERO, Vec3::new(0.04, 0.02, 0.03));
+        let mut cfg = walled_config(lo, hi);
+        cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
+        let (a, b, z) = (-0.01, 0.05, 0.002);
+        let corners = [Vec3::new(a, a, z), Vec3::new(b, a, z), Vec3::new(b, 0.03, z), Vec3::new(a, 0.03, z)];
+        let floor = grainflow::mesh::Mesh::from_indexed(
+            "floor",
+            &corners,
+            &[[0, 1, 2], [0, 2, 3]],
+            &grainflow::mesh::MeshTransform::default(),
+        )
+        .expect("a valid floor");
+        cfg.meshes = vec![grainflow::mesh::MeshWall::fixed(floor, 0)];
+        simulation(cfg, &bed(600, Vec3::new(0.0, 0.0, 0.00195), Vec3::new(0.04, 0.02, 0.02), 0.001, 5))
+    };
+    // Beyond x = 10 mm: every particle of the second rank and the first rank's near the cut.
+    let far = |sim: &Simulation| -> Vec<u32> {
+        let all = sim.gathered_in_id_order();
+        (0..all.len()).filter(|&i| all.position[i].x > 0.01).map(|i| all.id[i]).collect()
+    };
+    let got = on_ranks(2, &|comm| {
+        let mut sim = make();
+        sim.decompose(comm.clone(), None).expect("spread over ranks");
+        sim.advance(50);
+        let own: Vec<u64> = sim.particles().id[..sim.owned()].iter().map(|&id| id as u64).collect();
+        let second: Vec<u32> = comm.all_gather(&own)[1].iter().map(|&id| id as u32).collect();
+        sim.remove_ids(&second).expect("removed");
+        let ghosts_only = (sim.owned(), sim.particles().len());
+        sim.advance(200);
+        let gone = far(&sim);
+        sim.remove_ids(&gone).expect("removed");
+        sim.advance(200);
+        (second, ghosts_only, fingerprint(&sim))
+    });
+    let (second, _, want_bits) = &got[0];
+    let (owned, slots) = got[1].1;
+    assert!(owned == 0 && slots > 10, "the second rank holds {owned} own particles and {slots} slots");
+    assert!(got[1].2 == *want_bits, "the ranks disagree");
+    let mut one = make();
+    one.advance(50);
+    one.remove_ids(second).expect("removed");
+    one.advance(200);
+    let gone = far(&one);
+    one.remove_ids(&gone).expect("removed");
+    one.advance(200);
+    let meshed =
+        one.contacts().iter().filter(|c| matches!(c.other, grainflow::ContactPartner::Mesh { .. })).count();
+    assert!(meshed > 0, "no bead touches the mesh floor");
+    assert!(fingerprint(&one) == *want_bits, "2 ranks depart from one process");
 }

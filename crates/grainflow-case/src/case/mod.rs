@@ -56,6 +56,9 @@ pub struct Case {
     /// The point each mesh's torque is reported about in the time series (`torque_about`,
     /// else its rotation axis's origin, else the origin of coordinates), m.
     pub mesh_torque_about: Vec<Vec3>,
+    /// `[parallel]`: on ranks, the slowest rank's work over the mean, less 1, beyond which
+    /// their boxes are cut again (none: never).
+    pub rebalance: Option<f64>,
 }
 
 /// `[output]`, validated.
@@ -266,8 +269,8 @@ fn validate<'h>(
     let contact::Tables { law, pair_params, wall_params } =
         contact::contact(raw.contact, &phases, &mut wall_materials, has_walls, &mut warnings)?;
     let time = time::time(raw.time, &law, &phases)?;
-    let settings::Settings { gravity, skin, output } =
-        settings::settings(&raw.physics, &raw.neighbor, &raw.output)?;
+    let settings::Settings { gravity, skin, output, rebalance } =
+        settings::settings(&raw.physics, &raw.neighbor, &raw.output, &raw.parallel)?;
 
     // Insertions and outlets.
     let mesh_set = flow::Meshes { walls: &meshes, names: &mesh_names };
@@ -358,5 +361,6 @@ fn validate<'h>(
         max_overlap: run_overlap,
         mesh_names,
         mesh_torque_about,
+        rebalance,
     })
 }

@@ -1,26 +1,33 @@
-//! `[physics]`, `[neighbor]` and `[output]`: gravity, the neighbour-list skin and the output
-//! intervals.
+//! `[physics]`, `[neighbor]`, `[output]` and `[parallel]`: gravity, the neighbour-list skin,
+//! the output intervals and the ranks' rebalancing.
 
 use super::OutputSettings;
 use super::fields::{check, vec3};
 use crate::error::CaseError;
-use crate::raw::{RawNeighbor, RawOutput, RawPhysics};
+use crate::raw::{RawNeighbor, RawOutput, RawParallel, RawPhysics};
 use grainflow::Vec3;
 use grainflow::contact::limits::Range;
 use grainflow::simulation::STANDARD_GRAVITY;
 
-/// The settings of the three small tables.
+/// The settings of the four small tables.
 pub(super) struct Settings {
     pub gravity: Vec3,
     pub skin: Option<f64>,
     pub output: OutputSettings,
+    /// The ranks' work imbalance that re-cuts their boxes (none: never).
+    pub rebalance: Option<f64>,
 }
 
-/// `[physics]`, `[neighbor]` and `[output]`, in that order.
+/// `[parallel] threshold` by default: a re-cut when the slowest rank has 10 % more work than
+/// the mean.
+pub const DEFAULT_REBALANCE: f64 = 0.1;
+
+/// `[physics]`, `[neighbor]`, `[output]` and `[parallel]`, in that order.
 pub(super) fn settings(
     physics: &RawPhysics,
     neighbor: &RawNeighbor,
     output: &RawOutput,
+    parallel: &RawParallel,
 ) -> Result<Settings, CaseError> {
     let gravity = match physics.gravity {
         Some(g) => vec3(g, "[physics]", "gravity")?,
@@ -64,5 +71,12 @@ pub(super) fn settings(
         })
         .transpose()?;
     let settings = OutputSettings { interval, snapshots: output.snapshots.unwrap_or(true), vtk_interval };
-    Ok(Settings { gravity, skin, output: settings })
+    let threshold = match parallel.threshold {
+        Some(t) if !(t.is_finite() && t >= 0.0) => {
+            return Err(CaseError::invalid("[parallel]", "threshold", t, "must be a fraction >= 0"));
+        }
+        t => t.unwrap_or(DEFAULT_REBALANCE),
+    };
+    let rebalance = parallel.rebalance.unwrap_or(true).then_some(threshold);
+    Ok(Settings { gravity, skin, output: settings, rebalance })
 }

@@ -532,6 +532,7 @@ impl Translator<'_> {
             time: Some(time),
             neighbor,
             output,
+            parallel: Default::default(),
             particles: Some(particles),
             motion,
             insertions: equipment.insertions,

@@ -58,6 +58,11 @@ pub(crate) struct Decomposition {
     held: HashMap<u32, Vec3>,
     /// Their ids in the order of the rules (the case's), which a checkpoint keeps.
     held_order: Vec<u32>,
+    /// Re-cut the boxes when the slowest rank's work exceeds the mean by more than this
+    /// fraction (none: never).
+    threshold: Option<f64>,
+    /// The step of the last look at the ranks' work.
+    since: u64,
 }
 
 /// What a rank has sent to the others so far (collectives with itself left out).
@@ -71,6 +76,23 @@ pub struct DomainStats {
     pub migrated: u64,
     /// Ghosts sent at rebuilds (a particle to each rank that holds it).
     pub ghosts_sent: u64,
+    /// The slowest rank's work and all ranks' (particles and their list partners), each
+    /// summed over the steps: their ratio times the ranks is the slowest ÷ mean over the run.
+    pub work_slowest: u64,
+    pub work_total: u64,
+    /// The times the boxes were cut again.
+    pub recuts: u64,
+}
+
+impl DomainStats {
+    /// The slowest rank's work ÷ the mean over the run so far (1 if nothing was measured).
+    pub fn imbalance(&self, ranks: usize) -> f64 {
+        if self.work_total == 0 {
+            1.0
+        } else {
+            self.work_slowest as f64 * ranks as f64 / self.work_total as f64
+        }
+    }
 }
 
 /// Words of a particle that moves to another rank (without its Adams–Bashforth history).
@@ -84,9 +106,10 @@ const CONTACT: usize = 13;
 impl Simulation {
     /// Spreads the run over the ranks of `comm`, keeping on this rank the particles of its box
     /// and their ghosts. Every rank must call it with the same simulation (as set up from the
-    /// same case), before the first step. Refused for what ranks cannot run yet: prescribed
-    /// motion that follows a leader.
-    pub fn decompose(&mut self, comm: Arc<dyn Comm>) -> Result<(), EngineError> {
+    /// same case), before the first step. At rebuilds the boxes are cut again when the slowest
+    /// rank's work exceeds the mean by more than the fraction `rebalance` (none: never).
+    /// Refused for what ranks cannot run yet: prescribed motion that follows a leader.
+    pub fn decompose(&mut self, comm: Arc<dyn Comm>, rebalance: Option<f64>) -> Result<(), EngineError> {
         let refuse = |what: &str| {
             Err(EngineError::BadReference(format!("{what} cannot yet run on more than one rank")))
         };
@@ -110,7 +133,7 @@ impl Simulation {
         if !self.neighbors.is_built() {
             self.neighbors.build(&self.particles, &self.walls);
         }
-        let boxes = self.cut(comm.size());
+        let boxes = self.cut(comm.size(), None);
         let reach = 2.0 * self.r_max() + self.neighbors.skin();
         let history = !self.particles.accel_prev.is_empty();
         let ranks = comm.size();
@@ -126,6 +149,8 @@ impl Simulation {
             stale: false,
             held: self.motion.iter().map(|r| (self.particles.id[r.slot], r.anchor())).collect(),
             held_order: self.motion.iter().map(|r| self.particles.id[r.slot]).collect(),
+            threshold: rebalance,
+            since: self.step,
         }));
         // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
         self.sort.rule = ResortRule::Never;
@@ -346,16 +371,21 @@ impl Simulation {
 
     /// The boxes of `ranks` ranks for the particles as they are, weighted by 1 + their
     /// partners in the list; the outer faces pushed to infinity on axes that do not wrap, so
-    /// that every particle has an owner.
-    fn cut(&self, ranks: usize) -> Boxes {
+    /// that every particle has an owner. With `comm`, each rank cuts its own particles with
+    /// the others (collective); without, the particles held here (every rank's, alike).
+    fn cut(&self, ranks: usize, comm: Option<&dyn Comm>) -> Boxes {
         let p = &self.particles;
         let per = self.periodic;
-        let mut work = vec![1.0; p.len()];
+        let n = if comm.is_some() { self.owned() } else { p.len() };
+        let mut work = vec![1u64; n];
         for [a, b] in self.neighbors.pairs() {
-            work[a as usize] += 1.0;
-            work[b as usize] += 1.0;
+            for s in [a as usize, b as usize] {
+                if s < n {
+                    work[s] += 1;
+                }
+            }
         }
-        let items: Vec<Weighted> = (0..p.len())
+        let items: Vec<Weighted> = (0..n)
             .map(|i| Weighted { position: per.wrap(p.position[i]), work: work[i], id: p.id[i] as u64 })
             .filter(|w| w.position.is_finite())
             .collect();
@@ -363,6 +393,13 @@ impl Simulation {
             items.iter().fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(l, h), w| {
                 (l.min(w.position), h.max(w.position))
             });
+        if let Some(comm) = comm {
+            let mut mine = Vec::with_capacity(6);
+            push_vecs(&mut mine, &[lo, hi]);
+            for w in comm.all_gather(&mine) {
+                (lo, hi) = (lo.min(vec_at(&w, 0)), hi.max(vec_at(&w, 3)));
+            }
+        }
         if !lo.is_finite() || !hi.is_finite() {
             (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
         }
@@ -372,7 +409,13 @@ impl Simulation {
                 hi[k] = per.hi[k];
             }
         }
-        let mut boxes = crate::domain::bisect(lo, hi, &items, ranks);
+        let mut boxes = match comm {
+            None => crate::domain::bisect(lo, hi, &items, ranks),
+            Some(comm) => crate::domain::bisect_over(lo, hi, &items, ranks, &mut |counts| {
+                let all = comm.all_gather(&counts);
+                (0..counts.len()).map(|k| all.iter().map(|c| c[k]).sum()).collect()
+            }),
+        };
         let far = |v: f64, edge: f64, sign: f64| if v == edge { sign * f64::INFINITY } else { v };
         for b in &mut boxes.boxes {
             for k in (0..3).filter(|&k| !per.axes[k]) {
@@ -395,11 +438,41 @@ impl Simulation {
         let moved = self.neighbors.any_moved(&self.particles.position[..d.owned]);
         let due = d.comm.all_gather(&[moved as u64]).iter().any(|w| w[0] != 0);
         if due {
+            self.balance();
             self.redistribute(false, 0..0);
         } else if self.drifted || d.stale {
             // The particles moved since the ghosts were last refreshed (velocity Verlet's
             // drift, or a step whose end left them behind).
             self.refresh_ghosts();
+        }
+    }
+
+    /// At a rebuild, before the particles move: each rank's work (its particles and their
+    /// partners in the list, over the steps since the last rebuild) is recorded, and if the
+    /// slowest rank's exceeds the mean by more than the threshold the boxes are cut again, for
+    /// the particles as they are (they then move to their new boxes). Collective.
+    fn balance(&mut self) {
+        let Some(d) = self.domain.as_ref() else { return };
+        let owned = d.owned;
+        let mut work = owned as u64;
+        for [a, b] in self.neighbors.pairs() {
+            work += ((a as usize) < owned) as u64 + ((b as usize) < owned) as u64;
+        }
+        let all: Vec<u64> = d.comm.all_gather(&[work]).iter().map(|w| w[0]).collect();
+        let (slowest, total) = (all.iter().copied().max().unwrap_or(0), all.iter().sum::<u64>());
+        let ranks = all.len();
+        let recut = d.threshold.is_some_and(|t| slowest as f64 * ranks as f64 > (1.0 + t) * total as f64);
+        let comm = d.comm.clone();
+        let step = self.step;
+        let boxes = recut.then(|| self.cut(ranks, Some(&*comm)));
+        let Some(d) = self.domain.as_mut() else { return };
+        let steps = step - d.since;
+        d.since = step;
+        d.stats.work_slowest += steps * slowest;
+        d.stats.work_total += steps * total;
+        if let Some(boxes) = boxes {
+            d.boxes = boxes;
+            d.stats.recuts += 1;
         }
     }
 
