@@ -50,15 +50,35 @@ impl Comm for MpiComm {
             let mut into = PartitionMut::new(&mut recv[..], &got[..], &recv_displs[..]);
             self.world.all_to_all_varcount_into(&send, &mut into);
         }
-        let mut at = 0;
-        got.iter()
-            .map(|&c| {
-                let part = recv[at..at + c as usize].to_vec();
-                at += c as usize;
-                part
-            })
-            .collect()
+        split(&recv, &got)
     }
+
+    /// MPI's own all-gathers (a count each, then the words): log₂ P steps on most MPI
+    /// libraries, where an exchange sends to each rank on its own.
+    fn all_gather(&self, mine: &[u64]) -> Vec<Vec<u64>> {
+        let mut got = vec![0i32; self.size];
+        self.world.all_gather_into(&count(mine.len()), &mut got[..]);
+        let (displs, total) = (offsets(&got), got.iter().map(|&c| c as usize).sum());
+        let mut recv = vec![0u64; total];
+        {
+            let mut into = PartitionMut::new(&mut recv[..], &got[..], &displs[..]);
+            self.world.all_gather_varcount_into(mine, &mut into);
+        }
+        split(&recv, &got)
+    }
+}
+
+/// `words` cut into consecutive parts of `counts` words each.
+fn split(words: &[u64], counts: &[i32]) -> Vec<Vec<u64>> {
+    let mut at = 0;
+    counts
+        .iter()
+        .map(|&c| {
+            let part = words[at..at + c as usize].to_vec();
+            at += c as usize;
+            part
+        })
+        .collect()
 }
 
 /// A message length as MPI counts it.
