@@ -861,6 +861,12 @@ impl Simulation {
             })
             .collect();
         self.domain = Some(d);
+        // The particles that stayed keep what the sources found for them (mesh candidates).
+        let mut new_of = vec![u32::MAX; dest.len()];
+        for (k, &i) in kept.iter().enumerate() {
+            new_of[i] = k as u32;
+        }
+        self.sources.redistributed(&new_of, n);
         if let Err(e) = self.sources.take_carried(&self.particles.id, &kept_records) {
             // The records were made from valid histories: only a defect can break them.
             panic!("internal error: the ranks' wall histories do not fit the particles: {e}");

@@ -113,6 +113,9 @@ pub(crate) struct Meshes {
     pub t0: f64,
     /// The last evaluation's loads on the particles from the meshes, for the meshes' loads.
     loads: Vec<MeshLoadPart>,
+    /// Whether [`ContactSource::redistributed`] has just taken the candidates into the new
+    /// slots, which the `take_carried` after it then keeps.
+    redistributed: bool,
 }
 
 /// What one run of slots works with: marks of the triangles met by a query (per mesh), the
@@ -835,6 +838,13 @@ impl ContactSource for Meshes {
         self.append(n_old, n);
     }
 
+    fn redistributed(&mut self, new_of: &[u32], n: usize) {
+        self.remap(new_of);
+        let kept = new_of.iter().filter(|&&k| k != u32::MAX).count();
+        self.append(kept, n);
+        self.redistributed = self.built;
+    }
+
     fn heap_bytes(&self) -> usize {
         self.bytes()
     }
@@ -858,8 +868,11 @@ impl ContactSource for Meshes {
             lists.2.push(v(&r[3..6]));
             lists.3.push(v(&r[6..9]));
         }
-        // The slots changed: the candidates are found again.
-        self.built = false;
+        // The slots changed: the candidates are found again, but for particles that stayed
+        // on this rank when `redistributed` took theirs into the new slots.
+        if !std::mem::take(&mut self.redistributed) {
+            self.built = false;
+        }
         self.set_histories(ids, lists)
     }
 

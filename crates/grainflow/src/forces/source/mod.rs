@@ -143,6 +143,13 @@ pub(crate) trait ContactSource {
     /// Particles appended to the `n_old` slots, up to `n`.
     fn appended(&mut self, _n_old: usize, _n: usize) {}
 
+    /// The particles redistributed over the ranks: those of old slots with `new_of[old] !=
+    /// u32::MAX` stayed on this rank, in slots `new_of[old]` (the first ones, in their order);
+    /// the rest of the `n` slots are new (particles that arrived, and ghosts). Called before
+    /// [`take_carried`](Self::take_carried), which gives the histories; a source may keep
+    /// what it finds by slot for the particles that stayed.
+    fn redistributed(&mut self, _new_of: &[u32], _n: usize) {}
+
     /// Heap bytes the source holds outside the neighbour list.
     fn heap_bytes(&self) -> usize {
         0
@@ -283,6 +290,11 @@ impl Sources {
     /// See [`ContactSource::appended`].
     pub(crate) fn appended(&mut self, n_old: usize, n: usize) {
         each_source!(self, |s| s.appended(n_old, n));
+    }
+
+    /// See [`ContactSource::redistributed`].
+    pub(crate) fn redistributed(&mut self, new_of: &[u32], n: usize) {
+        each_source!(self, |s| s.redistributed(new_of, n));
     }
 
     /// Every source's section of a checkpoint, in the sources' order (see
