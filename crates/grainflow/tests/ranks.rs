@@ -305,7 +305,7 @@ fn a_checkpoint_over_ranks_restarts_on_any_rank_count_with_the_same_bits() {
 /// empties.
 fn falling_column(nudged: bool) -> Simulation {
     let (lo, hi) = (Vec3::ZERO, Vec3::new(0.02, 0.02, 0.08));
-    let mut cfg = walled_config(lo, hi);
+    let mut cfg = walled_mindlin(lo, hi, 0.3);
     cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
     let mut init = bed(1_200, Vec3::new(0.0, 0.0, 0.04), Vec3::new(0.02, 0.02, 0.08), 0.001, 17);
     for b in &mut init {
@@ -315,22 +315,6 @@ fn falling_column(nudged: bool) -> Simulation {
         nudge(&mut init);
     }
     simulation(cfg, &init)
-}
-
-/// A walled box of [`lo`, `hi`] with LAMMPS's Hertz–Mindlin law at restitution 0.3, 2·10⁻⁵ s.
-fn walled_config(lo: Vec3, hi: Vec3) -> SimulationConfig {
-    let (law, elastic) = lammps_mindlin();
-    let elastic = grainflow::ContactParams { en: 0.3, ..elastic };
-    config(
-        law,
-        vec![elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3)],
-        vec![wall_material("wall", Some(5.0e6), Some(0.3))],
-        Wall::domain_box(lo, hi, 0),
-        vec![elastic],
-        vec![elastic],
-        Integrator::VelocityVerlet,
-        2.0e-5,
-    )
 }
 
 /// Rebalancing follows the particles: without it the column's landing leaves one of two
@@ -388,7 +372,7 @@ fn a_landing_column_is_rebalanced_and_keeps_the_one_process_bits() {
 fn a_rank_emptied_beside_a_mesh_goes_on_with_the_one_process_bits() {
     let make = || {
         let (lo, hi) = (Vec3::ZERO, Vec3::new(0.04, 0.02, 0.03));
-        let mut cfg = walled_config(lo, hi);
+        let mut cfg = walled_mindlin(lo, hi, 0.3);
         cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
         let (a, b, z) = (-0.01, 0.05, 0.002);
         let corners = [Vec3::new(a, a, z), Vec3::new(b, a, z), Vec3::new(b, 0.03, z), Vec3::new(a, 0.03, z)];

@@ -51,6 +51,17 @@ impl Tally {
         self.count += 1;
         self.units += units;
     }
+
+    /// As three words for other ranks: the count, then the units' low and high halves.
+    fn words(&self) -> [u64; 3] {
+        [self.count, self.units as u128 as u64, (self.units as u128 >> 64) as u64]
+    }
+
+    /// Adds a tally given as its [`words`](Self::words).
+    fn add_words(&mut self, w: &[u64]) {
+        self.count += w[0];
+        self.units += (w[1] as u128 | (w[2] as u128) << 64) as i128;
+    }
 }
 
 /// The mass books of a run: what was there at the start, came in, went out and is there.
@@ -330,9 +341,7 @@ impl FlowStage {
     pub(super) fn rank_words(&self) -> Vec<u64> {
         let mut w = vec![self.pending.len() as u64];
         w.extend(self.pending.iter().flat_map(|(&id, &o)| [id as u64, o as u64]));
-        for t in &self.removed {
-            w.extend([t.count, t.units as u128 as u64, (t.units as u128 >> 64) as u64]);
-        }
+        w.extend(self.removed.iter().flat_map(Tally::words));
         w
     }
 
@@ -345,9 +354,7 @@ impl FlowStage {
         }
         let at = 1 + 2 * caught;
         for (k, t) in self.removed.iter_mut().enumerate() {
-            let c = &w[at + 3 * k..];
-            t.count += c[0];
-            t.units += (c[1] as u128 | (c[2] as u128) << 64) as i128;
+            t.add_words(&w[at + 3 * k..]);
         }
         at + 3 * self.removed.len()
     }
@@ -448,16 +455,12 @@ impl Simulation {
         if let Some(comm) = self.comm() {
             // Each rank counts its own particles and what its outlets removed; what was
             // inserted every rank counts alike (each places every batch).
-            let mut mine = Vec::with_capacity(3 * (1 + removed.len()));
-            for t in std::iter::once(&present).chain(&removed) {
-                mine.extend([t.count, t.units as u128 as u64, (t.units as u128 >> 64) as u64]);
-            }
+            let mine: Vec<u64> = std::iter::once(&present).chain(&removed).flat_map(Tally::words).collect();
             let all = comm.all_gather(&mine);
             for (k, t) in std::iter::once(&mut present).chain(&mut removed).enumerate() {
                 *t = Tally::default();
                 for w in &all {
-                    t.count += w[3 * k];
-                    t.units += (w[3 * k + 1] as u128 | (w[3 * k + 2] as u128) << 64) as i128;
+                    t.add_words(&w[3 * k..]);
                 }
             }
         }

@@ -240,12 +240,13 @@ pub fn nudge(init: &mut [ParticleInit]) {
     v.x += 1e-10 * v.length().max(1e-3);
 }
 
-/// 3 000 beads in a walled 30 × 30 × 60 mm box, LAMMPS's Hertz–Mindlin law, velocity Verlet
-/// (with `nudged`, the topmost one nudged).
-pub fn walled_bed(nudged: bool) -> Simulation {
-    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
+/// Glass beads of 2 mm (E = 5 MPa, ν = 0.3) in the walled box `lo`..`hi`, LAMMPS's
+/// Hertz–Mindlin law with restitution `en` for pairs and walls alike, velocity Verlet at
+/// 2·10⁻⁵ s, no gravity.
+pub fn walled_mindlin(lo: Vec3, hi: Vec3, en: f64) -> SimulationConfig {
     let (law, elastic) = lammps_mindlin();
-    let mut cfg = config(
+    let elastic = ContactParams { en, ..elastic };
+    config(
         law,
         vec![elastic_phase("glass", 0.002, 2500.0, 5.0e6, 0.3)],
         vec![wall_material("wall", Some(5.0e6), Some(0.3))],
@@ -254,7 +255,14 @@ pub fn walled_bed(nudged: bool) -> Simulation {
         vec![elastic],
         Integrator::VelocityVerlet,
         2.0e-5,
-    );
+    )
+}
+
+/// 3 000 beads in a walled 30 × 30 × 60 mm box, LAMMPS's Hertz–Mindlin law, velocity Verlet
+/// (with `nudged`, the topmost one nudged).
+pub fn walled_bed(nudged: bool) -> Simulation {
+    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
+    let mut cfg = walled_mindlin(lo, hi, lammps_mindlin().1.en);
     cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
     let mut init = bed(3000, lo, hi, 0.001, 11);
     if nudged {
