@@ -97,7 +97,7 @@ const HAND_OVER_KEYS: usize = 1 << 16;
 
 /// The sort key of the pair of slots a < b (or of a slot and a wall index).
 #[inline]
-fn pair_key(a: u32, b: u32) -> u64 {
+pub(crate) fn pair_key(a: u32, b: u32) -> u64 {
     ((a as u64) << 32) | b as u64
 }
 

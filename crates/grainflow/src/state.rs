@@ -192,3 +192,39 @@ impl Particles {
         self.torque.fill(Vec3::ZERO);
     }
 }
+
+/// No slot: a particle not held here.
+pub(crate) const NO_SLOT: u32 = u32::MAX;
+
+/// The slot of each id among particles (each id at most once): a table by id where the ids are dense enough
+/// (at most about twice as many ids as slots), else the (id, slot) pairs sorted.
+pub(crate) struct SlotsById {
+    by_id: Vec<u32>,
+    sorted: Vec<(u32, u32)>,
+}
+
+impl SlotsById {
+    pub(crate) fn new(ids: &[u32]) -> Self {
+        let span = ids.iter().max().map_or(0, |&m| m as usize + 1);
+        if span <= 2 * ids.len() + 1024 {
+            let mut by_id = vec![NO_SLOT; span];
+            for (s, &id) in ids.iter().enumerate() {
+                by_id[id as usize] = s as u32;
+            }
+            Self { by_id, sorted: Vec::new() }
+        } else {
+            let mut sorted: Vec<(u32, u32)> = ids.iter().enumerate().map(|(s, &id)| (id, s as u32)).collect();
+            sorted.sort_unstable();
+            Self { by_id: Vec::new(), sorted }
+        }
+    }
+
+    /// The slot of `id`, or [`NO_SLOT`].
+    pub(crate) fn get(&self, id: u32) -> u32 {
+        if self.sorted.is_empty() {
+            self.by_id.get(id as usize).copied().unwrap_or(NO_SLOT)
+        } else {
+            self.sorted.binary_search_by_key(&id, |e| e.0).map_or(NO_SLOT, |k| self.sorted[k].1)
+        }
+    }
+}

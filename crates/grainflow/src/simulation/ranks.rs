@@ -26,8 +26,8 @@ use super::{Common, ContactInfo, ContactPartner, ResortRule, Simulation};
 use crate::domain::{Boxes, Comm, Weighted};
 use crate::error::EngineError;
 use crate::math::Vec3;
-use crate::neighbor::{NeighborState, nonzero};
-use crate::state::{ParticleInit, Particles};
+use crate::neighbor::{NeighborState, nonzero, pair_key};
+use crate::state::{NO_SLOT, ParticleInit, Particles, SlotsById};
 use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::Arc;
@@ -538,18 +538,18 @@ impl Simulation {
     /// that order) and walls (id, wall, history, slot); those that are zero left out.
     #[allow(clippy::type_complexity)]
     fn histories_by_id(&self) -> (Vec<([u32; 2], [u32; 2], Vec3)>, Vec<(u32, u32, Vec3, u32)>) {
-        let (p, state) = (&self.particles, self.neighbors.state());
+        let (p, nl) = (&self.particles, &self.neighbors);
         let mut pairs = Vec::new();
-        for (&[a, b], &h) in state.pairs.iter().zip(&state.pair_history) {
+        for ([a, b], h) in nl.pairs().zip(nl.pair_histories()) {
             if nonzero(h) {
                 let (ia, ib) = (p.id[a as usize], p.id[b as usize]);
                 pairs.push(if ia < ib { ([ia, ib], [a, b], h) } else { ([ib, ia], [b, a], -h) });
             }
         }
-        let walls = state
-            .wall_pairs
+        let walls = nl
+            .wall_pairs()
             .iter()
-            .zip(&state.wall_history)
+            .zip(nl.wall_history())
             .filter(|(_, h)| nonzero(**h))
             .map(|(&[i, w], &h)| (p.id[i as usize], w, h, i))
             .collect();
@@ -713,18 +713,11 @@ impl Simulation {
                 to.extend_from_slice(&r[1..]);
             }
         }
-        let mut table: HashMap<[u32; 2], Vec3> = HashMap::with_capacity(pairs.len());
-        let mut wall_table: Vec<(u32, u32, Vec3)> = Vec::new();
+        // The histories that arrive with particles, by ids (pairs, then walls).
+        let mut arrived: Vec<([u32; 2], Vec3)> = Vec::new();
+        let mut wall_arrived: Vec<(u32, u32, Vec3)> = Vec::new();
         let kept: Vec<usize> = (0..p.len()).filter(|&i| dest[i] == me).collect();
         let mut next = p.gathered(&kept);
-        for (ids, _, h) in &pairs {
-            table.insert(*ids, *h);
-        }
-        for &(id, w, h, i) in &walls {
-            if dest[i as usize] == me {
-                wall_table.push((id, w, h));
-            }
-        }
         if !initial {
             // The particles that left this box, each followed by its histories.
             let mut out: Vec<Vec<u64>> = vec![Vec::new(); ranks];
@@ -782,15 +775,14 @@ impl Simulation {
                 let n_pairs = words[at] as usize;
                 at += 1;
                 for k in 0..n_pairs {
-                    let (ids, h) = read_history(&words[at + 5 * k..]);
-                    table.entry(ids).or_insert(h);
+                    arrived.push(read_history(&words[at + 5 * k..]));
                 }
                 at += 5 * n_pairs;
                 let n_walls = words[at] as usize;
                 at += 1;
                 for k in 0..n_walls {
                     let ([id, w], h) = read_history(&words[at + 5 * k..]);
-                    wall_table.push((id, w, h));
+                    wall_arrived.push((id, w, h));
                 }
                 at += 5 * n_walls;
                 let n_caught = words[at] as usize;
@@ -829,22 +821,41 @@ impl Simulation {
             }
             ghosts[r] = start..next.len();
         }
-        // The list's state under the new slots; pairs of two ghosts are left out.
-        let slot_of: HashMap<u32, u32> = next.id.iter().enumerate().map(|(k, &id)| (id, k as u32)).collect();
-        let mut list = NeighborState { skin: self.neighbors.skin(), built: false, ..Default::default() };
-        for (ids, h) in &table {
-            if let (Some(&a), Some(&b)) = (slot_of.get(&ids[0]), slot_of.get(&ids[1]))
-                && ((a as usize) < owned || (b as usize) < owned)
-            {
-                list.pairs.push([a, b]);
-                list.pair_history.push(*h);
-            }
+        // The list's state under the new slots; pairs of two ghosts are left out. The kept
+        // particles keep their order, so their pairs stay in list order: a stable sort puts
+        // the few others among them, and keeps the pair held here before one that arrived
+        // (the same bits: both ranks evaluated it).
+        let slot_of = SlotsById::new(&next.id);
+        let mut new_of_old = vec![NO_SLOT; dest.len()];
+        for (k, &i) in kept.iter().enumerate() {
+            new_of_old[i] = k as u32;
         }
-        for &(id, w, h) in &wall_table {
-            if let Some(&i) = slot_of.get(&id) {
-                list.wall_pairs.push([i, w]);
-                list.wall_history.push(h);
+        for (i, s) in new_of_old.iter_mut().enumerate().filter(|(_, s)| **s == NO_SLOT) {
+            *s = slot_of.get(p.id[i]);
+        }
+        let mut keyed: Vec<(u64, Vec3)> = Vec::with_capacity(pairs.len() + arrived.len());
+        let mut keep = |a: u32, b: u32, h: Vec3| {
+            if a != NO_SLOT && b != NO_SLOT && ((a as usize) < owned || (b as usize) < owned) {
+                keyed.push(if a < b { (pair_key(a, b), h) } else { (pair_key(b, a), -h) });
             }
+        };
+        for &(_, [a, b], h) in &pairs {
+            keep(new_of_old[a as usize], new_of_old[b as usize], h);
+        }
+        for &([a, b], h) in &arrived {
+            keep(slot_of.get(a), slot_of.get(b), h);
+        }
+        keyed.sort_by_key(|e| e.0);
+        keyed.dedup_by_key(|e| e.0);
+        let mut list = NeighborState { skin: self.neighbors.skin(), built: false, ..Default::default() };
+        list.pairs = keyed.iter().map(|&(k, _)| [(k >> 32) as u32, k as u32]).collect();
+        list.pair_history = keyed.into_iter().map(|e| e.1).collect();
+        let walls_kept =
+            walls.iter().filter(|w| dest[w.3 as usize] == me).map(|w| (new_of_old[w.3 as usize], w.1, w.2));
+        let walls_arrived = wall_arrived.iter().map(|&(id, w, h)| (slot_of.get(id), w, h));
+        for (i, w, h) in walls_kept.chain(walls_arrived).filter(|w| w.0 != NO_SLOT) {
+            list.wall_pairs.push([i, w]);
+            list.wall_history.push(h);
         }
         let n = next.len();
         next.force.resize(n, Vec3::ZERO);

@@ -160,11 +160,10 @@ impl Cylinders {
         if owners.len() != h.len() {
             return Err("the cylinder contacts' lists have different lengths".into());
         }
-        let mut by_id: Vec<(u32, u32)> = ids.iter().enumerate().map(|(s, &id)| (id, s as u32)).collect();
-        by_id.sort_unstable();
+        let slots = crate::state::SlotsById::new(ids);
         let mut history = Vec::with_capacity(h.len());
         for (&[id, cylinder], &h) in owners.iter().zip(&h) {
-            let slot = by_id.binary_search_by_key(&id, |e| e.0).map(|j| by_id[j].1).map_err(|_| {
+            let slot = Some(slots.get(id)).filter(|&s| s != crate::state::NO_SLOT).ok_or_else(|| {
                 format!("a cylinder contact names particle {id}, which the case does not have")
             })?;
             if cylinder as usize >= self.walls.len() {
@@ -175,7 +174,8 @@ impl Cylinders {
             }
             history.push(CylinderHistory { slot, cylinder, h });
         }
-        history.sort_unstable_by_key(|h| (h.slot, h.cylinder));
+        // Stable: records come mostly in order (those of particles that stayed).
+        history.sort_by_key(|h| (h.slot, h.cylinder));
         if history.windows(2).any(|w| (w[0].slot, w[0].cylinder) == (w[1].slot, w[1].cylinder)) {
             return Err("a cylinder contact appears twice".into());
         }
@@ -317,7 +317,8 @@ impl ContactSource for Cylinders {
             h.slot = k;
             k != u32::MAX
         });
-        self.history.sort_unstable_by_key(|h| (h.slot, h.cylinder));
+        self.// Stable: records come mostly in order (those of particles that stayed).
+        history.sort_by_key(|h| (h.slot, h.cylinder));
     }
 
     /// Nothing: appended slots have no history yet, and every slot is tested at every

@@ -269,7 +269,8 @@ impl Meshes {
             h.slot = k;
             k != u32::MAX
         });
-        self.history.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
+        self.// Stable: records come mostly in order (those of particles that stayed).
+        history.sort_by_key(|h| (h.slot, h.mesh, h.triangle));
         if !self.ready(new_of.len()) || !self.centres.len().is_multiple_of(new_of.len().max(1)) {
             self.built = false;
             return;
@@ -355,15 +356,13 @@ impl Meshes {
         if triangles.len() != n || normals.len() != n || h.len() != n {
             return Err("the mesh contacts' lists have different lengths".into());
         }
-        let mut by_id: Vec<(u32, u32)> = ids.iter().enumerate().map(|(s, &id)| (id, s as u32)).collect();
-        by_id.sort_unstable();
+        let slots = crate::state::SlotsById::new(ids);
         let mut history = Vec::with_capacity(n);
         for k in 0..n {
             let [id, mesh] = owners[k];
-            let slot = by_id
-                .binary_search_by_key(&id, |e| e.0)
-                .map(|j| by_id[j].1)
-                .map_err(|_| format!("a mesh contact names particle {id}, which the case does not have"))?;
+            let slot = Some(slots.get(id))
+                .filter(|&s| s != crate::state::NO_SLOT)
+                .ok_or_else(|| format!("a mesh contact names particle {id}, which the case does not have"))?;
             let fits = self
                 .walls
                 .get(mesh as usize)
@@ -376,7 +375,8 @@ impl Meshes {
             }
             history.push(MeshHistory { slot, mesh, triangle: triangles[k], normal: normals[k], h: h[k] });
         }
-        history.sort_unstable_by_key(|h| (h.slot, h.mesh, h.triangle));
+        // Stable: records come mostly in order (those of particles that stayed).
+        history.sort_by_key(|h| (h.slot, h.mesh, h.triangle));
         if history
             .windows(2)
             .any(|w| (w[0].slot, w[0].mesh, w[0].triangle) == (w[1].slot, w[1].mesh, w[1].triangle))
