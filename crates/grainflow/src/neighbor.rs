@@ -294,6 +294,21 @@ impl NeighborList {
         self.pair_history.iter().zip(&self.in_contact).map(|(&h, &c)| if c { h } else { Vec3::ZERO })
     }
 
+    /// The pairs whose history is not zero, as (slots a < b, the history seen from a), in
+    /// list order.
+    pub(crate) fn pairs_with_history(&self) -> Vec<([u32; 2], Vec3)> {
+        let mut out = Vec::new();
+        for (a, w) in self.offsets.windows(2).enumerate() {
+            for k in w[0]..w[1] {
+                let h = self.pair_history[k];
+                if self.in_contact[k] && nonzero(h) {
+                    out.push(([a as u32, self.partners[k]], h));
+                }
+            }
+        }
+        out
+    }
+
     /// Number of pairs that touched at the last force evaluation (or carry a history).
     pub fn pair_contact_count(&self) -> usize {
         self.in_contact.iter().filter(|&&c| c).count()

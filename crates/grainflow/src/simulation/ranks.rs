@@ -540,20 +540,21 @@ impl Simulation {
     fn histories_by_id(&self) -> (Vec<([u32; 2], [u32; 2], Vec3)>, Vec<(u32, u32, Vec3, u32)>) {
         let (p, nl) = (&self.particles, &self.neighbors);
         let mut pairs = Vec::new();
-        for ([a, b], h) in nl.pairs().zip(nl.pair_histories()) {
-            if nonzero(h) {
-                let (ia, ib) = (p.id[a as usize], p.id[b as usize]);
-                pairs.push(if ia < ib { ([ia, ib], [a, b], h) } else { ([ib, ia], [b, a], -h) });
-            }
+        for ([a, b], h) in nl.pairs_with_history() {
+            pairs.push(by_ids(p, [a, b], h));
         }
-        let walls = nl
-            .wall_pairs()
+        (pairs, self.histories_by_id_of_walls())
+    }
+
+    /// The wall histories of the list that are not zero, as (id, wall, history, slot).
+    fn histories_by_id_of_walls(&self) -> Vec<(u32, u32, Vec3, u32)> {
+        let (p, nl) = (&self.particles, &self.neighbors);
+        nl.wall_pairs()
             .iter()
             .zip(nl.wall_history())
             .filter(|(_, h)| nonzero(**h))
             .map(|(&[i, w], &h)| (p.id[i as usize], w, h, i))
-            .collect();
-        (pairs, walls)
+            .collect()
     }
 
     /// The whole run as one process would hold it, on rank 0 (`None` on the others; in one
@@ -696,7 +697,9 @@ impl Simulation {
             })
             .collect();
         let leaves = |i: usize| dest[i] != me && dest[i] != NONE;
-        let (pairs, walls) = self.histories_by_id();
+        // Only the histories that travel need their particles' ids.
+        let pairs = self.neighbors.pairs_with_history();
+        let walls = self.histories_by_id_of_walls();
         // The other sources' histories, by ids, kept here or sent with their particles.
         let carried = self.sources.carry();
         let mut kept_records: Vec<Vec<u64>> = vec![Vec::new(); carried.len()];
@@ -732,12 +735,13 @@ impl Simulation {
                 }
             }
             let mut histories: Vec<Vec<u64>> = vec![Vec::new(); ranks];
-            for (ids, [a, b], h) in &pairs {
+            for &([a, b], h) in &pairs {
                 let mut sent = usize::MAX;
-                for s in [*a as usize, *b as usize] {
+                for s in [a as usize, b as usize] {
                     if leaves(s) && dest[s] != sent {
                         sent = dest[s];
-                        push_history(&mut histories[sent], *ids, *h);
+                        let (ids, _, h) = by_ids(p, [a, b], h);
+                        push_history(&mut histories[sent], ids, h);
                     }
                 }
             }
@@ -839,7 +843,7 @@ impl Simulation {
                 keyed.push(if a < b { (pair_key(a, b), h) } else { (pair_key(b, a), -h) });
             }
         };
-        for &(_, [a, b], h) in &pairs {
+        for &([a, b], h) in &pairs {
             keep(new_of_old[a as usize], new_of_old[b as usize], h);
         }
         for &([a, b], h) in &arrived {
@@ -1033,6 +1037,13 @@ fn push_vecs(out: &mut Vec<u64>, vs: &[Vec3]) {
 
 fn vec_at(w: &[u64], k: usize) -> Vec3 {
     Vec3::new(f64::from_bits(w[k]), f64::from_bits(w[k + 1]), f64::from_bits(w[k + 2]))
+}
+
+/// A pair's history by ids: (the ids, lower first; the slots in that order; the history seen
+/// from the lower id), given the slots and the history seen from the first.
+fn by_ids(p: &Particles, [a, b]: [u32; 2], h: Vec3) -> ([u32; 2], [u32; 2], Vec3) {
+    let (ia, ib) = (p.id[a as usize], p.id[b as usize]);
+    if ia < ib { ([ia, ib], [a, b], h) } else { ([ib, ia], [b, a], -h) }
 }
 
 /// Appends a ghost's first state: what pairs read of it.
