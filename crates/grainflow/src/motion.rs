@@ -39,6 +39,8 @@ pub(crate) struct ResolvedMotion {
     /// slots).
     pub(crate) slot: usize,
     pub(crate) leader: Option<usize>,
+    /// Whether the rule follows a leader (whose slot, on ranks, may be on another rank).
+    follows: bool,
     axes: [bool; 3],
     anchor: Vec3,
 }
@@ -121,7 +123,7 @@ pub(crate) fn resolve(rules: &[PrescribedMotion], p: &Particles) -> Result<Vec<R
                     (Some(find(leader, "a leader")?), axes)
                 }
             };
-            Ok(ResolvedMotion { slot, leader, axes, anchor: p.position[slot] })
+            Ok(ResolvedMotion { slot, leader, follows: leader.is_some(), axes, anchor: p.position[slot] })
         })
         .collect()
 }
@@ -130,7 +132,7 @@ pub(crate) fn resolve(rules: &[PrescribedMotion], p: &Particles) -> Result<Vec<R
 pub(crate) fn held(rules: &[ResolvedMotion], n: usize) -> Vec<bool> {
     let mut held = vec![false; n];
     for r in rules {
-        if r.leader.is_none() {
+        if !r.follows {
             held[r.slot] = true;
         }
     }
@@ -180,7 +182,37 @@ pub(crate) fn free_runs(rules: &[ResolvedMotion], n: usize) -> Vec<std::ops::Ran
 impl ResolvedMotion {
     /// A `Hold` of slot `slot` at `anchor`.
     pub(crate) fn hold(slot: usize, anchor: Vec3) -> Self {
-        ResolvedMotion { slot, leader: None, axes: [false; 3], anchor }
+        ResolvedMotion { slot, leader: None, follows: false, axes: [false; 3], anchor }
+    }
+
+    /// A `Follow` of slot `slot` on `axes`, from `anchor`: of the leader in slot `leader`, or
+    /// (none) of one whose position the caller gives.
+    pub(crate) fn follow(slot: usize, leader: Option<usize>, axes: [bool; 3], anchor: Vec3) -> Self {
+        ResolvedMotion { slot, leader, follows: true, axes, anchor }
+    }
+
+    /// This rule, marked as following a leader or not.
+    pub(crate) fn with_follows(self, follows: bool) -> Self {
+        ResolvedMotion { follows, ..self }
+    }
+
+    /// Whether the rule follows a leader.
+    pub(crate) fn follows(&self) -> bool {
+        self.follows
+    }
+
+    /// The axes a follower copies from its leader.
+    pub(crate) fn axes(&self) -> [bool; 3] {
+        self.axes
+    }
+
+    /// The position the rule puts its particle at, given its leader's position now.
+    pub(crate) fn target(&self, leader: Vec3) -> Vec3 {
+        let (mut x, lx) = (self.anchor.to_array(), leader.to_array());
+        for k in (0..3).filter(|&k| self.follows && self.axes[k]) {
+            x[k] = lx[k];
+        }
+        Vec3::from_array(x)
     }
 
     /// The position the rule started from.
@@ -192,25 +224,21 @@ impl ResolvedMotion {
 pub(crate) fn apply(rules: &[ResolvedMotion], p: &mut Particles) -> bool {
     let mut changed = false;
     for r in rules {
-        let mut x = r.anchor.to_array();
-        if let Some(l) = r.leader {
-            let lx = p.position[l].to_array();
-            for k in 0..3 {
-                if r.axes[k] {
-                    x[k] = lx[k];
-                }
-            }
-        }
-        let x = Vec3::from_array(x);
-        let s = r.slot;
-        // Compared as bits, so that -0.0 and 0.0 (or any NaN) count as a change.
-        let same = |a: Vec3, b: Vec3| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits);
-        changed |=
-            !(same(p.position[s], x) && same(p.velocity[s], Vec3::ZERO) && same(p.omega[s], Vec3::ZERO));
-        p.position[s] = x;
-        p.velocity[s] = Vec3::ZERO;
-        p.omega[s] = Vec3::ZERO;
+        let x = r.target(r.leader.map_or(r.anchor, |l| p.position[l]));
+        changed |= put(p, r.slot, x);
     }
+    changed
+}
+
+/// Puts slot `s` at `x`, at rest; whether that changed its state, bit for bit (so that -0.0
+/// and 0.0, or any NaN, count as a change).
+pub(crate) fn put(p: &mut Particles, s: usize, x: Vec3) -> bool {
+    let same = |a: Vec3, b: Vec3| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits);
+    let changed =
+        !(same(p.position[s], x) && same(p.velocity[s], Vec3::ZERO) && same(p.omega[s], Vec3::ZERO));
+    p.position[s] = x;
+    p.velocity[s] = Vec3::ZERO;
+    p.omega[s] = Vec3::ZERO;
     changed
 }
 

@@ -756,7 +756,7 @@ impl Simulation {
         // are change nothing, and the forces of this step stay those of the state. (It moves
         // prescribed slots only, which the pending kick and the wrap after it leave alone or
         // wrap as they would have here.)
-        let moved = motion::apply(&self.motion, &mut self.particles);
+        let moved = self.apply_motion();
         let moved = self.moved_on_any_rank(moved);
         self.forces_current = !moved;
         if !self.kick_pending

@@ -144,6 +144,58 @@ fn periodic_chute_case(nudged: bool) -> (SimulationConfig, Vec<ParticleInit>) {
     (cfg, init)
 }
 
+/// The chute with ten free beads of the upper bed under rules that follow a leader in z
+/// (their own x and y kept): five follow beads on the far side in x (on another rank when
+/// the boxes are cut across x), one of those follows a follower whose rule comes after its
+/// own (it copies where its leader was before that rule moved it, as one process applies
+/// the rules in order), and the others follow it after its rule.
+fn followed_chute_case(nudged: bool) -> (SimulationConfig, Vec<ParticleInit>) {
+    let (mut cfg, init) = periodic_chute_case(nudged);
+    let mut upper: Vec<&ParticleInit> = init.iter().filter(|q| q.position.z > 0.012).collect();
+    upper.sort_by(|a, b| a.position.x.total_cmp(&b.position.x));
+    let (near, far) = (&upper[..5], &upper[upper.len() - 10..]);
+    let follow = |particle: u32, leader: u32| PrescribedMotion {
+        particle,
+        rule: MotionRule::Follow { leader, axes: [false, false, true] },
+    };
+    cfg.motion.push(follow(far[9].id, far[0].id));
+    for (f, l) in far[..5].iter().zip(near) {
+        cfg.motion.push(follow(f.id, l.id));
+    }
+    for f in &far[5..9] {
+        cfg.motion.push(follow(f.id, far[0].id));
+    }
+    (cfg, init)
+}
+
+fn followed_chute(nudged: bool) -> Simulation {
+    let (cfg, init) = followed_chute_case(nudged);
+    simulation(cfg, &init)
+}
+
+#[test]
+fn a_chute_with_followers_on_other_ranks_is_bit_identical_on_any_rank_count() {
+    // On 2 ranks some follower's leader is another rank's.
+    let (cfg, _) = followed_chute_case(false);
+    let pairs: Vec<(u32, u32)> = cfg
+        .motion
+        .iter()
+        .filter_map(|m| match m.rule {
+            MotionRule::Follow { leader, .. } => Some((m.particle, leader)),
+            MotionRule::Hold => None,
+        })
+        .collect();
+    let owned = on_ranks(2, &|comm| {
+        let mut sim = followed_chute(false);
+        sim.decompose(comm, None).expect("spread over ranks");
+        sim.particles().id[..sim.owned()].to_vec()
+    });
+    let rank_of = |id: u32| owned.iter().position(|ids| ids.contains(&id));
+    assert!(pairs.iter().any(|&(f, l)| rank_of(f) != rank_of(l)), "every follower is on its leader's rank");
+    check_rank_counts("followed chute", &|| followed_chute(false), &|| followed_chute(true), 400);
+    check_restarts("followed chute", &|| followed_chute_case(false), 200, 400, 0);
+}
+
 #[test]
 fn walled_hertz_bed_is_bit_identical_on_any_rank_count() {
     check_rank_counts("walled bed", &|| walled_bed(false), &|| walled_bed(true), 400);

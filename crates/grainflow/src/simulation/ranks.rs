@@ -53,16 +53,40 @@ pub(crate) struct Decomposition {
     /// Whether the ghosts lag behind their particles (a step within `advance` left them so:
     /// nobody looks at them before the next evaluation refreshes them).
     stale: bool,
-    /// The particles held in place, by id, with the positions they are held at (every
-    /// rank's: a ghost of a held particle is held too, as the pair law sees it).
-    held: HashMap<u32, Vec3>,
-    /// Their ids in the order of the rules (the case's), which a checkpoint keeps.
-    held_order: Vec<u32>,
+    /// The prescribed-motion rules of every rank's particles, by ids, in the case's order
+    /// (which a checkpoint keeps, and in which the rules are applied).
+    rules: Vec<RuleById>,
+    /// The index in `rules` of each prescribed particle's rule, by id.
+    rule_of: HashMap<u32, usize>,
+    /// The ids of the leaders, sorted.
+    leaders: Vec<u32>,
     /// Re-cut the boxes when the slowest rank's work exceeds the mean by more than this
     /// fraction (none: never).
     threshold: Option<f64>,
     /// The step of the last look at the ranks' work.
     since: u64,
+}
+
+/// A prescribed-motion rule by ids: its particle's and its leader's, and the rule as resolved
+/// in one process (its slots stale once spread).
+#[derive(Debug, Clone, Copy)]
+struct RuleById {
+    id: u32,
+    leader: Option<u32>,
+    rule: crate::motion::ResolvedMotion,
+}
+
+impl RuleById {
+    /// The rule for this rank's slot `slot`: a follower's leader, which may be on another
+    /// rank, is given by [`Simulation::apply_motion`].
+    fn on_rank(&self, slot: usize) -> crate::motion::ResolvedMotion {
+        let r = &self.rule;
+        if r.follows() {
+            crate::motion::ResolvedMotion::follow(slot, None, r.axes(), r.anchor())
+        } else {
+            crate::motion::ResolvedMotion::hold(slot, r.anchor())
+        }
+    }
 }
 
 /// What a rank has sent to the others so far (collectives with itself left out).
@@ -108,16 +132,12 @@ impl Simulation {
     /// and their ghosts. Every rank must call it with the same simulation (as set up from the
     /// same case), before the first step. At rebuilds the boxes are cut again when the slowest
     /// rank's work exceeds the mean by more than the fraction `rebalance` (none: never).
-    /// Refused for what ranks cannot run yet: prescribed motion that follows a leader.
     pub fn decompose(&mut self, comm: Arc<dyn Comm>, rebalance: Option<f64>) -> Result<(), EngineError> {
         let refuse = |what: &str| {
             Err(EngineError::BadReference(format!("{what} cannot yet run on more than one rank")))
         };
         if self.domain.is_some() {
             return refuse("a run already spread over ranks");
-        }
-        if comm.size() > 1 && self.motion.iter().any(|r| r.leader.is_some()) {
-            return refuse("prescribed motion that follows a leader");
         }
         if self.kick_pending || self.particles.len() != self.slot_count {
             return Err(EngineError::BadReference(
@@ -137,6 +157,15 @@ impl Simulation {
         let reach = 2.0 * self.r_max() + self.neighbors.skin();
         let history = !self.particles.accel_prev.is_empty();
         let ranks = comm.size();
+        let id = &self.particles.id;
+        let rules: Vec<RuleById> = self
+            .motion
+            .iter()
+            .map(|r| RuleById { id: id[r.slot], leader: r.leader.map(|l| id[l]), rule: *r })
+            .collect();
+        let mut leaders: Vec<u32> = rules.iter().filter_map(|r| r.leader).collect();
+        leaders.sort_unstable();
+        leaders.dedup();
         self.domain = Some(Box::new(Decomposition {
             comm,
             boxes,
@@ -147,8 +176,9 @@ impl Simulation {
             history,
             stats: DomainStats::default(),
             stale: false,
-            held: self.motion.iter().map(|r| (self.particles.id[r.slot], r.anchor())).collect(),
-            held_order: self.motion.iter().map(|r| self.particles.id[r.slot]).collect(),
+            rules: rules.clone(),
+            rule_of: rules.iter().enumerate().map(|(k, r)| (r.id, k)).collect(),
+            leaders,
             threshold: rebalance,
             since: self.step,
         }));
@@ -241,7 +271,9 @@ impl Simulation {
         }
         gone.sort_unstable();
         // Refused alike on every rank, before anything changes.
-        if let Some(id) = gone.iter().find(|id| d.held.contains_key(id)) {
+        if let Some(id) =
+            gone.iter().find(|id| d.rule_of.contains_key(id) || d.leaders.binary_search(id).is_ok())
+        {
             return Err(EngineError::BadReference(format!(
                 "particle {id} is under prescribed motion (or leads a particle that is): it cannot be removed"
             )));
@@ -478,17 +510,58 @@ impl Simulation {
 
     /// Marks the ghosts of held particles in `held` (slots of this rank).
     pub(super) fn mark_held_ghosts(&self, held: &mut [bool]) {
-        if let Some(d) = self.domain.as_ref().filter(|d| !d.held.is_empty()) {
+        if let Some(d) = self.domain.as_ref().filter(|d| !d.rules.is_empty()) {
             for (i, h) in held.iter_mut().enumerate().skip(d.owned) {
-                *h = d.held.contains_key(&self.particles.id[i]);
+                *h = d.rule_of.get(&self.particles.id[i]).is_some_and(|&k| !d.rules[k].rule.follows());
             }
         }
+    }
+
+    /// Puts the prescribed particles where their rules say, at rest ([`crate::motion::apply`]);
+    /// returns whether that changed any (on this rank). Spread over ranks with rules that
+    /// follow a leader, every rank gathers the leaders' positions from their owners and
+    /// replays all the rules in the case's order, as one process applies them (a leader
+    /// under a rule that comes first is where that rule put it); each then puts its own.
+    /// Collective then.
+    pub(super) fn apply_motion(&mut self) -> bool {
+        let Some(d) = self.domain.as_ref().filter(|d| !d.leaders.is_empty()) else {
+            return crate::motion::apply(&self.motion, &mut self.particles);
+        };
+        let p = &self.particles;
+        let mut mine = Vec::new();
+        for i in (0..d.owned).filter(|&i| d.leaders.binary_search(&p.id[i]).is_ok()) {
+            mine.push(p.id[i] as u64);
+            push_vecs(&mut mine, &[p.position[i]]);
+        }
+        let mut at: Vec<(u32, Vec3)> = d
+            .comm
+            .all_gather(&mine)
+            .iter()
+            .flat_map(|w| w.chunks_exact(4))
+            .map(|w| (w[0] as u32, vec_at(w, 1)))
+            .collect();
+        at.sort_unstable_by_key(|e| e.0);
+        let mut target = Vec::with_capacity(d.rules.len());
+        for r in &d.rules {
+            let lead = r.leader.and_then(|l| at.binary_search_by_key(&l, |e| e.0).ok()).map(|k| at[k].1);
+            let x = r.rule.target(lead.unwrap_or(r.rule.anchor()));
+            if let Ok(k) = at.binary_search_by_key(&r.id, |e| e.0) {
+                at[k].1 = x;
+            }
+            target.push(x);
+        }
+        let mut changed = false;
+        for r in &self.motion {
+            let k = d.rule_of[&self.particles.id[r.slot]];
+            changed |= crate::motion::put(&mut self.particles, r.slot, target[k]);
+        }
+        changed
     }
 
     /// Whether prescribed motion moved a particle on any rank, given whether it did on this
     /// one (every rank then evaluates the forces again, or none).
     pub(super) fn moved_on_any_rank(&self, moved: bool) -> bool {
-        match self.domain.as_ref().filter(|d| !d.held.is_empty()) {
+        match self.domain.as_ref().filter(|d| !d.rules.is_empty()) {
             Some(d) => d.comm.all_gather(&[moved as u64]).iter().any(|w| w[0] != 0),
             None => moved,
         }
@@ -651,10 +724,11 @@ impl Simulation {
             list.wall_history.push(h);
         }
         // In the case's order: a checkpoint lists the rules' anchors so.
-        let motion = d
-            .held_order
-            .iter()
-            .map(|&id| crate::motion::ResolvedMotion::hold(slot(id) as usize, d.held[&id]));
+        let motion = d.rules.iter().map(|r| {
+            let (at, leader) = (slot(r.id) as usize, r.leader.map(|l| slot(l) as usize));
+            crate::motion::ResolvedMotion::follow(at, leader, r.rule.axes(), r.rule.anchor())
+                .with_follows(r.rule.follows())
+        });
         let mut whole = self.clone();
         whole.flow = flow;
         whole.motion = motion.collect();
@@ -871,9 +945,7 @@ impl Simulation {
         }
         (d.owned, d.sends, d.ghosts, d.stale) = (owned, sends, ghosts, false);
         self.motion = (0..owned)
-            .filter_map(|i| {
-                d.held.get(&self.particles.id[i]).map(|&x| crate::motion::ResolvedMotion::hold(i, x))
-            })
+            .filter_map(|i| d.rule_of.get(&self.particles.id[i]).map(|&k| d.rules[k].on_rank(i)))
             .collect();
         self.domain = Some(d);
         // The particles that stayed keep what the sources found for them (mesh candidates).
