@@ -187,6 +187,28 @@ pub fn open_beside(dir: &Path) -> impl Fn(&str) -> Result<Box<dyn BufRead>, Case
     }
 }
 
+/// How the files a case names reach its reader, given the file's name and how to open it
+/// here: an identity in one process; over ranks, one process opens each file and passes its
+/// bytes on to the others, which never open it (see `grainflow_run::relay`).
+pub type Relay<'a> = dyn Fn(&str, &dyn Fn() -> Result<Box<dyn BufRead>, CaseError>) -> Result<Box<dyn BufRead>, CaseError>
+    + 'a;
+
+/// The [`Relay`] of one process: each file opened where it is read.
+pub fn direct(
+    _name: &str,
+    open: &dyn Fn() -> Result<Box<dyn BufRead>, CaseError>,
+) -> Result<Box<dyn BufRead>, CaseError> {
+    open()
+}
+
+/// `open` with every file passed through `relay`.
+pub fn relayed<'a>(
+    open: &'a Opener<'a>,
+    relay: &'a Relay<'a>,
+) -> impl Fn(&str) -> Result<Box<dyn BufRead>, CaseError> + 'a {
+    move |name: &str| relay(name, &|| open(name))
+}
+
 /// An [`Opener`] over a function that returns a file's text (tests, fuzzing, the library's
 /// in-memory entry points).
 pub fn open_text<'a>(

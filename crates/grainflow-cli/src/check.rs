@@ -28,8 +28,13 @@ pub struct CheckArgs {
 pub fn main(args: CheckArgs) -> ExitCode {
     let _stop = crate::signals::install();
     grainflow_case::plan::set_memory_limit(args.memory_limit);
-    let case = match crate::run::load_and_warn(&args.case, &args.overrides, args.motion.as_deref(), &args.set)
-    {
+    let case = match crate::run::load_and_warn(
+        &args.case,
+        &args.overrides,
+        args.motion.as_deref(),
+        &args.set,
+        &grainflow_case::input::direct,
+    ) {
         Ok(c) => c,
         Err(code) => return code,
     };

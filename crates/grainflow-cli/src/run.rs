@@ -302,8 +302,9 @@ pub fn load_and_warn(
     overrides: &[String],
     motion: Option<&Path>,
     set: &[String],
+    relay: &grainflow_case::input::Relay<'_>,
 ) -> Result<grainflow_case::Case, ExitCode> {
-    let case = load_case(case, overrides, motion, set).map_err(|e| {
+    let case = load_case(case, overrides, motion, set, relay).map_err(|e| {
         eprintln!("error: {e}");
         ExitCode::from(EXIT_BAD_INPUT)
     })?;
@@ -314,11 +315,13 @@ pub fn load_and_warn(
 }
 
 /// Reads a case file, or translates an MFIX deck. The error is the message to print.
+/// The files the case names come through `relay` (over ranks, read by rank 0 alone).
 fn load_case(
     case: &Path,
     overrides: &[String],
     motion: Option<&Path>,
     set: &[String],
+    relay: &grainflow_case::input::Relay<'_>,
 ) -> Result<grainflow_case::Case, String> {
     let sets =
         set.iter().map(|s| grainflow_case::SetOverride::parse(s)).collect::<Result<Vec<_>, String>>()?;
@@ -330,7 +333,7 @@ fn load_case(
             ));
         }
         // Deck messages name the deck (and its line) already.
-        return grainflow_case::mfix::load(case, overrides, motion)
+        return grainflow_case::mfix::load_relayed(case, overrides, motion, relay)
             .map(|d| d.case)
             .map_err(|e| e.to_string());
     }
@@ -346,7 +349,7 @@ fn load_case(
             case.display()
         ));
     }
-    grainflow_case::load_with(case, &sets).map_err(|e| match e {
+    grainflow_case::load_relayed(case, &sets, relay).map_err(|e| match e {
         // Syntax and read errors name the file already; the others name table and key.
         CaseError::Syntax(_) | CaseError::Read { .. } => e.to_string(),
         _ => format!("{}: {e}", case.display()),
@@ -371,7 +374,13 @@ pub fn main(args: RunArgs) -> ExitCode {
     // Before the set-up, which can take long (particle files, seeded lattices, placement).
     let stop = crate::signals::install();
     grainflow_case::plan::set_memory_limit(args.memory_limit);
-    let case = match load_and_warn(&args.case, &args.overrides, args.motion.as_deref(), &args.set) {
+    // Over ranks, the files the case names are read by rank 0 alone and passed on.
+    let relay = ranks.clone().map(grainflow_run::relay::over_ranks);
+    let relay: &grainflow_case::input::Relay<'_> = match &relay {
+        Some(r) => r,
+        None => &grainflow_case::input::direct,
+    };
+    let case = match load_and_warn(&args.case, &args.overrides, args.motion.as_deref(), &args.set, relay) {
         Ok(c) => c,
         Err(code) => return code,
     };

@@ -393,6 +393,17 @@ fn a_bad_case_on_two_ranks_exits_2_at_once_with_one_message() {
     let stderr = String::from_utf8_lossy(&r.stderr);
     assert_eq!(r.status.code(), Some(2), "{stderr}");
     assert_eq!(stderr.matches("diameter").count(), 1, "the message once, from rank 0: {stderr}");
+    // The files a case names are read by rank 0 alone and passed on: one it cannot open
+    // ends every rank the same way.
+    let drum = example(dir.path(), "rotating-drum", &[], false);
+    std::fs::remove_file(drum.with_file_name("drum.obj")).expect("remove the mesh");
+    let start = Instant::now();
+    let r = run(&drum, &dir.path().join("no-mesh"), Some(2), 1);
+    assert!(start.elapsed() < Duration::from_secs(30), "took {:?}", start.elapsed());
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.matches("drum.obj").count(), 1, "the message once, from rank 0: {stderr}");
+    std::fs::remove_dir_all(drum.parent().expect("folder")).expect("clean");
     // A failure of rank 0 alone (its output folder holds another run's results, which the
     // other ranks' scratch folders do not) ends every rank: none waits for it in a collective.
     let drum = example(dir.path(), "rotating-drum", &[("t_stop", "t_stop = 0.01")], false);

@@ -14,5 +14,6 @@
 
 pub mod outdir;
 pub mod output;
+pub mod relay;
 pub mod run;
 pub mod vtk;

@@ -86,13 +86,20 @@ pub fn load(path: &Path) -> Result<Case, CaseError> {
 /// [`SetOverride`]): a key set is validated exactly as if the file said it. The case hash
 /// covers the overrides.
 pub fn load_with(path: &Path, sets: &[SetOverride]) -> Result<Case, CaseError> {
-    if sets.is_empty() {
-        return load(path);
-    }
+    load_relayed(path, sets, &input::direct)
+}
+
+/// [`load_with`] with the files the case names (particles, meshes, key frames) passed
+/// through `relay` (see [`input::Relay`]); the case file itself is read here.
+pub fn load_relayed(path: &Path, sets: &[SetOverride], relay: &input::Relay<'_>) -> Result<Case, CaseError> {
     let text = input::read_text(path, input::Kind::CaseFile)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let (raw, source) = parse_raw_with(&text, &path.display().to_string(), sets)?;
-    from_raw_opened(raw, &source, &input::open_beside(&dir))
+    let (raw, source) = if sets.is_empty() {
+        (parse_raw(&text, &path.display().to_string())?, text.clone())
+    } else {
+        parse_raw_with(&text, &path.display().to_string(), sets)?
+    };
+    from_raw_opened(raw, &source, &input::relayed(&input::open_beside(&dir), relay))
 }
 
 /// [`parse`] with `--set` overrides (see [`load_with`]).

@@ -111,6 +111,17 @@ pub fn is_deck(path: &Path) -> bool {
 /// Every file is read through [`crate::input`]: regular files only, within its size limits,
 /// the particle file streamed.
 pub fn load(path: &Path, overrides: &[String], motion: Option<&Path>) -> Result<DeckCase, CaseError> {
+    load_relayed(path, overrides, motion, &input::direct)
+}
+
+/// [`load`] with the files the deck names (particles, STL, PSD, key frames) passed through
+/// `relay` (see [`input::Relay`]); the deck and the motion file are read here.
+pub fn load_relayed(
+    path: &Path,
+    overrides: &[String],
+    motion: Option<&Path>,
+    relay: &input::Relay<'_>,
+) -> Result<DeckCase, CaseError> {
     let text = input::read_text(path, input::Kind::Deck)?;
     let motion_text = motion
         .map(|m| input::read_text(m, input::Kind::Motion).map(|t| (t, m.display().to_string())))
@@ -121,7 +132,7 @@ pub fn load(path: &Path, overrides: &[String], motion: Option<&Path>) -> Result<
         &path.display().to_string(),
         overrides,
         motion_text.as_ref().map(|(t, o)| (t.as_str(), o.as_str())),
-        &input::open_beside(&dir),
+        &input::relayed(&input::open_beside(&dir), relay),
     )
 }
 
