@@ -190,14 +190,13 @@ pub fn open_beside(dir: &Path) -> impl Fn(&str) -> Result<Box<dyn BufRead>, Case
 /// How the files a case names reach its reader, given the file's name and how to open it
 /// here: an identity in one process; over ranks, one process opens each file and passes its
 /// bytes on to the others, which never open it (see `grainflow_run::relay`).
-pub type Relay<'a> = dyn Fn(&str, &dyn Fn() -> Result<Box<dyn BufRead>, CaseError>) -> Result<Box<dyn BufRead>, CaseError>
-    + 'a;
+pub type Relay<'a> = dyn Fn(&str, &OpenHere<'_>) -> Result<Box<dyn BufRead>, CaseError> + 'a;
+
+/// Opens one file where the case is read (what a [`Relay`] is given).
+pub type OpenHere<'a> = dyn Fn() -> Result<Box<dyn BufRead>, CaseError> + 'a;
 
 /// The [`Relay`] of one process: each file opened where it is read.
-pub fn direct(
-    _name: &str,
-    open: &dyn Fn() -> Result<Box<dyn BufRead>, CaseError>,
-) -> Result<Box<dyn BufRead>, CaseError> {
+pub fn direct(_name: &str, open: &OpenHere<'_>) -> Result<Box<dyn BufRead>, CaseError> {
     open()
 }
 

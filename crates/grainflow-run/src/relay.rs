@@ -10,6 +10,7 @@
 
 use grainflow::domain::Comm;
 use grainflow_case::CaseError;
+use grainflow_case::input::OpenHere;
 use std::io::{BufRead, Read};
 use std::sync::Arc;
 
@@ -24,7 +25,7 @@ const FAILED: u64 = 2;
 /// others take its bytes. With one rank, each file is opened as in one process.
 pub fn over_ranks(
     comm: Arc<dyn Comm>,
-) -> impl Fn(&str, &dyn Fn() -> Result<Box<dyn BufRead>, CaseError>) -> Result<Box<dyn BufRead>, CaseError> {
+) -> impl Fn(&str, &OpenHere<'_>) -> Result<Box<dyn BufRead>, CaseError> {
     move |name, open| {
         if comm.size() == 1 {
             return open();
