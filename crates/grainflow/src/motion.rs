@@ -176,34 +176,16 @@ pub(crate) fn free_runs(rules: &[ResolvedMotion], n: usize) -> Vec<std::ops::Ran
     runs
 }
 
-/// Puts every prescribed particle where its rule says, at rest. Returns true if that changed
-/// any position, velocity or angular velocity (bit for bit): a held particle already at its
-/// anchor and at rest changes nothing, so the forces of the state stay valid.
 impl ResolvedMotion {
-    /// A `Hold` of slot `slot` at `anchor`.
-    pub(crate) fn hold(slot: usize, anchor: Vec3) -> Self {
-        ResolvedMotion { slot, leader: None, follows: false, axes: [false; 3], anchor }
-    }
-
-    /// A `Follow` of slot `slot` on `axes`, from `anchor`: of the leader in slot `leader`, or
-    /// (none) of one whose position the caller gives.
-    pub(crate) fn follow(slot: usize, leader: Option<usize>, axes: [bool; 3], anchor: Vec3) -> Self {
-        ResolvedMotion { slot, leader, follows: true, axes, anchor }
-    }
-
-    /// This rule, marked as following a leader or not.
-    pub(crate) fn with_follows(self, follows: bool) -> Self {
-        ResolvedMotion { follows, ..self }
+    /// This rule for the particle in slot `slot`, its leader in slot `leader` (none: one
+    /// whose position the caller gives, as on ranks).
+    pub(crate) fn at_slots(self, slot: usize, leader: Option<usize>) -> Self {
+        ResolvedMotion { slot, leader, ..self }
     }
 
     /// Whether the rule follows a leader.
     pub(crate) fn follows(&self) -> bool {
         self.follows
-    }
-
-    /// The axes a follower copies from its leader.
-    pub(crate) fn axes(&self) -> [bool; 3] {
-        self.axes
     }
 
     /// The position the rule puts its particle at, given its leader's position now.
@@ -221,6 +203,9 @@ impl ResolvedMotion {
     }
 }
 
+/// Puts every prescribed particle where its rule says, at rest. Returns true if that changed
+/// any position, velocity or angular velocity (bit for bit): a held particle already at its
+/// anchor and at rest changes nothing, so the forces of the state stay valid.
 pub(crate) fn apply(rules: &[ResolvedMotion], p: &mut Particles) -> bool {
     let mut changed = false;
     for r in rules {

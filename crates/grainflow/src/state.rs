@@ -196,8 +196,9 @@ impl Particles {
 /// No slot: a particle not held here.
 pub(crate) const NO_SLOT: u32 = u32::MAX;
 
-/// The slot of each id among particles (each id at most once): a table by id where the ids are dense enough
-/// (at most about twice as many ids as slots), else the (id, slot) pairs sorted.
+/// The slot of each id among particles (each id at most once): a table by id where the ids
+/// are dense enough (at most about twice as many ids as slots), else the (id, slot) pairs
+/// sorted.
 pub(crate) struct SlotsById {
     by_id: Vec<u32>,
     sorted: Vec<(u32, u32)>,

@@ -80,12 +80,7 @@ impl RuleById {
     /// The rule for this rank's slot `slot`: a follower's leader, which may be on another
     /// rank, is given by [`Simulation::apply_motion`].
     fn on_rank(&self, slot: usize) -> crate::motion::ResolvedMotion {
-        let r = &self.rule;
-        if r.follows() {
-            crate::motion::ResolvedMotion::follow(slot, None, r.axes(), r.anchor())
-        } else {
-            crate::motion::ResolvedMotion::hold(slot, r.anchor())
-        }
+        self.rule.at_slots(slot, None)
     }
 }
 
@@ -724,11 +719,8 @@ impl Simulation {
             list.wall_history.push(h);
         }
         // In the case's order: a checkpoint lists the rules' anchors so.
-        let motion = d.rules.iter().map(|r| {
-            let (at, leader) = (slot(r.id) as usize, r.leader.map(|l| slot(l) as usize));
-            crate::motion::ResolvedMotion::follow(at, leader, r.rule.axes(), r.rule.anchor())
-                .with_follows(r.rule.follows())
-        });
+        let motion =
+            d.rules.iter().map(|r| r.rule.at_slots(slot(r.id) as usize, r.leader.map(|l| slot(l) as usize)));
         let mut whole = self.clone();
         whole.flow = flow;
         whole.motion = motion.collect();
@@ -904,10 +896,13 @@ impl Simulation {
         // the few others among them, and keeps the pair held here before one that arrived
         // (the same bits: both ranks evaluated it).
         let slot_of = SlotsById::new(&next.id);
-        let mut new_of_old = vec![NO_SLOT; dest.len()];
+        // Each kept slot's new one (what the sources take), then every old slot's: the
+        // others by id, if held here again (as a ghost, or one that left and came back).
+        let mut new_of = vec![NO_SLOT; dest.len()];
         for (k, &i) in kept.iter().enumerate() {
-            new_of_old[i] = k as u32;
+            new_of[i] = k as u32;
         }
+        let mut new_of_old = new_of.clone();
         for (i, s) in new_of_old.iter_mut().enumerate().filter(|(_, s)| **s == NO_SLOT) {
             *s = slot_of.get(p.id[i]);
         }
@@ -949,10 +944,6 @@ impl Simulation {
             .collect();
         self.domain = Some(d);
         // The particles that stayed keep what the sources found for them (mesh candidates).
-        let mut new_of = vec![u32::MAX; dest.len()];
-        for (k, &i) in kept.iter().enumerate() {
-            new_of[i] = k as u32;
-        }
         self.sources.redistributed(&new_of, n);
         if let Err(e) = self.sources.take_carried(&self.particles.id, &kept_records) {
             // The records were made from valid histories: only a defect can break them.

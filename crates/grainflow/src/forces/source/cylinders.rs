@@ -317,8 +317,8 @@ impl ContactSource for Cylinders {
             h.slot = k;
             k != u32::MAX
         });
-        self.// Stable: records come mostly in order (those of particles that stayed).
-        history.sort_by_key(|h| (h.slot, h.cylinder));
+        // Stable: the kept records are in order already (`new_of` keeps the slots' order).
+        self.history.sort_by_key(|h| (h.slot, h.cylinder));
     }
 
     /// Nothing: appended slots have no history yet, and every slot is tested at every

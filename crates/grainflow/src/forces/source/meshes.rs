@@ -269,8 +269,8 @@ impl Meshes {
             h.slot = k;
             k != u32::MAX
         });
-        self.// Stable: records come mostly in order (those of particles that stayed).
-        history.sort_by_key(|h| (h.slot, h.mesh, h.triangle));
+        // Stable: the kept records are in order already (`new_of` keeps the slots' order).
+        self.history.sort_by_key(|h| (h.slot, h.mesh, h.triangle));
         if !self.ready(new_of.len()) || !self.centres.len().is_multiple_of(new_of.len().max(1)) {
             self.built = false;
             return;
