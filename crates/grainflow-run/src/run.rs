@@ -208,9 +208,20 @@ pub fn run_case(
     let (output, domain, hash) = (case.output, case.domain, case.hash.clone());
     let (max_overlap, rebalance) = (case.max_overlap, case.rebalance);
     let mesh_loads = MeshLoads::new(&case);
-    let mut sim = match &options.restart {
-        None => Simulation::new(case.config, case.particles)?,
-        Some(path) => {
+    let spread = options.ranks.clone().filter(|c| c.size() > 1);
+    let mut sim = match (&options.restart, &spread) {
+        (None, None) => Simulation::new(case.config, case.particles)?,
+        // Each rank sets up from its run of the case's particles, in the file's order: no
+        // rank builds a neighbour list of them all.
+        (None, Some(comm)) => {
+            let n = case.particles.len();
+            let (r, ranks) = (comm.rank(), comm.size());
+            let share: Vec<usize> = (r * n / ranks..(r + 1) * n / ranks).collect();
+            let mine = case.particles.gathered(&share);
+            drop(case.particles);
+            Simulation::new_over_ranks(case.config, mine, comm.clone(), rebalance)?
+        }
+        (Some(path), _) => {
             let case_particles = options.accept_changed_case.then(|| particle_keys(&case.particles));
             let flow = !(case.config.insertions.is_empty() && case.config.outlets.is_empty());
             // The checkpoint holds the particles: the case's initial ones go before it is read
@@ -224,11 +235,11 @@ pub fn run_case(
             sim
         }
     };
-    check_output_volume(&sim, &output, mesh_loads.columns.len())?;
-    // A restart spreads the checkpoint's whole state as a fresh run spreads the case's.
-    if let Some(comm) = options.ranks.clone().filter(|c| c.size() > 1) {
+    // A restart spreads the checkpoint's whole state over the ranks.
+    if let (Some(comm), Some(_)) = (spread, &options.restart) {
         sim.decompose(comm, rebalance)?;
     }
+    check_output_volume(&sim, &output, mesh_loads.columns.len())?;
     let intent = match &options.restart {
         None => Intent::Fresh,
         Some(path) => Intent::Continue { run_id: sim.run_id(), checkpoint: path },
@@ -384,7 +395,7 @@ fn check_output_volume(
     mesh_columns: usize,
 ) -> Result<(), RunError> {
     let left = sim.total_steps().saturating_sub(sim.step_index()) as f64;
-    let n = sim.particles().len() as f64;
+    let n = sim.total_particles() as f64;
     let rows = left / output_every(output.interval, sim.dt(), sim.total_steps()) as f64 + 1.0;
     let frames = output
         .vtk_interval

@@ -177,6 +177,11 @@ pub(crate) fn free_runs(rules: &[ResolvedMotion], n: usize) -> Vec<std::ops::Ran
 }
 
 impl ResolvedMotion {
+    /// A rule anchored at `anchor` whose slots are not known yet (a rule by ids, on ranks).
+    pub(crate) fn spread(follows: bool, axes: [bool; 3], anchor: Vec3) -> Self {
+        ResolvedMotion { slot: 0, leader: None, follows, axes, anchor }
+    }
+
     /// This rule for the particle in slot `slot`, its leader in slot `leader` (none: one
     /// whose position the caller gives, as on ranks).
     pub(crate) fn at_slots(self, slot: usize, leader: Option<usize>) -> Self {

@@ -21,6 +21,7 @@ mod choice;
 mod inflow;
 mod population;
 mod ranks;
+mod whole;
 
 pub use crate::forces::source::{
     MeshLoad, periodic_cylinder_message, periodic_cylinder_reach, periodic_mesh_message, periodic_mesh_reach,
@@ -57,6 +58,16 @@ impl RunSizes {
         particles: &Particles,
         insertions: &[crate::insertion::Insertion],
     ) -> RunSizes {
+        RunSizes::over(phases, particles, insertions, whole::Whole(None))
+    }
+
+    /// [`of`](Self::of) for every rank's particles of `whole`, from this rank's.
+    fn over(
+        phases: &[Phase],
+        particles: &Particles,
+        insertions: &[crate::insertion::Insertion],
+        whole: whole::Whole<'_>,
+    ) -> RunSizes {
         // A particle made from its phase's diameter and density by another formula may differ
         // in the last bits; 1e-12 is far below any size a distribution would draw.
         let differs = |a: f64, b: f64| (a - b).abs() > 1e-12 * b.abs();
@@ -76,6 +87,7 @@ impl RunSizes {
             smallest[k] = smallest[k].min(lo);
             vary |= differs(lo, ph.diameter) || differs(hi, ph.diameter) || differs(part.density, ph.density);
         }
+        let (smallest, vary) = (whole.mins(smallest), whole.any(vary));
         let smallest = phases
             .iter()
             .zip(smallest)
@@ -226,16 +238,19 @@ impl Simulation {
         let mut sim = Simulation::unbuilt(config, particles)?;
         sim.neighbors.build(&sim.particles, &sim.walls);
         // Two particles at the same centre have no contact normal: the force loop would
-        // treat them as not touching.
-        let x = &sim.particles.position;
-        if let Some([i, j]) = sim.neighbors.pairs().find(|&[i, j]| x[i as usize] == x[j as usize]) {
-            let (i, j) = (i as usize, j as usize);
-            let (a, b) =
-                (sim.particles.id[i].min(sim.particles.id[j]), sim.particles.id[i].max(sim.particles.id[j]));
-            return Err(EngineError::BadReference(format!(
-                "particles {a} and {b} have the same centre ({:e}, {:e}, {:e}) m: their contact has no normal direction; move one of them",
-                x[i].x, x[i].y, x[i].z
-            )));
+        // treat them as not touching. The pair of the smallest ids is named.
+        let (x, id) = (&sim.particles.position, &sim.particles.id);
+        let same = sim
+            .neighbors
+            .pairs()
+            .filter(|&[i, j]| x[i as usize] == x[j as usize])
+            .map(|[i, j]| {
+                let (a, b) = (id[i as usize].min(id[j as usize]), id[i as usize].max(id[j as usize]));
+                ((a as u64) << 32 | b as u64, i as usize)
+            })
+            .min();
+        if let Some((key, i)) = same {
+            return Err(same_centre(key, x[i]));
         }
         // Batches due at the start are in the initial state.
         sim.flow_stage(false)?;
@@ -246,6 +261,17 @@ impl Simulation {
     /// [`new`](Self::new) without building the neighbour list: for a restart, whose list comes
     /// from the checkpoint (a large bed would otherwise hold two lists at once).
     pub(crate) fn unbuilt(config: SimulationConfig, particles: Particles) -> Result<Self, EngineError> {
+        Ok(Simulation::unbuilt_over(config, particles, whole::Whole(None))?.0)
+    }
+
+    /// [`unbuilt`](Self::unbuilt) from this rank's share of the particles, with the facts of
+    /// the whole set reduced over the ranks of `whole`; with them, also every rank's motion
+    /// rules by ids, in the case's order.
+    fn unbuilt_over(
+        config: SimulationConfig,
+        particles: Particles,
+        whole: whole::Whole<'_>,
+    ) -> Result<(Self, Vec<ranks::RuleById>), EngineError> {
         for ph in &config.phases {
             ph.validate()?;
         }
@@ -288,7 +314,11 @@ impl Simulation {
                 )));
             }
         }
-        check_particles(&particles, config.phases.len())?;
+        whole.agree(check_lengths(&particles))?;
+        if let Some(id) = whole.repeated_id(&particles.id) {
+            return Err(EngineError::BadReference(format!("particle id {id} is used twice")));
+        }
+        whole.agree(check_each(&particles, config.phases.len()))?;
         if !(config.t_start.is_finite() && config.t_stop.is_finite() && config.t_stop > config.t_start) {
             return Err(EngineError::invalid(
                 "t_stop",
@@ -299,15 +329,25 @@ impl Simulation {
         if !config.gravity.is_finite() {
             return Err(EngineError::BadReference("gravity must be a finite vector in m/s²".into()));
         }
-        let sizes = RunSizes::of(&config.phases, &particles, &config.insertions);
+        let sizes = RunSizes::over(&config.phases, &particles, &config.insertions, whole);
         let reference = coeff_table(&config, &config.phases)?;
         // Contacts' own sizes where they differ from the phases' (where they do not, the
         // phases' coefficients are the contacts' own, and cost nothing per contact).
         let own = config.law.sizes == ContactSizes::Own && sizes.vary;
-        let time_step = choose_time_step(&config, &particles, &sizes, &reference)?;
-        let flow =
-            inflow::FlowStage::new(config.insertions, config.outlets, &particles, config.phases.len())?;
-        let r_max = particles.max_radius().max(flow.max_radius());
+        let fastest = whole.max(timestep::fastest(&particles));
+        let time_step = choose_time_step(&config, fastest, &sizes, &reference)?;
+        let heaviest = whole.max(particles.mass.iter().copied().fold(0.0, f64::max));
+        let next_id = whole.max_u64(particles.id.iter().map(|&i| i as u64 + 1).max().unwrap_or(1));
+        let flow = inflow::FlowStage::new(
+            config.insertions,
+            config.outlets,
+            (heaviest, next_id),
+            config.phases.len(),
+        )?;
+        let mut flow = flow;
+        flow.count_initial(&particles.mass, whole);
+        let r_held = whole.max(particles.max_radius());
+        let r_max = r_held.max(flow.max_radius());
         let peak_floor = sum_floor(&config.law, &config.phases, &reference);
         let coeffs =
             if own { reference.per_unit_size(&config.law, &config.phases, r_max) } else { reference };
@@ -320,7 +360,7 @@ impl Simulation {
                     "the neighbour skin must be a length >= 0, in m",
                 ));
             }
-            None => default_skin(particles.max_radius().max(flow.max_radius())),
+            None => default_skin(r_max),
         };
         let skin = skin_reaching(skin, config.skin.is_some(), coeffs.reach())?;
         let mut particles = particles;
@@ -328,11 +368,10 @@ impl Simulation {
             particles.accel_prev = vec![Vec3::ZERO; particles.len()];
             particles.alpha_prev = vec![Vec3::ZERO; particles.len()];
         }
-        let motion = motion::resolve(&config.motion, &particles)?;
+        let (motion, rules) = whole.resolve_motion(&config.motion, &particles)?;
         let free = motion::free_runs(&motion, particles.len());
         let periodic = config.periodic.unwrap_or(Periodic::NONE);
-        periodic.check(particles.max_radius().max(flow.max_radius()), skin, &config.walls)?;
-        let r_max = particles.max_radius().max(flow.max_radius());
+        periodic.check(r_max, skin, &config.walls)?;
         if let Some((m, axis, from, to)) =
             sources::periodic_mesh_reach(&config.meshes, &periodic, r_max, config.t_stop - config.t_start)
         {
@@ -399,8 +438,8 @@ impl Simulation {
             slot_count: n_particles,
             domain: None,
         };
-        sim.put_prescribed_last()?;
-        Ok(sim)
+        whole.agree(sim.put_prescribed_last())?;
+        Ok((sim, rules))
     }
 
     /// The particles.
@@ -1161,7 +1200,7 @@ fn thread_blocks(plan: &ForcePlan, par: bool, n: usize) -> &[std::ops::Range<usi
 /// before it is built.
 pub fn time_step_of(config: &SimulationConfig, particles: &Particles) -> Result<TimeStepChoice, EngineError> {
     let sizes = RunSizes::of(&config.phases, particles, &config.insertions);
-    choose_time_step(config, particles, &sizes, &coeff_table(config, &config.phases)?)
+    choose_time_step(config, timestep::fastest(particles), &sizes, &coeff_table(config, &config.phases)?)
 }
 
 /// The coefficient table of `config`'s law and walls for `phases` (the case's, or sized as
@@ -1174,11 +1213,11 @@ fn coeff_table(config: &SimulationConfig, phases: &[Phase]) -> Result<CoeffTable
 /// their own sizes and these vary, else from the phases' (`reference` is their table).
 fn choose_time_step(
     config: &SimulationConfig,
-    particles: &Particles,
+    fastest: f64,
     sizes: &RunSizes,
     reference: &CoeffTable,
 ) -> Result<TimeStepChoice, EngineError> {
-    let speed = timestep::characteristic_speed(particles, &config.insertions, &config.meshes);
+    let speed = timestep::speed_of(fastest, &config.insertions, &config.meshes);
     let span = config.t_stop - config.t_start;
     if config.law.sizes == ContactSizes::Own && sizes.vary {
         let table = coeff_table(config, &sizes.smallest)?;
@@ -1203,6 +1242,26 @@ fn sum_floor(law: &ContactLaw, phases: &[Phase], coeffs: &CoeffTable) -> forces:
 /// used once, known phases, positive finite radii, masses and moments of inertia, finite
 /// positions and velocities. [`Simulation::new`] checks it first.
 pub fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
+    check_lengths(p)?;
+    let mut ids: Vec<u32> = p.id.clone();
+    ids.sort_unstable();
+    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+        return Err(EngineError::BadReference(format!("particle id {} is used twice", w[0])));
+    }
+    check_each(p, n_phases)
+}
+
+/// Two particles, ids `a` and `b` in `key` (a above b), have the same centre `x`.
+fn same_centre(key: u64, x: Vec3) -> EngineError {
+    let (a, b) = (key >> 32, key & 0xffff_ffff);
+    EngineError::BadReference(format!(
+        "particles {a} and {b} have the same centre ({:e}, {:e}, {:e}) m: their contact has no normal direction; move one of them",
+        x.x, x.y, x.z
+    ))
+}
+
+/// Whether the particle arrays all have one length.
+fn check_lengths(p: &Particles) -> Result<(), EngineError> {
     let n = p.len();
     let lens = [
         p.phase.len(),
@@ -1219,12 +1278,13 @@ pub fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError
     if lens.iter().any(|&l| l != n) || !history_ok {
         return Err(EngineError::BadReference("particle arrays have different lengths".into()));
     }
-    let mut ids: Vec<u32> = p.id.clone();
-    ids.sort_unstable();
-    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
-        return Err(EngineError::BadReference(format!("particle id {} is used twice", w[0])));
-    }
-    for i in 0..n {
+    Ok(())
+}
+
+/// Whether each particle has a known phase, positive finite size, mass and moment of inertia,
+/// and a finite state (the first that has not is named).
+fn check_each(p: &Particles, n_phases: usize) -> Result<(), EngineError> {
+    for i in 0..p.len() {
         let id = p.id[i];
         if p.phase[i] as usize >= n_phases {
             return Err(EngineError::BadReference(format!(

@@ -153,7 +153,20 @@ pub fn characteristic_speed(
     insertions: &[crate::insertion::Insertion],
     meshes: &[crate::mesh::MeshWall],
 ) -> (f64, String) {
-    let start = particles.velocity.iter().map(|v| v.length()).fold(0.0, f64::max);
+    speed_of(fastest(particles), insertions, meshes)
+}
+
+/// The fastest of `particles` at the start, m/s.
+pub fn fastest(particles: &crate::state::Particles) -> f64 {
+    particles.velocity.iter().map(|v| v.length()).fold(0.0, f64::max)
+}
+
+/// [`characteristic_speed`] with the fastest particle at the start given (`start`, m/s).
+pub fn speed_of(
+    start: f64,
+    insertions: &[crate::insertion::Insertion],
+    meshes: &[crate::mesh::MeshWall],
+) -> (f64, String) {
     let inserted = insertions.iter().map(|i| i.velocity.length()).fold(0.0, f64::max);
     let mesh = meshes.iter().map(|m| m.fastest_point_speed().0).fold(0.0, f64::max);
     let v = start.max(inserted).max(mesh);

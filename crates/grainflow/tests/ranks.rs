@@ -473,3 +473,142 @@ fn a_rank_emptied_beside_a_mesh_goes_on_with_the_one_process_bits() {
     assert!(meshed > 0, "no bead touches the mesh floor");
     assert!(fingerprint(&one) == *want_bits, "2 ranks depart from one process");
 }
+
+/// The fingerprint after `steps` steps of the run set up on `ranks` ranks from shares of the
+/// case's particles (rank r the r-th of `ranks` runs of them, as listed) — no rank ever holds
+/// them all — with the most particles a rank held.
+fn run_from_shares(
+    case: &(dyn Fn() -> (SimulationConfig, Vec<ParticleInit>) + Sync),
+    ranks: usize,
+    steps: u64,
+) -> (Vec<u64>, usize) {
+    let results = on_ranks(ranks, &|comm| {
+        let (cfg, init) = case();
+        let (r, n) = (comm.rank(), init.len());
+        let share = grainflow::Particles::from_init(&init[r * n / ranks..(r + 1) * n / ranks]);
+        let mut sim = Simulation::new_over_ranks(cfg, share, comm, Some(0.0)).expect("set up over ranks");
+        let mut most = sim.particles().len();
+        for _ in 0..steps / 10 {
+            sim.advance(10);
+            most = most.max(sim.particles().len());
+        }
+        sim.advance(steps % 10);
+        (fingerprint(&sim), most)
+    });
+    for r in &results[1..] {
+        assert!(r.0 == results[0].0, "ranks see different gathered states");
+    }
+    (results[0].0.clone(), results.iter().map(|r| r.1).max().unwrap_or(0))
+}
+
+/// The walled bed of `common` with beads poured in above it at the start and again later.
+fn bed_poured_into_case(nudged: bool) -> (SimulationConfig, Vec<ParticleInit>) {
+    use grainflow::insertion::psd::{Basis, Mixture, MixturePart, SizeDistribution};
+    use grainflow::insertion::region::Region;
+    use grainflow::insertion::{Amount, Insertion, Schedule};
+    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
+    let mut cfg = walled_mindlin(lo, hi, lammps_mindlin().1.en);
+    cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
+    let mut init = bed(3000, lo, hi, 0.001, 11);
+    if nudged {
+        nudge(&mut init);
+    }
+    let pour = |name: &str, at: f64| Insertion {
+        name: name.into(),
+        region: Region::Box { lo: Vec3::new(0.0, 0.0, 0.04), hi },
+        mixture: Mixture {
+            parts: vec![MixturePart {
+                phase: 0,
+                density: 2500.0,
+                fraction: 1.0,
+                sizes: SizeDistribution::Uniform { min: 1.8e-3, max: 2.0e-3 },
+            }],
+            basis: Basis::Mass,
+        },
+        amount: Some(Amount::VolumeFraction(0.2)),
+        schedule: Schedule::Once { at },
+        velocity: Vec3::new(0.0, 0.0, -0.5),
+        seed: 3,
+        given: Vec::new(),
+        max_initial_overlap: grainflow::insertion::DEFAULT_MAX_INITIAL_OVERLAP,
+        plane_z: None,
+    };
+    cfg.insertions = vec![pour("at the start", 0.0), pour("later", 0.004)];
+    (cfg, init)
+}
+
+/// A run set up from shares of its particles, none holding them all, is the one process's to
+/// the bit: the time step, the skin, the motion rules (followers whose leaders start on other
+/// ranks), insertions at the start and later (their first ids from the largest id anywhere)
+/// and a turning mesh — on 2, 3 and 4 ranks; and a 10⁻¹⁰ nudge shows.
+#[test]
+fn a_run_set_up_from_shares_of_its_particles_has_the_one_process_bits() {
+    let cases: [(&str, &(dyn Fn(bool) -> (SimulationConfig, Vec<ParticleInit>) + Sync), u64); 3] = [
+        ("followed chute", &followed_chute_case, 300),
+        ("poured bed", &bed_poured_into_case, 400),
+        ("mesh drum", &|nudged| thrown_at_a_drum_case(nudged, true), 1_000),
+    ];
+    for (name, case, steps) in cases {
+        let (cfg, init) = case(false);
+        let mut one = simulation(cfg, &init);
+        one.advance(steps);
+        let want = fingerprint(&one);
+        let n = one.particles().len();
+        for ranks in [2, 3, 4] {
+            let (got, most) = run_from_shares(&|| case(false), ranks, steps);
+            let differing = want.iter().zip(&got).filter(|(a, b)| a != b).count();
+            assert_eq!(want.len(), got.len(), "{name}: {ranks} ranks hold another number of particles");
+            assert_eq!(
+                differing, 0,
+                "{name}: {differing} values differ between one process and {ranks} ranks"
+            );
+            assert!(most < n * 3 / 4, "{name}: a rank of {ranks} held {most} of {n} particles");
+        }
+        let (nudged, _) = run_from_shares(&|| case(true), 2, steps);
+        let differing = want.iter().zip(&nudged).filter(|(a, b)| a != b).count();
+        assert!(differing > 100, "{name}: a 1e-10 change left the state alone ({differing} values differ)");
+    }
+}
+
+/// A share's bad particle, an id on two ranks' shares and a rule naming a particle no rank
+/// holds are refused on every rank with the one process's message.
+#[test]
+fn a_bad_share_is_refused_on_every_rank_as_in_one_process() {
+    let message = |edit: &(dyn Fn(&mut SimulationConfig, &mut Vec<ParticleInit>) + Sync)| {
+        let (mut cfg, mut init) = followed_chute_case(false);
+        edit(&mut cfg, &mut init);
+        let one = Simulation::new(cfg, grainflow::Particles::from_init(&init)).err().map(|e| e.to_string());
+        let ranks = on_ranks(3, &|comm| {
+            let (mut cfg, mut init) = followed_chute_case(false);
+            edit(&mut cfg, &mut init);
+            let (r, n) = (comm.rank(), init.len());
+            let share = grainflow::Particles::from_init(&init[r * n / 3..(r + 1) * n / 3]);
+            Simulation::new_over_ranks(cfg, share, comm, None).err().map(|e| e.to_string())
+        });
+        (one, ranks)
+    };
+    let edits: [&(dyn Fn(&mut SimulationConfig, &mut Vec<ParticleInit>) + Sync); 4] = [
+        // On the last rank's share, and a later one on the second's: the first is named.
+        &|_, init| {
+            let n = init.len();
+            init[n - 2].radius = -1.0;
+            init[n / 2].radius = 0.0;
+        },
+        &|_, init| {
+            let n = init.len();
+            init[n - 1].id = init[0].id;
+        },
+        &|cfg, _| cfg.motion.push(PrescribedMotion { particle: 999_999, rule: MotionRule::Hold }),
+        &|_, init| {
+            let n = init.len();
+            init[n - 1].position = init[n / 2].position;
+        },
+    ];
+    for edit in edits {
+        let (one, ranks) = message(edit);
+        let one = one.expect("one process refuses it");
+        for (r, m) in ranks.iter().enumerate() {
+            assert_eq!(m.as_deref(), Some(one.as_str()), "rank {r}");
+        }
+    }
+}

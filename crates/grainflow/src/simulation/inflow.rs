@@ -185,11 +185,12 @@ fn quantum_exponent(largest_mass: f64) -> i32 {
 }
 
 impl FlowStage {
-    /// The stage for `insertions` and `outlets`, with the particles `p` present at the start.
+    /// The stage for `insertions` and `outlets`, with the particles present at the start
+    /// (`heaviest`: their largest mass, kg; `next_id`: one above their largest id).
     pub(crate) fn new(
         insertions: Vec<Insertion>,
         outlets: Vec<Outlet>,
-        p: &crate::state::Particles,
+        (heaviest, next_id): (f64, u64),
         n_phases: usize,
     ) -> Result<FlowStage, EngineError> {
         for ins in &insertions {
@@ -212,8 +213,7 @@ impl FlowStage {
             .iter()
             .flat_map(|i| i.mixture.parts.iter())
             .map(|part| part.density * std::f64::consts::FRAC_PI_6 * part.sizes.max_diameter().powi(3))
-            .chain(p.mass.iter().copied())
-            .fold(0.0, f64::max);
+            .fold(heaviest, f64::max);
         let quantum_exp = quantum_exponent(largest);
         let feeds = insertions
             .iter()
@@ -225,12 +225,12 @@ impl FlowStage {
                 missed: 0,
             })
             .collect();
-        let mut stage = FlowStage {
+        let stage = FlowStage {
             removed: vec![Tally::default(); outlets.len()],
             insertions,
             outlets,
             feeds,
-            next_id: p.id.iter().map(|&i| i as u64 + 1).max().unwrap_or(1),
+            next_id,
             quantum_exp,
             initial: Tally::default(),
             error: None,
@@ -238,8 +238,15 @@ impl FlowStage {
             notices: Vec::new(),
             solids: None,
         };
-        stage.initial = stage.tally(p.mass.iter().copied());
         Ok(stage)
+    }
+
+    /// Counts the particles present at the start (`masses`: this rank's) over the ranks of
+    /// `whole`, exactly (integer quanta).
+    pub(super) fn count_initial(&mut self, masses: &[f64], whole: super::whole::Whole<'_>) {
+        let t = self.tally(masses.iter().copied());
+        let [count, units] = whole.sums([t.count as i128, t.units]);
+        self.initial = Tally { count: count as u64, units };
     }
 
     /// True if the stage has nothing to do.

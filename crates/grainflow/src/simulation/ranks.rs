@@ -70,10 +70,10 @@ pub(crate) struct Decomposition {
 /// A prescribed-motion rule by ids: its particle's and its leader's, and the rule as resolved
 /// in one process (its slots stale once spread).
 #[derive(Debug, Clone, Copy)]
-struct RuleById {
-    id: u32,
-    leader: Option<u32>,
-    rule: crate::motion::ResolvedMotion,
+pub(super) struct RuleById {
+    pub(super) id: u32,
+    pub(super) leader: Option<u32>,
+    pub(super) rule: crate::motion::ResolvedMotion,
 }
 
 impl RuleById {
@@ -149,15 +149,44 @@ impl Simulation {
             self.neighbors.build(&self.particles, &self.walls);
         }
         let boxes = self.cut(comm.size(), None);
-        let reach = 2.0 * self.r_max() + self.neighbors.skin();
-        let history = !self.particles.accel_prev.is_empty();
-        let ranks = comm.size();
         let id = &self.particles.id;
         let rules: Vec<RuleById> = self
             .motion
             .iter()
             .map(|r| RuleById { id: id[r.slot], leader: r.leader.map(|l| id[l]), rule: *r })
             .collect();
+        let reach = 2.0 * self.r_max() + self.neighbors.skin();
+        self.spread_with(comm, rebalance, (rules, boxes, reach), true);
+        Ok(())
+    }
+
+    /// Spreads a run set up from each rank's share of the particles ([`Simulation::
+    /// new_over_ranks`]): the boxes are cut for the particles as they are spread, and the
+    /// particles move to the ranks of their boxes. `rules` are every rank's motion rules by
+    /// ids, in the case's order. Collective.
+    pub(super) fn spread_share(
+        &mut self,
+        comm: Arc<dyn Comm>,
+        rebalance: Option<f64>,
+        rules: Vec<RuleById>,
+    ) -> Result<(), EngineError> {
+        let boxes = self.cut(comm.size(), Some(&*comm));
+        let reach = 2.0 * super::whole::Whole(Some(&*comm)).max(self.r_max()) + self.neighbors.skin();
+        self.spread_with(comm, rebalance, (rules, boxes, reach), false);
+        Ok(())
+    }
+
+    /// Takes this rank's part in `boxes`, with ghosts within `reach` of it (with `initial`,
+    /// every rank holds every particle).
+    fn spread_with(
+        &mut self,
+        comm: Arc<dyn Comm>,
+        rebalance: Option<f64>,
+        (rules, boxes, reach): (Vec<RuleById>, Boxes, f64),
+        initial: bool,
+    ) {
+        let history = !self.particles.accel_prev.is_empty();
+        let ranks = comm.size();
         let mut leaders: Vec<u32> = rules.iter().filter_map(|r| r.leader).collect();
         leaders.sort_unstable();
         leaders.dedup();
@@ -171,8 +200,8 @@ impl Simulation {
             history,
             stats: DomainStats::default(),
             stale: false,
-            rules: rules.clone(),
             rule_of: rules.iter().enumerate().map(|(k, r)| (r.id, k)).collect(),
+            rules,
             leaders,
             threshold: rebalance,
             since: self.step,
@@ -180,12 +209,11 @@ impl Simulation {
         // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
         self.sort.rule = ResortRule::Never;
         let rank = self.domain.as_ref().map_or(0, |d| d.comm.rank());
-        self.redistribute(true, 0..0);
+        self.redistribute(initial, 0..0);
         // Each rank keeps the caught particles of its own, and rank 0 the outlets' books.
         let mut own: Vec<u32> = self.particles.id[..self.owned()].to_vec();
         own.sort_unstable();
         self.flow.keep_rank_part(&own, rank);
-        Ok(())
     }
 
     /// Whether `yes` holds on any rank (`yes` in one process). Collective on ranks.
