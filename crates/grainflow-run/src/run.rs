@@ -501,27 +501,32 @@ pub const LAST_GOOD_IN_MEMORY: usize = 64 << 20;
 /// The last state that passed the health check, written to [`LAST_GOOD_FILE`] only if a
 /// later check fails. Small states are kept in memory (one buffer, reused); larger ones are
 /// streamed to a hidden file in the output folder (renamed into place on a failure, removed
-/// when the run ends otherwise).
+/// when the run ends otherwise). On ranks each rank keeps its own part of the state (in
+/// memory, or in a hidden file of its folder) and the run without its particles: only a
+/// failure gathers the whole, on rank 0, which writes it.
 struct LastGood<'a> {
     step: u64,
     hash: &'a str,
     out: &'a Path,
     /// The bytes in memory, or None when they are on disk.
     bytes: Option<Vec<u8>>,
+    /// On ranks: the run at the kept step without its particles, and this rank's part of it
+    /// in memory (None: on disk).
+    part: Option<(Simulation, Option<Vec<u64>>)>,
 }
 
 impl<'a> LastGood<'a> {
     fn new(
-        sim: &Simulation,
+        sim: &mut Simulation,
         hash: &'a str,
         out: &'a Path,
         max_in_memory: usize,
     ) -> Result<Self, OutputError> {
-        // On ranks, the whole state is about this rank's share times the ranks.
-        // (The ranks other than 0 keep nothing, in memory.)
-        let in_memory = sim.comm().is_some_and(|c| c.rank() > 0)
-            || sim.checkpoint_size(hash).saturating_mul(sim.ranks()) <= max_in_memory;
-        let mut kept = LastGood { step: 0, hash, out, bytes: in_memory.then(Vec::new) };
+        // On ranks, this rank's part is about its own share of the state.
+        let in_memory = sim.checkpoint_size(hash) <= max_in_memory;
+        let part = (sim.ranks() > 1).then(|| (sim.skeleton(), in_memory.then(Vec::new)));
+        let bytes = (part.is_none() && in_memory).then(Vec::new);
+        let mut kept = LastGood { step: 0, hash, out, bytes, part };
         kept.keep(sim)?;
         Ok(kept)
     }
@@ -530,29 +535,60 @@ impl<'a> LastGood<'a> {
         self.out.join(format!(".{LAST_GOOD_FILE}.rolling"))
     }
 
-    /// Keeps the current state; on ranks, the whole run's, gathered on rank 0 (the others
-    /// keep nothing: only rank 0's folder is the user's). Collective on ranks.
-    fn keep(&mut self, sim: &Simulation) -> Result<(), OutputError> {
+    /// Keeps the current state (on ranks, this rank's part). Collective on ranks.
+    fn keep(&mut self, sim: &mut Simulation) -> Result<(), OutputError> {
         self.step = sim.step_index();
-        let whole = if sim.ranks() > 1 { sim.gathered_whole() } else { None };
-        let sim = match (&whole, sim.ranks() > 1) {
-            (Some(w), _) => w,
-            (None, true) => return Ok(()),
-            (None, false) => sim,
-        };
+        let path = self.rolling_path();
+        if let Some((skeleton, words)) = &mut self.part {
+            *skeleton = sim.skeleton();
+            return match words {
+                Some(w) => {
+                    w.clear();
+                    sim.part_into(&mut |x| w.extend_from_slice(x));
+                    Ok(())
+                }
+                None => write_atomic_with(&path, |f| {
+                    let mut failed = Ok(());
+                    sim.part_into(&mut |x| {
+                        if failed.is_ok() {
+                            failed =
+                                x.iter().try_for_each(|v| std::io::Write::write_all(f, &v.to_le_bytes()));
+                        }
+                    });
+                    failed
+                })
+                .map_err(io_err(&path)),
+            };
+        }
         match &mut self.bytes {
             Some(b) => sim.checkpoint_into(self.hash, b),
             None => {
-                let path = self.rolling_path();
                 write_atomic_with(&path, |w| sim.write_checkpoint(self.hash, w)).map_err(io_err(&path))?;
             }
         }
         Ok(())
     }
 
-    /// Writes the kept state to [`LAST_GOOD_FILE`]; returns its step and path.
+    /// Writes the kept state to [`LAST_GOOD_FILE`]; returns its step and path. On ranks the
+    /// parts are gathered on rank 0, which writes them (collective).
     fn save(&self) -> Result<(u64, PathBuf), OutputError> {
         let saved = self.out.join(LAST_GOOD_FILE);
+        if let Some((skeleton, words)) = &self.part {
+            let path = self.rolling_path();
+            let mine = match words {
+                Some(w) => Ok(w.clone()),
+                None => std::fs::read(&path).map(|b| {
+                    b.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default())).collect()
+                }),
+            };
+            // A part that cannot be read fails this rank alone, which ends every rank.
+            let mine = mine.map_err(io_err(&path))?;
+            if let Some(whole) = skeleton.whole_from_parts(mine) {
+                write_atomic_with(&saved, |w| whole.write_checkpoint(self.hash, w))
+                    .map_err(io_err(&saved))?;
+            }
+            return Ok((self.step, saved));
+        }
         match &self.bytes {
             Some(b) => write_atomic(&saved, b).map_err(io_err(&saved))?,
             None => std::fs::rename(self.rolling_path(), &saved).map_err(io_err(&saved))?,

@@ -1,6 +1,8 @@
 //! The last good state of a run that fails its health check is the same whether it was kept
 //! in memory (small states) or in a file (large states, so that the copy does not add to the
-//! run's memory): the same state to the bit, and it restarts. A healthy run leaves no copy behind.
+//! run's memory): the same state to the bit, and it restarts — also on ranks, where each keeps
+//! its part in memory or in a file of its own and a failure gathers them. A healthy run leaves
+//! no copy behind.
 
 use grainflow_run::run::{LAST_GOOD_FILE, RunError, RunOptions, run_case};
 use std::path::Path;
@@ -29,9 +31,15 @@ fn options(max_in_memory: usize) -> RunOptions {
 fn last_good_state_kept_in_a_file_equals_the_one_kept_in_memory() {
     let dir = tempfile::tempdir().expect("temp dir");
     let mut saved = Vec::new();
-    for (name, max_in_memory) in [("memory", usize::MAX), ("file", 0)] {
+    let runs = [
+        ("memory", 1, usize::MAX),
+        ("file", 1, 0),
+        ("2 ranks, memory", 2, usize::MAX),
+        ("3 ranks, files", 3, 0),
+    ];
+    for (name, ranks, max_in_memory) in runs {
         let out = dir.path().join(name);
-        let result = run_case(case(dir.path(), true), &out, &options(max_in_memory), |_| {});
+        let result = on_ranks(ranks, &out, max_in_memory, &|| case(dir.path(), true));
         let Err(RunError::Unhealthy { good_step, saved: path, .. }) = result else {
             panic!("{name}: the forced time step should fail the health check: {result:?}");
         };
@@ -44,16 +52,60 @@ fn last_good_state_kept_in_a_file_equals_the_one_kept_in_memory() {
         assert!(rolling.is_empty(), "{name}: rolling copy left behind: {rolling:?}");
         saved.push((good_step, std::fs::read(&path).expect("saved state")));
     }
-    assert_eq!(saved[0].0, saved[1].0, "same step kept");
-    // The two runs have run ids of their own: the states they saved are compared whole.
+    // The runs have run ids of their own: the states they saved are compared whole.
     let restore = |bytes: &[u8]| {
         grainflow::Simulation::restore(case(dir.path(), true).config, bytes, None).expect("restores")
     };
-    let (a, b) = (restore(&saved[0].1), restore(&saved[1].1));
-    assert_ne!(a.run_id(), b.run_id());
-    assert_eq!(a.step_index(), b.step_index());
-    assert!(a.particles() == b.particles(), "the two copies' particles differ");
-    assert!(a.neighbors().state() == b.neighbors().state(), "the two copies' contacts differ");
+    let a = restore(&saved[0].1);
+    for (k, (step, bytes)) in saved.iter().enumerate().skip(1) {
+        let name = runs[k].0;
+        assert_eq!(saved[0].0, *step, "{name}: another step kept");
+        let b = restore(bytes);
+        assert_ne!(a.run_id(), b.run_id());
+        assert_eq!(a.step_index(), b.step_index());
+        if runs[k].1 == 1 {
+            assert!(a.particles() == b.particles(), "{name}: the copies' particles differ");
+            assert!(a.neighbors().state() == b.neighbors().state(), "{name}: the copies' contacts differ");
+        }
+        // Gathered from ranks, the state is in id order: the same particles and contacts.
+        let ((pa, ca), (pb, cb)) = (a.in_id_order(), b.in_id_order());
+        assert!(pa == pb, "{name}: the copies' particles differ");
+        assert_eq!(format!("{ca:?}"), format!("{cb:?}"), "{name}: the copies' contacts differ");
+    }
+}
+
+/// The run of `case` on `ranks` ranks (threads joined by a `LocalComm`; one: no ranks) into
+/// `out` (the other ranks into folders of their own), keeping states up to `max_in_memory`
+/// bytes in memory; rank 0's result.
+fn on_ranks(
+    ranks: usize,
+    out: &Path,
+    max_in_memory: usize,
+    case: &(dyn Fn() -> grainflow_case::Case + Sync),
+) -> Result<grainflow_run::run::RunSummary, RunError> {
+    if ranks == 1 {
+        return run_case(case(), out, &options(max_in_memory), |_| {});
+    }
+    // Loaded once (the loader writes the case file).
+    let case = case();
+    let case = &case;
+    let comms = grainflow::domain::LocalComm::team(ranks);
+    let mut results: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = comms
+            .into_iter()
+            .enumerate()
+            .map(|(r, comm)| {
+                let out = if r == 0 { out.to_path_buf() } else { out.with_extension(format!("rank{r}")) };
+                s.spawn(move || {
+                    let comm: std::sync::Arc<dyn grainflow::domain::Comm> = std::sync::Arc::new(comm);
+                    let options = RunOptions { ranks: Some(comm), ..options(max_in_memory) };
+                    run_case(case.clone(), &out, &options, |_| {})
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().expect("rank")).collect()
+    });
+    results.swap_remove(0)
 }
 
 #[test]

@@ -296,6 +296,17 @@ impl NeighborList {
 
     /// The pairs whose history is not zero, as (slots a < b, the history seen from a), in
     /// list order.
+    /// This list's settings and counts without its pairs, histories or scratch (not built).
+    pub(crate) fn emptied(&self) -> NeighborList {
+        NeighborList {
+            skin: self.skin,
+            stats: self.stats,
+            periodic: self.periodic,
+            ghosts_from: self.ghosts_from,
+            ..Default::default()
+        }
+    }
+
     pub(crate) fn pairs_with_history(&self) -> Vec<([u32; 2], Vec3)> {
         let mut out = Vec::new();
         for (a, w) in self.offsets.windows(2).enumerate() {

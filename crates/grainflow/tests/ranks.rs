@@ -543,7 +543,8 @@ fn bed_poured_into_case(nudged: bool) -> (SimulationConfig, Vec<ParticleInit>) {
 /// and a turning mesh — on 2, 3 and 4 ranks; and a 10⁻¹⁰ nudge shows.
 #[test]
 fn a_run_set_up_from_shares_of_its_particles_has_the_one_process_bits() {
-    let cases: [(&str, &(dyn Fn(bool) -> (SimulationConfig, Vec<ParticleInit>) + Sync), u64); 3] = [
+    type CaseOf = dyn Fn(bool) -> (SimulationConfig, Vec<ParticleInit>) + Sync;
+    let cases: [(&str, &CaseOf, u64); 3] = [
         ("followed chute", &followed_chute_case, 300),
         ("poured bed", &bed_poured_into_case, 400),
         ("mesh drum", &|nudged| thrown_at_a_drum_case(nudged, true), 1_000),
@@ -574,7 +575,8 @@ fn a_run_set_up_from_shares_of_its_particles_has_the_one_process_bits() {
 /// holds are refused on every rank with the one process's message.
 #[test]
 fn a_bad_share_is_refused_on_every_rank_as_in_one_process() {
-    let message = |edit: &(dyn Fn(&mut SimulationConfig, &mut Vec<ParticleInit>) + Sync)| {
+    type Edit = dyn Fn(&mut SimulationConfig, &mut Vec<ParticleInit>) + Sync;
+    let message = |edit: &Edit| {
         let (mut cfg, mut init) = followed_chute_case(false);
         edit(&mut cfg, &mut init);
         let one = Simulation::new(cfg, grainflow::Particles::from_init(&init)).err().map(|e| e.to_string());
@@ -587,7 +589,7 @@ fn a_bad_share_is_refused_on_every_rank_as_in_one_process() {
         });
         (one, ranks)
     };
-    let edits: [&(dyn Fn(&mut SimulationConfig, &mut Vec<ParticleInit>) + Sync); 4] = [
+    let edits: [&Edit; 4] = [
         // On the last rank's share, and a later one on the second's: the first is named.
         &|_, init| {
             let n = init.len();

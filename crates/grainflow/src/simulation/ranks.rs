@@ -630,18 +630,6 @@ impl Simulation {
         }
     }
 
-    /// The list's histories by ids: pairs (lower id first, seen from it, with their slots in
-    /// that order) and walls (id, wall, history, slot); those that are zero left out.
-    #[allow(clippy::type_complexity)]
-    fn histories_by_id(&self) -> (Vec<([u32; 2], [u32; 2], Vec3)>, Vec<(u32, u32, Vec3, u32)>) {
-        let (p, nl) = (&self.particles, &self.neighbors);
-        let mut pairs = Vec::new();
-        for ([a, b], h) in nl.pairs_with_history() {
-            pairs.push(by_ids(p, [a, b], h));
-        }
-        (pairs, self.histories_by_id_of_walls())
-    }
-
     /// The wall histories of the list that are not zero, as (id, wall, history, slot).
     fn histories_by_id_of_walls(&self) -> Vec<(u32, u32, Vec3, u32)> {
         let (p, nl) = (&self.particles, &self.neighbors);
@@ -659,38 +647,84 @@ impl Simulation {
     /// written from; restored on any number of ranks it goes on with the same bits.
     /// Collective: every rank must call it.
     pub fn gathered_whole(&self) -> Option<Simulation> {
-        let Some(d) = &self.domain else { return Some(self.clone()) };
-        let (me, ranks, owned) = (d.comm.rank(), d.comm.size(), d.owned);
-        let p = &self.particles;
-        // This rank's particles and the histories of their contacts, by ids: [particles,
-        // count, particle words.., pairs, pair words.., walls, wall words.., per source:
-        // length, records..]. A pair across two ranks comes from both, the same bits.
-        let (pairs, walls) = self.histories_by_id();
-        let mut mine = vec![owned as u64];
+        if self.domain.is_none() {
+            return Some(self.clone());
+        }
+        let mut mine = Vec::new();
+        self.part_into(&mut |w| mine.extend_from_slice(w));
+        self.whole_from_parts(mine)
+    }
+
+    /// This rank's part of the whole run, as [`whole_from_parts`](Self::whole_from_parts)
+    /// takes it, a few words at a time into `emit` (so that it can go to a file without a
+    /// copy in memory): its particles, and the histories of their contacts by ids —
+    /// `[particles, particle words.., pairs, pair words.., walls, wall words.., flow words..,
+    /// per source: length, records..]`. A pair across two ranks comes from both, the same
+    /// bits. Nothing in one process.
+    pub fn part_into(&self, emit: &mut dyn FnMut(&[u64])) {
+        let Some(d) = &self.domain else { return };
+        let (owned, p) = (d.owned, &self.particles);
+        emit(&[owned as u64]);
+        let mut buf = Vec::with_capacity(4096);
+        let flush = |buf: &mut Vec<u64>, emit: &mut dyn FnMut(&[u64]), at_least: usize| {
+            if buf.len() >= at_least {
+                emit(buf);
+                buf.clear();
+            }
+        };
         for i in 0..owned {
-            d.push_moving(&mut mine, p, i);
+            d.push_moving(&mut buf, p, i);
+            flush(&mut buf, emit, 4000);
         }
-        let pairs: Vec<_> =
-            pairs.iter().filter(|(_, [a, b], _)| (*a as usize) < owned || (*b as usize) < owned).collect();
-        mine.push(pairs.len() as u64);
-        for (ids, _, h) in pairs {
-            push_history(&mut mine, *ids, *h);
+        flush(&mut buf, emit, 0);
+        let pairs = self.neighbors.pairs_with_history();
+        let mine = |&&([a, b], _): &&([u32; 2], Vec3)| (a as usize) < owned || (b as usize) < owned;
+        emit(&[pairs.iter().filter(mine).count() as u64]);
+        for &([a, b], h) in pairs.iter().filter(mine) {
+            let (ids, _, h) = by_ids(p, [a, b], h);
+            push_history(&mut buf, ids, h);
+            flush(&mut buf, emit, 4000);
         }
-        let walls: Vec<_> = walls.iter().filter(|w| (w.3 as usize) < owned).collect();
-        mine.push(walls.len() as u64);
-        for &&(id, w, h, _) in &walls {
-            push_history(&mut mine, [id, w], h);
+        flush(&mut buf, emit, 0);
+        drop(pairs);
+        let walls: Vec<_> =
+            self.histories_by_id_of_walls().into_iter().filter(|w| (w.3 as usize) < owned).collect();
+        buf.push(walls.len() as u64);
+        for &(id, w, h, _) in &walls {
+            push_history(&mut buf, [id, w], h);
         }
-        mine.extend(self.flow.rank_words());
+        buf.extend(self.flow.rank_words());
         for (words, records) in self.sources.carry() {
             let kept: Vec<&[u64]> =
                 records.chunks_exact(words.max(1)).filter(|r| (r[0] as usize) < owned).collect();
-            mine.push((kept.len() * words) as u64);
+            buf.push((kept.len() * words) as u64);
             for r in kept {
-                mine.push(p.id[r[0] as usize] as u64);
-                mine.extend_from_slice(&r[1..]);
+                buf.push(p.id[r[0] as usize] as u64);
+                buf.extend_from_slice(&r[1..]);
             }
         }
+        emit(&buf);
+    }
+
+    /// A copy of this simulation without its particles, list and per-slot facts: what
+    /// [`whole_from_parts`](Self::whole_from_parts) needs of the run at a step (its time,
+    /// books, motion rules and settings), kept beside the parts of that step at little cost.
+    pub fn skeleton(&mut self) -> Simulation {
+        let particles = std::mem::take(&mut self.particles);
+        let light = self.neighbors.emptied();
+        let neighbors = std::mem::replace(&mut self.neighbors, light);
+        let held = std::mem::take(&mut self.held);
+        let bare = self.clone();
+        (self.particles, self.neighbors, self.held) = (particles, neighbors, held);
+        bare
+    }
+
+    /// The whole run as one process would hold it, on rank 0 (`None` on the others), from
+    /// every rank's part of it (`mine`: this rank's, from [`part_into`](Self::part_into) at
+    /// the step of this simulation or of its [`skeleton`](Self::skeleton)). Collective.
+    pub fn whole_from_parts(&self, mine: Vec<u64>) -> Option<Simulation> {
+        let Some(d) = &self.domain else { return Some(self.clone()) };
+        let (me, ranks) = (d.comm.rank(), d.comm.size());
         let mut out = vec![Vec::new(); ranks];
         out[0] = mine;
         let got = d.comm.exchange(out);
