@@ -614,3 +614,70 @@ fn a_bad_share_is_refused_on_every_rank_as_in_one_process() {
         }
     }
 }
+
+/// 600 beads resting on a fixed floor of 1 600 triangles in a walled 40 × 20 × 30 mm box,
+/// cut by the ranks: each rank bins only the floor's triangles near its box (fewer than
+/// three quarters of them on 2 ranks), and the run is the one process's to the bit.
+#[test]
+fn each_rank_bins_the_fixed_triangles_near_its_box_alone() {
+    let case = |nudged: bool| {
+        let (lo, hi) = (Vec3::ZERO, Vec3::new(0.04, 0.02, 0.03));
+        let mut cfg = walled_mindlin(lo, hi, 0.3);
+        cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
+        let (nx, ny, z) = (40, 20, 0.002);
+        let corner = |i: usize, j: usize| {
+            Vec3::new(-0.01 + 0.06 * i as f64 / nx as f64, -0.01 + 0.04 * j as f64 / ny as f64, z)
+        };
+        let corners: Vec<Vec3> = (0..=ny).flat_map(|j| (0..=nx).map(move |i| corner(i, j))).collect();
+        let at = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+        let triangles: Vec<[u32; 3]> = (0..ny)
+            .flat_map(|j| {
+                (0..nx).flat_map(move |i| {
+                    [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]]
+                })
+            })
+            .collect();
+        let floor = grainflow::mesh::Mesh::from_indexed(
+            "floor",
+            &corners,
+            &triangles,
+            &grainflow::mesh::MeshTransform::default(),
+        )
+        .expect("a valid floor");
+        cfg.meshes = vec![grainflow::mesh::MeshWall::fixed(floor, 0)];
+        let mut init = bed(600, Vec3::new(0.0, 0.0, 0.00195), Vec3::new(0.04, 0.02, 0.02), 0.001, 5);
+        if nudged {
+            nudge(&mut init);
+        }
+        (cfg, init)
+    };
+    let (cfg, init) = case(false);
+    let mut one = simulation(cfg, &init);
+    one.advance(600);
+    let whole = one.binned_triangles();
+    assert_eq!(whole, 1_600);
+    let meshed =
+        one.contacts().iter().filter(|c| matches!(c.other, grainflow::ContactPartner::Mesh { .. })).count();
+    assert!(meshed > 20, "only {meshed} beads touch the floor");
+    let want = fingerprint(&one);
+    for ranks in [2, 3] {
+        let got = on_ranks(ranks, &|comm| {
+            let (cfg, init) = case(false);
+            let (r, n) = (comm.rank(), init.len());
+            let share = grainflow::Particles::from_init(&init[r * n / ranks..(r + 1) * n / ranks]);
+            let mut sim = Simulation::new_over_ranks(cfg, share, comm, None).expect("set up over ranks");
+            sim.advance(600);
+            (fingerprint(&sim), sim.binned_triangles())
+        });
+        for (r, (bits, binned)) in got.iter().enumerate() {
+            assert!(*bits == want, "{ranks} ranks depart from one process");
+            assert!(*binned < whole * 3 / 4, "rank {r} of {ranks} bins {binned} of {whole} triangles");
+        }
+    }
+    let mut nudged = {
+        let (c, i) = case(true);
+        simulation(c, &i)
+    };
+    nudged.advance(600);
+    assert!(fingerprint(&nudged) != want, "a 1e-10 change left the state alone");
+}

@@ -56,9 +56,32 @@ impl TriangleGrid {
     /// Bins `mesh`'s triangles in cells of side at least `cell` (m; the neighbour cut-off),
     /// coarser where the mesh is large and has few triangles.
     pub fn new(mesh: &Mesh, cell: f64) -> TriangleGrid {
-        let (lo, hi) = mesh.bounds();
+        let all: Vec<u32> = (0..mesh.triangle_count() as u32).collect();
+        TriangleGrid::of(mesh, cell, &all, mesh.bounds())
+    }
+
+    /// [`new`](Self::new) for the triangles whose bounding boxes meet the box `lo`–`hi` alone
+    /// (a rank's part of the domain, widened by the reach of its particles): the others are
+    /// never near.
+    pub fn within(mesh: &Mesh, cell: f64, lo: Vec3, hi: Vec3) -> TriangleGrid {
+        let meets = |t: u32| {
+            let [a, b, c] = mesh.corners(t);
+            (a.min(b).min(c)).cmple(hi).all() && (a.max(b).max(c)).cmpge(lo).all()
+        };
+        let kept: Vec<u32> = (0..mesh.triangle_count() as u32).filter(|&t| meets(t)).collect();
+        let bounds =
+            kept.iter().fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(l, h), &t| {
+                let [a, b, c] = mesh.corners(t);
+                (l.min(a.min(b).min(c)), h.max(a.max(b).max(c)))
+            });
+        let bounds = if kept.is_empty() { (Vec3::ZERO, Vec3::ZERO) } else { bounds };
+        TriangleGrid::of(mesh, cell, &kept, bounds)
+    }
+
+    /// The triangles `kept` of `mesh`, which lie within `lo`–`hi`, binned.
+    fn of(mesh: &Mesh, cell: f64, kept: &[u32], (lo, hi): (Vec3, Vec3)) -> TriangleGrid {
         let span = (hi - lo).max(Vec3::splat(0.0));
-        let budget = (CELLS_PER_TRIANGLE * mesh.triangle_count()).max(MIN_CELL_BUDGET) as f64;
+        let budget = (CELLS_PER_TRIANGLE * kept.len()).max(MIN_CELL_BUDGET) as f64;
         let mut cell = if cell.is_finite() && cell > 0.0 { cell } else { span.max_element().max(1.0) };
         let count = |c: f64| span.to_array().map(|s| (s / c).floor() as usize + 1);
         while count(cell).iter().map(|&n| n as f64).product::<f64>() > budget {
@@ -72,8 +95,9 @@ impl TriangleGrid {
             std::array::from_fn(|k| (r[k].floor().max(0.0) as usize).min(dims[k] - 1))
         };
         // Counting sort of (cell, triangle) pairs.
-        let boxes: Vec<([usize; 3], [usize; 3])> = (0..mesh.triangle_count() as u32)
-            .map(|t| {
+        let boxes: Vec<([usize; 3], [usize; 3])> = kept
+            .iter()
+            .map(|&t| {
                 let [a, b, c] = mesh.corners(t);
                 (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)))
             })
@@ -96,9 +120,9 @@ impl TriangleGrid {
         }
         let mut fill = start.clone();
         let mut triangles = vec![0u32; start[n_cells] as usize];
-        for (t, b) in boxes.iter().enumerate() {
+        for (&t, b) in kept.iter().zip(&boxes) {
             each_cell(b, &mut |c| {
-                triangles[fill[c] as usize] = t as u32;
+                triangles[fill[c] as usize] = t;
                 fill[c] += 1;
             });
         }
@@ -179,6 +203,14 @@ impl TriangleGrid {
                 }
             }
         }
+    }
+
+    /// The triangles binned (each once).
+    pub fn triangle_count(&self) -> usize {
+        let mut t = self.triangles.clone();
+        t.sort_unstable();
+        t.dedup();
+        t.len()
     }
 
     /// Heap bytes of the grid.

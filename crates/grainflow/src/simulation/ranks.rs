@@ -331,6 +331,12 @@ impl Simulation {
         self.domain.as_ref().map_or(self.particles.len(), |d| d.owned)
     }
 
+    /// The triangles of the meshes this rank bins (over ranks, the fixed meshes' near its box
+    /// alone), summed over the meshes.
+    pub fn binned_triangles(&self) -> usize {
+        self.sources.meshes.binned_triangles()
+    }
+
     /// What this rank has sent to the others so far (zeros in one process).
     pub fn domain_stats(&self) -> DomainStats {
         self.domain.as_ref().map_or_else(DomainStats::default, |d| d.stats)
@@ -1004,6 +1010,12 @@ impl Simulation {
         self.motion = (0..owned)
             .filter_map(|i| d.rule_of.get(&self.particles.id[i]).map(|&k| d.rules[k].on_rank(i)))
             .collect();
+        // Fixed meshes bin the triangles near this box (periodic axes whole).
+        let [mut lo, mut hi] = d.boxes.boxes[me];
+        for k in (0..3).filter(|&k| per.axes[k]) {
+            (lo[k], hi[k]) = (f64::NEG_INFINITY, f64::INFINITY);
+        }
+        self.sources.meshes.bin_near([lo, hi]);
         self.domain = Some(d);
         // The particles that stayed keep what the sources found for them (mesh candidates).
         self.sources.redistributed(&new_of, n);

@@ -87,6 +87,9 @@ pub(crate) struct Meshes {
     /// The mesh walls.
     pub walls: Vec<MeshWall>,
     grids: Vec<TriangleGrid>,
+    /// On ranks, this rank's box: the grids of fixed meshes bin only the triangles near it
+    /// (none: every triangle).
+    near: Option<[Vec3; 2]>,
     /// Whether the candidates are current (false: found afresh at the next evaluation).
     built: bool,
     /// The neighbour-list build at which fixed meshes' candidates were last checked.
@@ -510,6 +513,20 @@ impl Meshes {
             .collect()
     }
 
+    /// On ranks: the box of this rank's particles, which the grids of fixed meshes bin the
+    /// triangles near (binned again when it changes).
+    pub(crate) fn bin_near(&mut self, near: [Vec3; 2]) {
+        if self.near != Some(near) {
+            self.near = Some(near);
+            self.grids.clear();
+        }
+    }
+
+    /// The triangles the meshes' grids hold, over all meshes (a triangle once per mesh).
+    pub(crate) fn binned_triangles(&self) -> usize {
+        self.grids.iter().map(TriangleGrid::triangle_count).sum()
+    }
+
     /// Finds the candidates of the state `v` if they are not current, so that the contacts
     /// and diagnostics of a state not yet evaluated (a new or a restored simulation) include
     /// its mesh contacts. The next evaluation finds the same contacts with them as with any
@@ -592,7 +609,17 @@ impl Meshes {
         }
         if self.grids.len() != self.walls.len() {
             let cell = 2.0 * v.r_max + margin;
-            self.grids = self.walls.iter().map(|m| TriangleGrid::new(&m.mesh, cell)).collect();
+            // An owned centre lies in the box, or has moved less than the margin out of it
+            // since: the triangles within reach of it meet the box widened so.
+            let reach = Vec3::splat(v.r_max + 2.0 * margin + v.coeffs.reach());
+            self.grids = self
+                .walls
+                .iter()
+                .map(|m| match self.near.filter(|_| !m.motion.moves()) {
+                    Some([lo, hi]) => TriangleGrid::within(&m.mesh, cell, lo - reach, hi + reach),
+                    None => TriangleGrid::new(&m.mesh, cell),
+                })
+                .collect();
         }
         // Each run of the stale slots is searched on its own; the runs' finds are then placed
         // in slot order, as one search of them all would place them.
