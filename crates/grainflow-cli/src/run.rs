@@ -408,8 +408,9 @@ pub fn main(args: RunArgs) -> ExitCode {
         },
         (None, None) => PathBuf::from("out"),
     };
-    // Every rank writes the same outputs: rank 0 into the folder, the others into one of
-    // their own, removed at the end.
+    // Every rank runs the same outputs: rank 0 into the folder, the others into one of their
+    // own (their snapshots and frames empty: the particles are gathered on rank 0), removed
+    // at the end.
     let scratch =
         (rank > 0).then(|| std::env::temp_dir().join(format!("grainflow-rank{rank}-{}", std::process::id())));
     let out = scratch.clone().unwrap_or(out);

@@ -1167,8 +1167,7 @@ fn run_simulation(
             let path = snap_dir.join(name);
             // In id order: the file does not depend on how the particles are stored (or spread
             // over ranks).
-            write_atomic(&path, snapshot_csv(&sim.gathered_in_id_order()).as_bytes())
-                .map_err(io_err(&path))?;
+            write_atomic(&path, snapshot_csv(&sim.gathered_on_rank_0()).as_bytes()).map_err(io_err(&path))?;
             files.push(path);
         }
         Ok(d)
@@ -1186,7 +1185,7 @@ fn run_simulation(
             for file in frame_files(sim.step_index(), &moving) {
                 folder.record(&Path::new("vtk").join(file))?;
             }
-            let (particles, contacts) = sim.gathered_in_id_order_with_contacts();
+            let (particles, contacts) = sim.gathered_on_rank_0_with_contacts();
             series
                 .write(sim.step_index(), sim.time(), &particles, &contacts, &moving)
                 .map_err(io_err(&vtk_dir))?;

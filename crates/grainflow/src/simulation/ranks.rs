@@ -365,6 +365,18 @@ impl Simulation {
     /// Every rank's particles (ghosts left out) in id order, on every rank: what outputs
     /// write, the same however the run is spread. Collective: every rank must call it.
     pub fn gathered_in_id_order(&self) -> Particles {
+        self.gathered(true)
+    }
+
+    /// [`gathered_in_id_order`](Self::gathered_in_id_order) on rank 0 alone (the others get
+    /// none): what output files are written from, without a copy of every particle on every
+    /// rank. Collective.
+    pub fn gathered_on_rank_0(&self) -> Particles {
+        self.gathered(false)
+    }
+
+    /// The particles in id order, on every rank or (`everyone` false) on rank 0 alone.
+    fn gathered(&self, everyone: bool) -> Particles {
         let p = &self.particles;
         let all = match &self.domain {
             None => p.clone(),
@@ -374,7 +386,7 @@ impl Simulation {
                     d.push_moving(&mut mine, p, i);
                 }
                 let mut all = Particles::default();
-                for words in d.comm.all_gather(&mine) {
+                for words in d.to(everyone, mine) {
                     let mut at = 0;
                     while at < words.len() {
                         d.read_moving(&words, &mut at, &mut all);
@@ -390,8 +402,18 @@ impl Simulation {
     /// contacts of the whole run in id order, on every rank (a contact's slots are those of
     /// the returned particles). Collective: every rank must call it.
     pub fn gathered_in_id_order_with_contacts(&self) -> (Particles, Vec<ContactInfo>) {
+        self.gathered_with_contacts(true)
+    }
+
+    /// [`gathered_in_id_order_with_contacts`](Self::gathered_in_id_order_with_contacts) on
+    /// rank 0 alone (the others get none). Collective.
+    pub fn gathered_on_rank_0_with_contacts(&self) -> (Particles, Vec<ContactInfo>) {
+        self.gathered_with_contacts(false)
+    }
+
+    fn gathered_with_contacts(&self, everyone: bool) -> (Particles, Vec<ContactInfo>) {
         let Some(d) = &self.domain else { return self.in_id_order() };
-        let all = self.gathered_in_id_order();
+        let all = self.gathered(everyone);
         let p = &self.particles;
         let mut mine = Vec::new();
         for c in self.contacts() {
@@ -407,7 +429,7 @@ impl Simulation {
         }
         let slot = |id: u64| all.id.binary_search(&(id as u32)).unwrap_or(usize::MAX);
         let mut contacts = Vec::new();
-        for words in d.comm.all_gather(&mine) {
+        for words in d.to(everyone, mine) {
             for w in words.chunks_exact(CONTACT) {
                 let other = match w[1] {
                     0 => ContactPartner::Wall(w[2] as usize),
@@ -534,6 +556,16 @@ impl Simulation {
         if let Some(boxes) = boxes {
             d.boxes = boxes;
             d.stats.recuts += 1;
+        }
+    }
+
+    /// Cuts the boxes again for the particles as they are; they move to their new boxes at
+    /// the next rebuild. Collective.
+    pub(super) fn cut_again(&mut self) {
+        let Some(comm) = self.domain.as_ref().map(|d| d.comm.clone()) else { return };
+        let boxes = self.cut(comm.size(), Some(&*comm));
+        if let Some(d) = self.domain.as_mut() {
+            d.boxes = boxes;
         }
     }
 
@@ -1051,6 +1083,17 @@ impl Simulation {
 }
 
 impl Decomposition {
+    /// Every rank's `mine`, by rank: on every rank, or (`everyone` false) on rank 0 alone (the
+    /// others get empty lists).
+    fn to(&self, everyone: bool, mine: Vec<u64>) -> Vec<Vec<u64>> {
+        if everyone {
+            return self.comm.all_gather(&mine);
+        }
+        let mut out = vec![Vec::new(); self.comm.size()];
+        out[0] = mine;
+        self.comm.exchange(out)
+    }
+
     /// [`Comm::exchange`], counted.
     fn exchange(&mut self, out: Vec<Vec<u64>>) -> Vec<Vec<u64>> {
         let me = self.comm.rank();

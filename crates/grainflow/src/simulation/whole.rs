@@ -210,7 +210,14 @@ impl Simulation {
             let err = (same.map(|s| s.0) == Some(least)).then(|| super::same_centre(least, at));
             whole.agree(err.map_or(Ok(()), Err))?;
         }
+        let before = sim.total_particles();
         sim.flow_stage(false)?;
+        // The boxes were cut before the batches due at the start were placed: cut again for
+        // them (the particles move at the next rebuild), or a hopper filled at the start
+        // would sit in the box that holds the insertion region.
+        if sim.total_particles() != before {
+            sim.cut_again();
+        }
         sim.prepare_mesh_candidates();
         Ok(sim)
     }
