@@ -681,3 +681,32 @@ fn each_rank_bins_the_fixed_triangles_near_its_box_alone() {
     nudged.advance(600);
     assert!(fingerprint(&nudged) != want, "a 1e-10 change left the state alone");
 }
+
+/// A run whose particles all come from a batch at the start (none in the case) is cut for
+/// them once they are placed: after the first rebuild each of 2 ranks owns about half.
+#[test]
+fn a_run_filled_at_the_start_is_cut_for_the_placed_particles() {
+    let case = || {
+        let (mut cfg, _) = bed_poured_into_case(false);
+        cfg.insertions.truncate(1);
+        cfg.insertions[0].region = grainflow::insertion::region::Region::Box {
+            lo: Vec3::new(0.0, 0.0, 0.0),
+            hi: Vec3::new(0.03, 0.03, 0.06),
+        };
+        cfg
+    };
+    let owned = on_ranks(2, &|comm| {
+        let mut sim = Simulation::new_over_ranks(case(), grainflow::Particles::default(), comm, None)
+            .expect("set up over ranks");
+        let builds = sim.neighbors().stats().builds;
+        while sim.neighbors().stats().builds == builds {
+            sim.advance(1);
+        }
+        (sim.owned(), sim.total_particles())
+    });
+    let total = owned[0].1;
+    assert!(total > 1000, "only {total} placed");
+    for (r, &(n, _)) in owned.iter().enumerate() {
+        assert!(n * 10 > total * 4, "rank {r} owns {n} of {total}");
+    }
+}
