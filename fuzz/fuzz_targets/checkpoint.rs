@@ -24,6 +24,11 @@ fn config() -> SimulationConfig {
         skin: None,
         motion: Vec::new(),
         periodic: None,
+        meshes: Vec::new(),
+        cylinders: Vec::new(),
+        resort: grainflow::ResortRule::Auto,
+        insertions: Vec::new(),
+        outlets: Vec::new(),
     }
 }
 
