@@ -238,19 +238,9 @@ impl Simulation {
         let mut sim = Simulation::unbuilt(config, particles)?;
         sim.neighbors.build(&sim.particles, &sim.walls);
         // Two particles at the same centre have no contact normal: the force loop would
-        // treat them as not touching. The pair of the smallest ids is named.
-        let (x, id) = (&sim.particles.position, &sim.particles.id);
-        let same = sim
-            .neighbors
-            .pairs()
-            .filter(|&[i, j]| x[i as usize] == x[j as usize])
-            .map(|[i, j]| {
-                let (a, b) = (id[i as usize].min(id[j as usize]), id[i as usize].max(id[j as usize]));
-                ((a as u64) << 32 | b as u64, i as usize)
-            })
-            .min();
-        if let Some((key, i)) = same {
-            return Err(same_centre(key, x[i]));
+        // treat them as not touching.
+        if let Some((key, x)) = sim.same_centre_pair() {
+            return Err(same_centre(key, x));
         }
         // Batches due at the start are in the initial state.
         sim.flow_stage(false)?;
@@ -1249,6 +1239,22 @@ pub fn check_particles(p: &Particles, n_phases: usize) -> Result<(), EngineError
         return Err(EngineError::BadReference(format!("particle id {} is used twice", w[0])));
     }
     check_each(p, n_phases)
+}
+
+impl Simulation {
+    /// The pair of the list at one centre with the smallest ids, if any: the ids as one key
+    /// (the lower in the upper half) and the centre.
+    fn same_centre_pair(&self) -> Option<(u64, Vec3)> {
+        let (x, id) = (&self.particles.position, &self.particles.id);
+        self.neighbors
+            .pairs()
+            .filter(|&[i, j]| x[i as usize] == x[j as usize])
+            .map(|[i, j]| {
+                let (a, b) = (id[i as usize].min(id[j as usize]), id[i as usize].max(id[j as usize]));
+                ((a as u64) << 32 | b as u64, x[i as usize])
+            })
+            .min_by_key(|e| e.0)
+    }
 }
 
 /// Two particles, ids `a` and `b` in `key` (a above b), have the same centre `x`.

@@ -506,13 +506,8 @@ fn bed_poured_into_case(nudged: bool) -> (SimulationConfig, Vec<ParticleInit>) {
     use grainflow::insertion::psd::{Basis, Mixture, MixturePart, SizeDistribution};
     use grainflow::insertion::region::Region;
     use grainflow::insertion::{Amount, Insertion, Schedule};
-    let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
-    let mut cfg = walled_mindlin(lo, hi, lammps_mindlin().1.en);
-    cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
-    let mut init = bed(3000, lo, hi, 0.001, 11);
-    if nudged {
-        nudge(&mut init);
-    }
+    let hi = Vec3::new(0.03, 0.03, 0.06);
+    let (mut cfg, init) = walled_bed_case(nudged);
     let pour = |name: &str, at: f64| Insertion {
         name: name.into(),
         region: Region::Box { lo: Vec3::new(0.0, 0.0, 0.04), hi },

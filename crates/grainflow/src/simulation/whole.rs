@@ -192,22 +192,11 @@ impl Simulation {
         let (mut sim, rules) = Simulation::unbuilt_over(config, share, Whole(Some(&*comm)))?;
         sim.spread_share(comm, rebalance, rules)?;
         // Two particles at the same centre (see `new`): the smallest such pair of ids anywhere.
-        let x = &sim.particles.position;
-        let id = &sim.particles.id;
-        let same = sim
-            .neighbors
-            .pairs()
-            .filter(|&[i, j]| x[i as usize] == x[j as usize])
-            .map(|[i, j]| {
-                let (a, b) = (id[i as usize].min(id[j as usize]), id[i as usize].max(id[j as usize]));
-                ((a as u64) << 32 | b as u64, i as usize)
-            })
-            .min();
+        let same = sim.same_centre_pair();
         let whole = Whole(sim.comm().map(|c| &**c));
         let least = whole.each(&[same.map_or(u64::MAX, |s| s.0)]).map(|w| w[0]).min().unwrap_or(u64::MAX);
         if least != u64::MAX {
-            let at = same.filter(|s| s.0 == least).map_or(Vec3::ZERO, |s| x[s.1]);
-            let err = (same.map(|s| s.0) == Some(least)).then(|| super::same_centre(least, at));
+            let err = same.filter(|s| s.0 == least).map(|(key, x)| super::same_centre(key, x));
             whole.agree(err.map_or(Ok(()), Err))?;
         }
         let before = sim.total_particles();

@@ -261,6 +261,12 @@ pub fn walled_mindlin(lo: Vec3, hi: Vec3, en: f64) -> SimulationConfig {
 /// 3 000 beads in a walled 30 × 30 × 60 mm box, LAMMPS's Hertz–Mindlin law, velocity Verlet
 /// (with `nudged`, the topmost one nudged).
 pub fn walled_bed(nudged: bool) -> Simulation {
+    let (cfg, init) = walled_bed_case(nudged);
+    simulation(cfg, &init)
+}
+
+/// The configuration and particles of [`walled_bed`].
+pub fn walled_bed_case(nudged: bool) -> (SimulationConfig, Vec<ParticleInit>) {
     let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
     let mut cfg = walled_mindlin(lo, hi, lammps_mindlin().1.en);
     cfg.gravity = Vec3::new(0.0, 0.0, -9.81);
@@ -268,7 +274,7 @@ pub fn walled_bed(nudged: bool) -> Simulation {
     if nudged {
         nudge(&mut init);
     }
-    simulation(cfg, &init)
+    (cfg, init)
 }
 
 /// A tube of `n` flat facets about the z axis, corners on the circle of radius `r`, for
