@@ -16,6 +16,6 @@ pub mod plan;
 pub mod raw;
 pub mod set;
 
-pub use case::{Case, OutputSettings, load, load_relayed, load_with, parse, parse_with};
+pub use case::{Bed, Case, OutputSettings, load, load_relayed, load_scoped, load_with, parse, parse_with};
 pub use error::CaseError;
 pub use set::SetOverride;

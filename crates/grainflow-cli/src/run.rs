@@ -304,7 +304,7 @@ pub fn load_and_warn(
     set: &[String],
     relay: &grainflow_case::input::Relay<'_>,
 ) -> Result<grainflow_case::Case, ExitCode> {
-    let case = load_case(case, overrides, motion, set, relay).map_err(|e| {
+    let case = load_case(case, overrides, motion, set, relay, grainflow_case::Bed::Every).map_err(|e| {
         eprintln!("error: {e}");
         ExitCode::from(EXIT_BAD_INPUT)
     })?;
@@ -315,13 +315,15 @@ pub fn load_and_warn(
 }
 
 /// Reads a case file, or translates an MFIX deck. The error is the message to print.
-/// The files the case names come through `relay` (over ranks, read by rank 0 alone).
+/// The files the case names come through `relay` (over ranks, read by rank 0 alone); a case
+/// file's initial particles are read as `bed` says (a deck's are read on every rank).
 fn load_case(
     case: &Path,
     overrides: &[String],
     motion: Option<&Path>,
     set: &[String],
     relay: &grainflow_case::input::Relay<'_>,
+    bed: grainflow_case::Bed,
 ) -> Result<grainflow_case::Case, String> {
     let sets =
         set.iter().map(|s| grainflow_case::SetOverride::parse(s)).collect::<Result<Vec<_>, String>>()?;
@@ -349,7 +351,7 @@ fn load_case(
             case.display()
         ));
     }
-    grainflow_case::load_relayed(case, &sets, relay).map_err(|e| match e {
+    grainflow_case::load_scoped(case, &sets, relay, bed).map_err(|e| match e {
         // Syntax and read errors name the file already; the others name table and key.
         CaseError::Syntax(_) | CaseError::Read { .. } => e.to_string(),
         _ => format!("{}: {e}", case.display()),
@@ -380,23 +382,48 @@ pub fn main(args: RunArgs) -> ExitCode {
         Some(r) => r,
         None => &grainflow_case::input::direct,
     };
-    let case = match load_and_warn(&args.case, &args.overrides, args.motion.as_deref(), &args.set, relay) {
-        Ok(c) => c,
-        Err(code) => return code,
+    // Over ranks, a fresh run of a case file has rank 0 alone read and check the initial
+    // particles; the others get their share of them (`grainflow_run::share`).
+    let bed = match &ranks {
+        Some(_) if rank_count > 1 && args.restart.is_none() && !grainflow_case::mfix::is_deck(&args.case) => {
+            if rank == 0 {
+                grainflow_case::Bed::Here
+            } else {
+                grainflow_case::Bed::Elsewhere
+            }
+        }
+        _ => grainflow_case::Bed::Every,
     };
-    if args.restart.is_none() {
-        match grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit()) {
-            Ok(plan) => {
+    let loaded = load_case(&args.case, &args.overrides, args.motion.as_deref(), &args.set, relay, bed)
+        .and_then(|case| {
+            for w in &case.warnings {
+                eprintln!("warning: {w}");
+            }
+            if args.restart.is_none() && bed != grainflow_case::Bed::Elsewhere {
+                let plan = grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit())
+                    .map_err(|e| format!("{}: {e}", args.case.display()))?;
                 for w in &plan.warnings {
                     eprintln!("warning: {w}");
                 }
             }
-            Err(e) => {
-                eprintln!("error: {}: {e}", args.case.display());
-                return ExitCode::from(EXIT_BAD_INPUT);
-            }
+            Ok(case)
+        });
+    let loaded = match (&ranks, bed) {
+        (Some(comm), grainflow_case::Bed::Here | grainflow_case::Bed::Elsewhere) => {
+            grainflow_run::share::share_case(&**comm, loaded).map_err(|r| match r.rank {
+                0 => r.message,
+                k => format!("on rank {k}: {}", r.message),
+            })
         }
-    }
+        _ => loaded,
+    };
+    let case = match loaded {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
     let title = if case.title.is_empty() { args.case.display().to_string() } else { case.title.clone() };
     println!("grainflow {}: {title}", env!("CARGO_PKG_VERSION"));
     // A restart continues in its checkpoint's folder unless told otherwise.

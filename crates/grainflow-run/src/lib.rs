@@ -16,4 +16,5 @@ pub mod outdir;
 pub mod output;
 pub mod relay;
 pub mod run;
+pub mod share;
 pub mod vtk;

@@ -213,6 +213,10 @@ pub fn run_case(
         (None, None) => Simulation::new(case.config, case.particles)?,
         // Each rank sets up from its run of the case's particles, in the file's order: no
         // rank builds a neighbour list of them all.
+        // Handed out by rank 0 (see `crate::share`).
+        (None, Some(comm)) if case.particles_are_share => {
+            Simulation::new_over_ranks(case.config, case.particles, comm.clone(), rebalance)?
+        }
         (None, Some(comm)) => {
             let n = case.particles.len();
             let (r, ranks) = (comm.rank(), comm.size());

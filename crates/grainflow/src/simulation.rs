@@ -29,7 +29,7 @@ pub use crate::forces::source::{
 pub use choice::ThreadReport;
 pub use inflow::{FlowBooks, Tally};
 pub use population::ResortRule;
-pub use ranks::DomainStats;
+pub use ranks::{DomainStats, starting_ranks};
 
 /// Standard gravity, m/s² (MFIX's default, along −y).
 pub const STANDARD_GRAVITY: f64 = 9.80665;

@@ -86,6 +86,33 @@ impl Particles {
         p
     }
 
+    /// [`from_init`](Particles::from_init) of a set given away: its memory goes as the
+    /// particles are built (from the back, a block at a time), so that a large bed is never
+    /// held twice.
+    pub fn from_init_vec(mut init: Vec<ParticleInit>) -> Self {
+        const BLOCK: usize = 1 << 16;
+        let mut p = Particles::with_capacity(init.len());
+        while !init.is_empty() {
+            let from = init.len().saturating_sub(BLOCK);
+            for q in init[from..].iter().rev() {
+                p.push(q);
+            }
+            init.truncate(from);
+            if init.capacity() > 2 * init.len() + BLOCK {
+                init.shrink_to_fit();
+            }
+        }
+        p.id.reverse();
+        p.phase.reverse();
+        p.radius.reverse();
+        p.mass.reverse();
+        p.inertia.reverse();
+        p.position.reverse();
+        p.velocity.reverse();
+        p.omega.reverse();
+        p
+    }
+
     /// Appends one particle.
     pub fn push(&mut self, q: &ParticleInit) {
         let m = sphere_mass(q.radius, q.density);
@@ -226,6 +253,33 @@ impl SlotsById {
             self.by_id.get(id as usize).copied().unwrap_or(NO_SLOT)
         } else {
             self.sorted.binary_search_by_key(&id, |e| e.0).map_or(NO_SLOT, |k| self.sorted[k].1)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_set_given_away_builds_the_same_particles() {
+        // Across the blocks the set is taken in (65 536), and with none.
+        for n in [0, 1, 7, (1 << 16) + 3, 2 << 16] {
+            let init: Vec<ParticleInit> = (0..n)
+                .map(|k| {
+                    let x = k as f64;
+                    ParticleInit {
+                        id: k as u32 + 1,
+                        phase: (k % 3) as u32,
+                        radius: 1e-3 * (1.0 + (k % 5) as f64),
+                        density: 2500.0 + x,
+                        position: Vec3::new(x, -x, 0.5 * x),
+                        velocity: Vec3::new(0.1 * x, 0.0, -x),
+                        omega: Vec3::new(0.0, x, 1.0),
+                    }
+                })
+                .collect();
+            assert_eq!(Particles::from_init_vec(init.clone()), Particles::from_init(&init), "{n} particles");
         }
     }
 }

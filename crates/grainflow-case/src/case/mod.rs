@@ -59,6 +59,25 @@ pub struct Case {
     /// `[parallel]`: on ranks, the slowest rank's work over the mean, less 1, beyond which
     /// their boxes are cut again (none: never).
     pub rebalance: Option<f64>,
+    /// True when `particles` is this rank's share of the case's initial particles (a run
+    /// of them in the file's order, handed out by rank 0), false when it is all of them.
+    pub particles_are_share: bool,
+}
+
+/// Which of the case's initial particles (`[particles]`: its file and its list) a process
+/// reads, checks and holds. Over ranks rank 0 reads them all and checks them as one process
+/// does, then hands each rank its share: the other ranks never hold the whole set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Bed {
+    /// All of them, their file passed through the relay like every other file.
+    #[default]
+    Every,
+    /// All of them, their file opened here and not passed on (rank 0 of many).
+    Here,
+    /// None: another process reads and checks them. The checks that need them, and the time
+    /// step taken from their sizes, are that process's; `config.time_step` is the case's
+    /// rule before the particles are known, to be replaced by the one process's.
+    Elsewhere,
 }
 
 /// `[output]`, validated.
@@ -92,6 +111,16 @@ pub fn load_with(path: &Path, sets: &[SetOverride]) -> Result<Case, CaseError> {
 /// [`load_with`] with the files the case names (particles, meshes, key frames) passed
 /// through `relay` (see [`input::Relay`]); the case file itself is read here.
 pub fn load_relayed(path: &Path, sets: &[SetOverride], relay: &input::Relay<'_>) -> Result<Case, CaseError> {
+    load_scoped(path, sets, relay, Bed::Every)
+}
+
+/// [`load_relayed`] with the initial particles read as `bed` says (see [`Bed`]).
+pub fn load_scoped(
+    path: &Path,
+    sets: &[SetOverride],
+    relay: &input::Relay<'_>,
+    bed: Bed,
+) -> Result<Case, CaseError> {
     let text = input::read_text(path, input::Kind::CaseFile)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let (raw, source) = if sets.is_empty() {
@@ -99,7 +128,8 @@ pub fn load_relayed(path: &Path, sets: &[SetOverride], relay: &input::Relay<'_>)
     } else {
         parse_raw_with(&text, &path.display().to_string(), sets)?
     };
-    from_raw_opened(raw, &source, &input::relayed(&input::open_beside(&dir), relay))
+    let here = input::open_beside(&dir);
+    from_raw_scoped(raw, &source, &input::relayed(&here, relay), &here, bed)
 }
 
 /// [`parse`] with `--set` overrides (see [`load_with`]).
@@ -170,12 +200,24 @@ pub(crate) fn from_raw_opened(
     source: &str,
     open: &input::Opener<'_>,
 ) -> Result<Case, CaseError> {
+    from_raw_scoped(raw, source, open, open, Bed::Every)
+}
+
+/// [`from_raw_opened`] with the initial particles read as `bed` says, their file (for
+/// [`Bed::Here`]) through `open_bed`.
+fn from_raw_scoped(
+    raw: RawCase,
+    source: &str,
+    open: &input::Opener<'_>,
+    open_bed: &input::Opener<'_>,
+    bed: Bed,
+) -> Result<Case, CaseError> {
     use sha2::{Digest, Sha256};
     // The hash covers the case text and every file it reads, in the order read: the bytes
     // are hashed as the reader takes them, and a reader that succeeds reads to the end.
     let hasher = std::cell::RefCell::new(Sha256::new());
     hasher.borrow_mut().update(source.as_bytes());
-    let hashing_open = |name: &str| {
+    let hashing = |open: &input::Opener<'_>, name: &str| {
         let reader = open(name)?;
         let mut h = hasher.borrow_mut();
         h.update(b"\0file\0");
@@ -184,6 +226,8 @@ pub(crate) fn from_raw_opened(
         drop(h);
         Ok(input::Stream::new(std::io::BufReader::new(Hashing { inner: reader, hasher: &hasher }), name))
     };
+    let hashing_open = |name: &str| hashing(open, name);
+    let hashing_open_bed = |name: &str| hashing(if bed == Bed::Here { open_bed } else { open }, name);
     // Mesh files are read whole, as bytes (a binary STL is not text), and hashed the same way.
     let hashing_read = |name: &str| -> Result<Vec<u8>, CaseError> {
         use std::io::Read;
@@ -198,7 +242,7 @@ pub(crate) fn from_raw_opened(
         h.update(&bytes);
         Ok(bytes)
     };
-    let mut case = validate(raw, &hashing_open, &hashing_read)?;
+    let mut case = validate(raw, &hashing_open, &hashing_read, (&hashing_open_bed, bed))?;
     case.hash = hasher.into_inner().finalize().iter().map(|b| format!("{b:02x}")).collect();
     Ok(case)
 }
@@ -247,12 +291,17 @@ fn version(v: Option<i64>) -> Result<(), CaseError> {
     Ok(())
 }
 
+/// Opens a particle file named in the case as a stream.
+type OpenStream<'a, 'h> = dyn Fn(&str) -> Result<input::Stream<'h>, CaseError> + 'a;
+
 /// The raw case as a [`Case`]: each table validated in turn, then the checks across tables.
-/// `open` streams a particle file, `read_bytes` reads a mesh file.
+/// `open` streams a particle file, `read_bytes` reads a mesh file; the initial particles are
+/// read as `bed` says, their file through `open_bed`.
 fn validate<'h>(
     raw: RawCase,
     open: &dyn Fn(&str) -> Result<input::Stream<'h>, CaseError>,
     read_bytes: &dyn Fn(&str) -> Result<Vec<u8>, CaseError>,
+    (open_bed, bed): (&OpenStream<'_, 'h>, Bed),
 ) -> Result<Case, CaseError> {
     let mut warnings = Vec::new();
     version(raw.version)?;
@@ -291,13 +340,13 @@ fn validate<'h>(
         raw.particles,
         !insertions.is_empty(),
         &phases,
-        open,
+        (open_bed, bed),
         (min, max),
         axes,
         skin,
         &mut warnings,
     )?;
-    let motion = motion::motion(&raw.motion, &particles)?;
+    let motion = motion::motion(&raw.motion, (bed != Bed::Elsewhere).then_some(&particles))?;
     let (run_overlap, max_overlap) = particles::overlaps(max_overlap, max_initial_overlap)?;
     geometry::check(
         &motion,
@@ -321,19 +370,23 @@ fn validate<'h>(
         .map(|part| 0.5 * part.sizes.max_diameter())
         .fold(particles.max_radius(), f64::max);
     cylinders::check(&particles, &cylinders, max_overlap, periodic.as_ref().map(|p| (p, r_max)))?;
-    let time_step = time::step(
-        &time,
-        &law,
-        &phases,
-        &wall_materials,
-        &pair_params,
-        &wall_params,
-        &particles,
-        &insertions,
-        &meshes,
-        &mesh_names,
-        &mut warnings,
-    )?;
+    let time_step = if bed == Bed::Elsewhere {
+        time.time_step
+    } else {
+        time::step(
+            &time,
+            &law,
+            &phases,
+            &wall_materials,
+            &pair_params,
+            &wall_params,
+            &particles,
+            &insertions,
+            &meshes,
+            &mesh_names,
+            &mut warnings,
+        )?
+    };
     let (integrator, t_start, t_stop) = (time.integrator, time.t_start, time.t_stop);
 
     let config = SimulationConfig {
@@ -369,5 +422,6 @@ fn validate<'h>(
         mesh_names,
         mesh_torque_about,
         rebalance,
+        particles_are_share: false,
     })
 }

@@ -5,10 +5,15 @@ use crate::error::CaseError;
 use crate::raw::{IdSelection, RawMotion};
 use grainflow::{MotionRule, Particles, PrescribedMotion};
 
-/// The prescribed motions of `[[motion]]`, each id checked against the particles.
-pub(super) fn motion(raw: &[RawMotion], particles: &Particles) -> Result<Vec<PrescribedMotion>, CaseError> {
-    let ids: std::collections::HashSet<u32> =
-        if raw.is_empty() { Default::default() } else { particles.id.iter().copied().collect() };
+/// The prescribed motions of `[[motion]]`, each id checked against the particles (when they
+/// are here: see [`super::Bed::Elsewhere`]).
+pub(super) fn motion(
+    raw: &[RawMotion],
+    particles: Option<&Particles>,
+) -> Result<Vec<PrescribedMotion>, CaseError> {
+    let ids: Option<std::collections::HashSet<u32>> =
+        particles.map(|p| if raw.is_empty() { Default::default() } else { p.id.iter().copied().collect() });
+    let has = |id: u32| ids.as_ref().is_none_or(|ids| ids.contains(&id));
     let mut motion = Vec::new();
     for (k, m) in raw.iter().enumerate() {
         let table = format!("[[motion]] #{}", k + 1);
@@ -91,11 +96,11 @@ pub(super) fn motion(raw: &[RawMotion], particles: &Particles) -> Result<Vec<Pre
                     ));
                 }
             };
-            if !ids.contains(&id) {
+            if !has(id) {
                 return Err(CaseError::invalid(&table, "particles", id, "no particle has this id"));
             }
             if let MotionRule::Follow { leader, .. } = rule
-                && !ids.contains(&leader)
+                && !has(leader)
             {
                 return Err(CaseError::invalid(
                     &table,

@@ -5,7 +5,6 @@ use super::fields::{check, require, vec3};
 use super::materials::phase_index;
 use super::{DEFAULT_MAX_INITIAL_OVERLAP, DEFAULT_MAX_OVERLAP};
 use crate::error::CaseError;
-use crate::input;
 use crate::particles;
 use crate::raw::RawParticles;
 use grainflow::contact::limits;
@@ -26,7 +25,7 @@ pub(super) fn particles<'h>(
     raw: Option<RawParticles>,
     inserting: bool,
     phases: &[Phase],
-    open: &dyn Fn(&str) -> Result<input::Stream<'h>, CaseError>,
+    (open, bed): (&super::OpenStream<'_, 'h>, super::Bed),
     (min, max): (Vec3, Vec3),
     axes: [bool; 3],
     skin: Option<f64>,
@@ -43,7 +42,10 @@ pub(super) fn particles<'h>(
         )?,
     };
     let mut init: Vec<ParticleInit> = Vec::new();
-    if let Some(file) = &praw.file {
+    let elsewhere = bed == super::Bed::Elsewhere;
+    if elsewhere {
+        // Another process reads the file and the list, and checks them.
+    } else if let Some(file) = &praw.file {
         let lower = file.to_ascii_lowercase();
         let format = praw.format.clone().unwrap_or_else(|| {
             if lower.ends_with(".csv") {
@@ -110,7 +112,7 @@ pub(super) fn particles<'h>(
             "only meaningful together with `file`",
         ));
     }
-    for (k, p) in praw.list.iter().enumerate() {
+    for (k, p) in praw.list.iter().enumerate().filter(|_| !elsewhere) {
         let table = format!("[[particles.list]] #{}", k + 1);
         let phase = phase_index(
             phases,
@@ -132,7 +134,7 @@ pub(super) fn particles<'h>(
             omega: vec3(p.angular_velocity.unwrap_or([0.0; 3]), &table, "angular_velocity")?,
         });
     }
-    if init.is_empty() && !inserting {
+    if init.is_empty() && !inserting && !elsewhere {
         return Err(CaseError::missing(
             "[particles]",
             "file or list",
@@ -141,6 +143,7 @@ pub(super) fn particles<'h>(
     }
     match praw.order.as_deref() {
         None | Some("input") => {}
+        _ if elsewhere => {}
         Some("spatial") => {
             let r_max = init.iter().map(|p| p.radius).fold(0.0, f64::max);
             let cut = 2.0 * r_max + skin.unwrap_or_else(|| grainflow::simulation::default_skin(r_max));
@@ -172,9 +175,8 @@ pub(super) fn particles<'h>(
             ));
         }
     };
-    let particles = Particles::from_init(&init);
-    // A large bed's inputs are as large as its state: let them go before the checks below.
-    drop(init);
+    // A large bed's inputs are as large as its state: they go as it is built.
+    let particles = Particles::from_init_vec(init);
     Ok(Bed {
         particles,
         resort,

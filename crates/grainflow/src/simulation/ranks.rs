@@ -23,6 +23,7 @@
 //! of the whole box, as one process does, so a ghost is sent as it is.
 
 use super::{Common, ContactInfo, ContactPartner, ResortRule, Simulation};
+use crate::boundary::Periodic;
 use crate::domain::{Boxes, Comm, Weighted};
 use crate::error::EngineError;
 use crate::math::Vec3;
@@ -472,47 +473,67 @@ impl Simulation {
             .map(|i| Weighted { position: per.wrap(p.position[i]), work: work[i], id: p.id[i] as u64 })
             .filter(|w| w.position.is_finite())
             .collect();
-        let (mut lo, mut hi) =
-            items.iter().fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(l, h), w| {
-                (l.min(w.position), h.max(w.position))
-            });
-        if let Some(comm) = comm {
-            let mut mine = Vec::with_capacity(6);
-            push_vecs(&mut mine, &[lo, hi]);
-            for w in comm.all_gather(&mine) {
-                (lo, hi) = (lo.min(vec_at(&w, 0)), hi.max(vec_at(&w, 3)));
-            }
-        }
-        if !lo.is_finite() || !hi.is_finite() {
-            (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
-        }
-        for k in 0..3 {
-            if per.axes[k] {
-                lo[k] = per.lo[k];
-                hi[k] = per.hi[k];
-            }
-        }
-        let mut boxes = match comm {
-            None => crate::domain::bisect(lo, hi, &items, ranks),
-            Some(comm) => crate::domain::bisect_over(lo, hi, &items, ranks, &mut |counts| {
-                let all = comm.all_gather(&counts);
-                (0..counts.len()).map(|k| all.iter().map(|c| c[k]).sum()).collect()
-            }),
-        };
-        let far = |v: f64, edge: f64, sign: f64| if v == edge { sign * f64::INFINITY } else { v };
-        for b in &mut boxes.boxes {
-            for k in (0..3).filter(|&k| !per.axes[k]) {
-                b[0][k] = far(b[0][k], lo[k], -1.0);
-                b[1][k] = far(b[1][k], hi[k], 1.0);
-            }
-        }
-        for k in (0..3).filter(|&k| !per.axes[k]) {
-            boxes.domain[0][k] = f64::NEG_INFINITY;
-            boxes.domain[1][k] = f64::INFINITY;
-        }
-        boxes
+        boxes_for(&items, per, ranks, comm)
     }
+}
 
+/// The rank each of a run's particles, all held here, starts on: the boxes the ranks cut for
+/// them at their set-up ([`Simulation::new_over_ranks`]), every particle weighing alike. Handing
+/// the particles out so spares them the first migration.
+pub fn starting_ranks(p: &Particles, periodic: Option<Periodic>, ranks: usize) -> Vec<usize> {
+    let per = periodic.unwrap_or_default();
+    let items: Vec<Weighted> = (0..p.len())
+        .map(|i| Weighted { position: per.wrap(p.position[i]), work: 1, id: p.id[i] as u64 })
+        .filter(|w| w.position.is_finite())
+        .collect();
+    let boxes = boxes_for(&items, per, ranks, None);
+    p.position.iter().map(|&x| boxes.owner(per.wrap(x)).unwrap_or(0)).collect()
+}
+
+/// The boxes of `ranks` ranks for `items` (see [`Simulation::cut`]).
+fn boxes_for(items: &[Weighted], per: Periodic, ranks: usize, comm: Option<&dyn Comm>) -> Boxes {
+    let (mut lo, mut hi) =
+        items.iter().fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(l, h), w| {
+            (l.min(w.position), h.max(w.position))
+        });
+    if let Some(comm) = comm {
+        let mut mine = Vec::with_capacity(6);
+        push_vecs(&mut mine, &[lo, hi]);
+        for w in comm.all_gather(&mine) {
+            (lo, hi) = (lo.min(vec_at(&w, 0)), hi.max(vec_at(&w, 3)));
+        }
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
+    }
+    for k in 0..3 {
+        if per.axes[k] {
+            lo[k] = per.lo[k];
+            hi[k] = per.hi[k];
+        }
+    }
+    let mut boxes = match comm {
+        None => crate::domain::bisect(lo, hi, items, ranks),
+        Some(comm) => crate::domain::bisect_over(lo, hi, items, ranks, &mut |counts| {
+            let all = comm.all_gather(&counts);
+            (0..counts.len()).map(|k| all.iter().map(|c| c[k]).sum()).collect()
+        }),
+    };
+    let far = |v: f64, edge: f64, sign: f64| if v == edge { sign * f64::INFINITY } else { v };
+    for b in &mut boxes.boxes {
+        for k in (0..3).filter(|&k| !per.axes[k]) {
+            b[0][k] = far(b[0][k], lo[k], -1.0);
+            b[1][k] = far(b[1][k], hi[k], 1.0);
+        }
+    }
+    for k in (0..3).filter(|&k| !per.axes[k]) {
+        boxes.domain[0][k] = f64::NEG_INFINITY;
+        boxes.domain[1][k] = f64::INFINITY;
+    }
+    boxes
+}
+
+impl Simulation {
     /// The domain stage before a force evaluation: the ranks decide together whether the list
     /// is due; if so the particles move to their boxes' ranks and the lists are built again,
     /// else the ghosts take their owners' new state.
