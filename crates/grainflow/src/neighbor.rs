@@ -308,16 +308,17 @@ impl NeighborList {
     }
 
     pub(crate) fn pairs_with_history(&self) -> Vec<([u32; 2], Vec3)> {
-        let mut out = Vec::new();
-        for (a, w) in self.offsets.windows(2).enumerate() {
-            for k in w[0]..w[1] {
+        self.each_pair_with_history().collect()
+    }
+
+    /// The pairs in contact with a non-zero history, by slots, in list order.
+    pub(crate) fn each_pair_with_history(&self) -> impl Iterator<Item = ([u32; 2], Vec3)> + '_ {
+        self.offsets.windows(2).enumerate().flat_map(move |(a, w)| {
+            (w[0]..w[1]).filter_map(move |k| {
                 let h = self.pair_history[k];
-                if self.in_contact[k] && nonzero(h) {
-                    out.push(([a as u32, self.partners[k]], h));
-                }
-            }
-        }
-        out
+                (self.in_contact[k] && nonzero(h)).then(|| ([a as u32, self.partners[k]], h))
+            })
+        })
     }
 
     /// Number of pairs that touched at the last force evaluation (or carry a history).

@@ -736,16 +736,15 @@ impl Simulation {
             flush(&mut buf, emit, 4000);
         }
         flush(&mut buf, emit, 0);
-        let pairs = self.neighbors.pairs_with_history();
-        let mine = |&&([a, b], _): &&([u32; 2], Vec3)| (a as usize) < owned || (b as usize) < owned;
-        emit(&[pairs.iter().filter(mine).count() as u64]);
-        for &([a, b], h) in pairs.iter().filter(mine) {
+        // Twice over the list (a count, then the pairs), rather than a copy of the pairs.
+        let mine = |&([a, b], _): &([u32; 2], Vec3)| (a as usize) < owned || (b as usize) < owned;
+        emit(&[self.neighbors.each_pair_with_history().filter(mine).count() as u64]);
+        for ([a, b], h) in self.neighbors.each_pair_with_history().filter(mine) {
             let (ids, _, h) = by_ids(p, [a, b], h);
             push_history(&mut buf, ids, h);
             flush(&mut buf, emit, 4000);
         }
         flush(&mut buf, emit, 0);
-        drop(pairs);
         let walls: Vec<_> =
             self.histories_by_id_of_walls().into_iter().filter(|w| (w.3 as usize) < owned).collect();
         buf.push(walls.len() as u64);
