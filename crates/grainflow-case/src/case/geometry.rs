@@ -121,10 +121,13 @@ fn check_geometry(
             }
         }
     }
-    let mut nl = grainflow::neighbor::NeighborList::new(0.0);
-    nl.build(p, &[]);
-    for [i, j] in nl.pairs() {
-        let (i, j) = (i as usize, j as usize);
+    // The first bad pair in slot order (the smaller slot first, then its partner's): two at
+    // one centre, or an overlap above the limit.
+    let bad = |i: usize, j: usize| {
+        let overlap = p.radius[i] + p.radius[j] - (p.position[j] - p.position[i]).length();
+        p.position[i] == p.position[j] || overlap > max_overlap * p.radius[i].min(p.radius[j])
+    };
+    if let Some((i, j)) = first_pair(p, bad) {
         if p.position[i] == p.position[j] {
             return Err(CaseError::Geometry(format!(
                 "{} and particle {} have the same centre: their contact has no normal direction; move one of them",
@@ -134,15 +137,127 @@ fn check_geometry(
         }
         let overlap = p.radius[i] + p.radius[j] - (p.position[j] - p.position[i]).length();
         let r = p.radius[i].min(p.radius[j]);
-        if overlap > max_overlap * r {
-            return Err(CaseError::Geometry(format!(
-                "{} and particle {} overlap by {:.3e} m = {:.3} of the smaller radius; the limit is [particles] max_initial_overlap = {max_overlap}",
-                at(i),
-                p.id[j],
-                overlap,
-                overlap / r
-            )));
-        }
+        return Err(CaseError::Geometry(format!(
+            "{} and particle {} overlap by {:.3e} m = {:.3} of the smaller radius; the limit is [particles] max_initial_overlap = {max_overlap}",
+            at(i),
+            p.id[j],
+            overlap,
+            overlap / r
+        )));
     }
     Ok(())
+}
+
+/// The touching pair `(i, j)`, `i < j`, that `bad` holds for with the smallest `i`, then `j`;
+/// positions finite. The particles are sorted into cubic cells of the largest diameter (16 B
+/// a particle, where a neighbour list of a large bed is many times that), x fastest; the
+/// cells of each row of 3 × 3 neighbouring rows follow one after another in that order, so a
+/// cursor per row walks forward through the sorted particles as the cells do.
+fn first_pair(p: &Particles, bad: impl Fn(usize, usize) -> bool) -> Option<(usize, usize)> {
+    let n = p.len();
+    let r_max = p.max_radius();
+    if n < 2 || !(r_max > 0.0 && r_max.is_finite()) {
+        return None;
+    }
+    let cell = 2.0 * r_max;
+    let (lo, hi) =
+        p.position.iter().fold((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)), |(l, h), &x| {
+            (l.min(x), h.max(x))
+        });
+    let dims = ((hi - lo) / cell).floor().to_array().map(|c| c as u64 + 1);
+    // A key for every cell, with room for one beyond each end of each axis.
+    let (nx, ny) = (dims[0] + 2, dims[1] + 2);
+    if (nx as u128) * (ny as u128) * (dims[2] as u128 + 2) >= 1u128 << 63 {
+        return first_pair_by_list(p, bad);
+    }
+    let cell_of = |x: Vec3| ((x - lo) / cell).floor().to_array().map(|c| (c as u64).min(u64::MAX - 2) + 1);
+    let key = |[cx, cy, cz]: [u64; 3]| (cz * ny + cy) * nx + cx;
+    let mut sorted: Vec<(u64, u32)> = (0..n).map(|i| (key(cell_of(p.position[i])), i as u32)).collect();
+    sorted.sort_unstable();
+    let mut best: Option<(usize, usize)> = None;
+    let mut cursor = [0usize; 9];
+    let mut s = 0;
+    while s < n {
+        let k = sorted[s].0;
+        let e = s + sorted[s..].partition_point(|c| c.0 == k);
+        let (cx, cy, cz) = (k % nx, k / nx % ny, k / nx / ny);
+        for (row, (dy, dz)) in (0..3).flat_map(|dz| (0..3).map(move |dy| (dy, dz))).enumerate() {
+            let (ry, rz) = (cy + dy - 1, cz + dz - 1);
+            let (from, to) = (key([cx - 1, ry, rz]), key([cx + 1, ry, rz]));
+            let at = &mut cursor[row];
+            while *at < n && sorted[*at].0 < from {
+                *at += 1;
+            }
+            for &(kj, j) in sorted[*at..].iter().take_while(|c| c.0 <= to) {
+                debug_assert!(kj >= from);
+                for &(_, i) in &sorted[s..e] {
+                    let (a, b) = (i.min(j) as usize, i.max(j) as usize);
+                    if i < j && best.is_none_or(|w| (a, b) < w) && bad(a, b) {
+                        best = Some((a, b));
+                    }
+                }
+            }
+        }
+        s = e;
+    }
+    best
+}
+
+/// [`first_pair`] over a neighbour list (cells too many for the keys).
+fn first_pair_by_list(p: &Particles, bad: impl Fn(usize, usize) -> bool) -> Option<(usize, usize)> {
+    let mut nl = grainflow::neighbor::NeighborList::new(0.0);
+    nl.build(p, &[]);
+    nl.pairs().map(|[i, j]| (i.min(j) as usize, i.max(j) as usize)).filter(|&(i, j)| bad(i, j)).min()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use grainflow::state::ParticleInit;
+    use rand::{Rng, SeedableRng};
+
+    /// A loose cloud of beads of mixed sizes, some pressed into others.
+    fn cloud(n: usize, seed: u64) -> Particles {
+        let mut rng = grainflow::insertion::InsertRng::seed_from_u64(seed);
+        let init: Vec<ParticleInit> = (0..n)
+            .map(|k| ParticleInit {
+                id: k as u32 + 1,
+                phase: 0,
+                radius: rng.random_range(0.5e-3..1.5e-3),
+                density: 2500.0,
+                position: Vec3::new(
+                    rng.random_range(0.0..0.05),
+                    rng.random_range(0.0..0.05),
+                    rng.random_range(0.0..0.02),
+                ),
+                velocity: Vec3::ZERO,
+                omega: Vec3::ZERO,
+            })
+            .collect();
+        Particles::from_init(&init)
+    }
+
+    #[test]
+    fn the_cells_find_the_first_bad_pair_the_neighbour_list_finds() {
+        for seed in 0..4 {
+            let p = cloud(3000, seed);
+            // Limits from every touching pair being bad to none being.
+            for limit in [0.0, 0.05, 0.3, 0.9, 2.0] {
+                let bad = |i: usize, j: usize| {
+                    let overlap = p.radius[i] + p.radius[j] - (p.position[j] - p.position[i]).length();
+                    overlap > limit * p.radius[i].min(p.radius[j])
+                };
+                let by_list = first_pair_by_list(&p, bad);
+                assert_eq!(first_pair(&p, bad), by_list, "seed {seed}, limit {limit}");
+                if limit == 0.0 {
+                    assert!(by_list.is_some(), "the cloud has touching pairs");
+                }
+            }
+        }
+        // A pair at one centre, far into the set, is found.
+        let mut p = cloud(3000, 9);
+        p.position[2999] = p.position[1234];
+        let same = |i: usize, j: usize| p.position[i] == p.position[j];
+        assert_eq!(first_pair(&p, same), Some((1234, 2999)));
+    }
 }
