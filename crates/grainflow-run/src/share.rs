@@ -60,12 +60,13 @@ pub fn share_case(comm: &dyn Comm, mine: Result<Case, String>) -> Result<Case, R
     let mut case = mine.expect("every rank loaded its case");
     // What depends on the particles, from rank 0: with the number of particles each rank
     // starts with, in the boxes the ranks will cut for them (so that none migrates at once).
-    let mut runs: Vec<Vec<usize>> = vec![Vec::new(); ranks];
+    let mut runs: Vec<Vec<u32>> = vec![Vec::new(); ranks];
     let head = if rank == 0 {
         let starts = grainflow::simulation::starting_ranks(&case.particles, case.config.periodic, ranks);
         for (i, &r) in starts.iter().enumerate() {
-            runs[r].push(i);
+            runs[r as usize].push(i as u32);
         }
+        drop(starts);
         let (tag, value) = match case.config.time_step {
             TimeStepRule::Fixed(dt) => (0, dt),
             TimeStepRule::Mfix { factor } => (1, factor),
@@ -99,16 +100,18 @@ pub fn share_case(comm: &dyn Comm, mine: Result<Case, String>) -> Result<Case, R
         }
     }
     if rank == 0 {
-        got = case.particles.gathered(&runs[0]);
+        // In place: the whole set is never held twice over.
+        got = std::mem::take(&mut case.particles);
+        got.keep_slots(&runs[0]);
     }
     case.particles = got;
     case.particles_are_share = true;
     Ok(case)
 }
 
-fn chunk(p: &Particles, slots: &[usize]) -> Vec<u64> {
+fn chunk(p: &Particles, slots: &[u32]) -> Vec<u64> {
     let mut w = Vec::with_capacity(slots.len() * WORDS);
-    for &i in slots {
+    for i in slots.iter().map(|&i| i as usize) {
         w.push((u64::from(p.id[i]) << 32) | u64::from(p.phase[i]));
         w.extend([p.radius[i], p.mass[i], p.inertia[i]].map(f64::to_bits));
         for v in [p.position[i], p.velocity[i], p.omega[i]] {
@@ -242,7 +245,7 @@ file = "particles.csv"
             assert_eq!(c.config.time_step, one.config.time_step, "rank {r}");
             assert_eq!(c.hash, one.hash, "rank {r}");
             // Its box's particles, in the file's order, bit for bit.
-            let mine: Vec<usize> = (0..starts.len()).filter(|&i| starts[i] == r).collect();
+            let mine: Vec<usize> = (0..starts.len()).filter(|&i| starts[i] as usize == r).collect();
             assert!(mine.len() > one.particles.len() / 4, "rank {r} starts with {} of 486", mine.len());
             assert_eq!(c.particles, one.particles.gathered(&mine), "rank {r}");
             all.append(&c.particles);

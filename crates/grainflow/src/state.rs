@@ -113,6 +113,34 @@ impl Particles {
         p
     }
 
+    /// Keeps only the particles of `slots` (ascending), in place, and gives back the memory of
+    /// the others.
+    pub fn keep_slots(&mut self, slots: &[u32]) {
+        fn keep<T: Copy>(v: &mut Vec<T>, slots: &[u32]) {
+            if v.is_empty() {
+                return;
+            }
+            for (k, &s) in slots.iter().enumerate() {
+                v[k] = v[s as usize];
+            }
+            v.truncate(slots.len());
+            v.shrink_to_fit();
+        }
+        debug_assert!(slots.windows(2).all(|w| w[0] < w[1]));
+        keep(&mut self.id, slots);
+        keep(&mut self.phase, slots);
+        keep(&mut self.radius, slots);
+        keep(&mut self.mass, slots);
+        keep(&mut self.inertia, slots);
+        keep(&mut self.position, slots);
+        keep(&mut self.velocity, slots);
+        keep(&mut self.omega, slots);
+        keep(&mut self.force, slots);
+        keep(&mut self.torque, slots);
+        keep(&mut self.accel_prev, slots);
+        keep(&mut self.alpha_prev, slots);
+    }
+
     /// Appends one particle.
     pub fn push(&mut self, q: &ParticleInit) {
         let m = sphere_mass(q.radius, q.density);
@@ -262,7 +290,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_set_given_away_builds_the_same_particles() {
+    fn a_set_given_away_or_kept_in_part_builds_the_same_particles() {
         // Across the blocks the set is taken in (65 536), and with none.
         for n in [0, 1, 7, (1 << 16) + 3, 2 << 16] {
             let init: Vec<ParticleInit> = (0..n)
@@ -279,7 +307,17 @@ mod tests {
                     }
                 })
                 .collect();
-            assert_eq!(Particles::from_init_vec(init.clone()), Particles::from_init(&init), "{n} particles");
+            let p = Particles::from_init(&init);
+            assert_eq!(Particles::from_init_vec(init.clone()), p, "{n} particles");
+            // Every third particle kept in place is the same as gathered.
+            let slots: Vec<u32> = (0..n as u32).filter(|s| s % 3 == 1).collect();
+            let mut kept = p.clone();
+            kept.keep_slots(&slots);
+            assert_eq!(
+                kept,
+                p.gathered(&slots.iter().map(|&s| s as usize).collect::<Vec<_>>()),
+                "{n} particles"
+            );
         }
     }
 }

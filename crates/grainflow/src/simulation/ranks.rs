@@ -478,16 +478,20 @@ impl Simulation {
 }
 
 /// The rank each of a run's particles, all held here, starts on: the boxes the ranks cut for
-/// them at their set-up ([`Simulation::new_over_ranks`]), every particle weighing alike. Handing
-/// the particles out so spares them the first migration.
-pub fn starting_ranks(p: &Particles, periodic: Option<Periodic>, ranks: usize) -> Vec<usize> {
+/// them at their set-up ([`Simulation::new_over_ranks`]), every particle weighing alike; above
+/// 2²⁰ particles, boxes cut for an even sample of them (within a few particles of those: the
+/// set-up moves those few). Handing the particles out so spares them the first migration.
+pub fn starting_ranks(p: &Particles, periodic: Option<Periodic>, ranks: usize) -> Vec<u32> {
     let per = periodic.unwrap_or_default();
+    let stride = p.len().div_ceil(1 << 20).max(1);
     let items: Vec<Weighted> = (0..p.len())
+        .step_by(stride)
         .map(|i| Weighted { position: per.wrap(p.position[i]), work: 1, id: p.id[i] as u64 })
         .filter(|w| w.position.is_finite())
         .collect();
     let boxes = boxes_for(&items, per, ranks, None);
-    p.position.iter().map(|&x| boxes.owner(per.wrap(x)).unwrap_or(0)).collect()
+    drop(items);
+    p.position.iter().map(|&x| boxes.owner(per.wrap(x)).unwrap_or(0) as u32).collect()
 }
 
 /// The boxes of `ranks` ranks for `items` (see [`Simulation::cut`]).
