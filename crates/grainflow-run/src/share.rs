@@ -85,7 +85,9 @@ pub fn share_case(comm: &dyn Comm, mine: Result<Case, String>) -> Result<Case, R
         if head[0] == 0 { TimeStepRule::Fixed(value) } else { TimeStepRule::Mfix { factor: value } };
     case.hash = String::from_utf8_lossy(&bytes_of(&head[3..], head[2])).into_owned();
     // Each rank's particles, a chunk per exchange; every rank makes the same exchanges.
+    // Without force and torque, as rank 0's bed (zero until the simulation holds them).
     let mut got = Particles::with_capacity(counts[rank] as usize);
+    (got.force, got.torque) = (Vec::new(), Vec::new());
     for to in 1..ranks {
         for start in (0..counts[to] as usize).step_by(CHUNK) {
             let end = (start + CHUNK).min(counts[to] as usize);
@@ -132,8 +134,6 @@ fn read_chunk(w: &[u64], p: &mut Particles) {
         p.position.push(v(at + 4));
         p.velocity.push(v(at + 7));
         p.omega.push(v(at + 10));
-        p.force.push(Vec3::ZERO);
-        p.torque.push(Vec3::ZERO);
     }
 }
 

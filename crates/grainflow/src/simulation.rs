@@ -305,6 +305,10 @@ impl Simulation {
             }
         }
         whole.agree(check_lengths(&particles))?;
+        let mut particles = particles;
+        for loads in [&mut particles.force, &mut particles.torque] {
+            loads.resize(particles.id.len(), Vec3::ZERO);
+        }
         if let Some(id) = whole.repeated_id(&particles.id) {
             return Err(EngineError::BadReference(format!("particle id {id} is used twice")));
         }
@@ -1277,10 +1281,11 @@ fn check_lengths(p: &Particles) -> Result<(), EngineError> {
         p.position.len(),
         p.velocity.len(),
         p.omega.len(),
-        p.force.len(),
-        p.torque.len(),
     ];
-    let history_ok = [p.accel_prev.len(), p.alpha_prev.len()].iter().all(|&l| l == n || l == 0);
+    // Loads and the Adams–Bashforth history may be left out (zero).
+    let history_ok = [p.force.len(), p.torque.len(), p.accel_prev.len(), p.alpha_prev.len()]
+        .iter()
+        .all(|&l| l == n || l == 0);
     if lens.iter().any(|&l| l != n) || !history_ok {
         return Err(EngineError::BadReference("particle arrays have different lengths".into()));
     }

@@ -26,9 +26,9 @@ pub struct Particles {
     pub velocity: Vec<Vec3>,
     /// Angular velocity, rad/s.
     pub omega: Vec<Vec3>,
-    /// Force accumulator, N.
+    /// Force accumulator, N; empty (zero) in a bed not yet in a simulation, which fills it.
     pub force: Vec<Vec3>,
-    /// Torque accumulator, N·m.
+    /// Torque accumulator, N·m; empty (zero) like `force`.
     pub torque: Vec<Vec3>,
     /// Previous step's linear acceleration (Adams–Bashforth history), m/s²; empty unless the
     /// Adams–Bashforth integrator runs.
@@ -86,16 +86,17 @@ impl Particles {
         p
     }
 
-    /// [`from_init`](Particles::from_init) of a set given away: its memory goes as the
-    /// particles are built (from the back, a block at a time), so that a large bed is never
-    /// held twice.
+    /// [`from_init`](Particles::from_init) of a set given away, without its force and torque
+    /// (empty: zero until a simulation holds the set): its memory goes as the particles are
+    /// built (from the back, a block at a time), so that a large bed is never held twice.
     pub fn from_init_vec(mut init: Vec<ParticleInit>) -> Self {
         const BLOCK: usize = 1 << 16;
         let mut p = Particles::with_capacity(init.len());
+        (p.force, p.torque) = (Vec::new(), Vec::new());
         while !init.is_empty() {
             let from = init.len().saturating_sub(BLOCK);
             for q in init[from..].iter().rev() {
-                p.push(q);
+                p.push_state(q);
             }
             init.truncate(from);
             if init.capacity() > 2 * init.len() + BLOCK {
@@ -143,6 +144,13 @@ impl Particles {
 
     /// Appends one particle.
     pub fn push(&mut self, q: &ParticleInit) {
+        self.push_state(q);
+        self.force.push(Vec3::ZERO);
+        self.torque.push(Vec3::ZERO);
+    }
+
+    /// [`push`](Particles::push) without the force and torque.
+    fn push_state(&mut self, q: &ParticleInit) {
         let m = sphere_mass(q.radius, q.density);
         self.id.push(q.id);
         self.phase.push(q.phase);
@@ -153,8 +161,6 @@ impl Particles {
         self.position.push(q.position);
         self.velocity.push(q.velocity);
         self.omega.push(q.omega);
-        self.force.push(Vec3::ZERO);
-        self.torque.push(Vec3::ZERO);
     }
 
     /// Number of particles.
@@ -308,7 +314,10 @@ mod tests {
                 })
                 .collect();
             let p = Particles::from_init(&init);
-            assert_eq!(Particles::from_init_vec(init.clone()), p, "{n} particles");
+            let mut given = Particles::from_init_vec(init.clone());
+            assert!(given.force.is_empty() && given.torque.is_empty());
+            (given.force, given.torque) = (p.force.clone(), p.torque.clone());
+            assert_eq!(given, p, "{n} particles");
             // Every third particle kept in place is the same as gathered.
             let slots: Vec<u32> = (0..n as u32).filter(|s| s % 3 == 1).collect();
             let mut kept = p.clone();

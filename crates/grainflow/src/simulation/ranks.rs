@@ -910,7 +910,8 @@ impl Simulation {
         let mut arrived: Vec<([u32; 2], Vec3)> = Vec::new();
         let mut wall_arrived: Vec<(u32, u32, Vec3)> = Vec::new();
         let kept: Vec<usize> = (0..p.len()).filter(|&i| dest[i] == me).collect();
-        let mut next = p.gathered(&kept);
+        let old_ids = p.id.clone();
+        let mut outgoing = None;
         if !initial {
             // The particles that left this box, each followed by its histories.
             let mut out: Vec<Vec<u64>> = vec![Vec::new(); ranks];
@@ -958,6 +959,12 @@ impl Simulation {
                     o.extend(records);
                 }
             }
+            outgoing = Some(out);
+        }
+        // The particles that stay, kept in place: the set is never held twice over.
+        let mut next = std::mem::take(&mut self.particles);
+        next.keep_slots(&kept.iter().map(|&i| i as u32).collect::<Vec<_>>());
+        if let Some(out) = outgoing {
             for words in d.exchange(out) {
                 if words.is_empty() {
                     continue;
@@ -1028,7 +1035,7 @@ impl Simulation {
         }
         let mut new_of_old = new_of.clone();
         for (i, s) in new_of_old.iter_mut().enumerate().filter(|(_, s)| **s == NO_SLOT) {
-            *s = slot_of.get(p.id[i]);
+            *s = slot_of.get(old_ids[i]);
         }
         let mut keyed: Vec<(u64, Vec3)> = Vec::with_capacity(pairs.len() + arrived.len());
         let mut keep = |a: u32, b: u32, h: Vec3| {
