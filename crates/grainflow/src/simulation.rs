@@ -357,7 +357,6 @@ impl Simulation {
             None => default_skin(r_max),
         };
         let skin = skin_reaching(skin, config.skin.is_some(), coeffs.reach())?;
-        let mut particles = particles;
         if config.integrator == Integrator::AdamsBashforth && particles.accel_prev.is_empty() {
             particles.accel_prev = vec![Vec3::ZERO; particles.len()];
             particles.alpha_prev = vec![Vec3::ZERO; particles.len()];
