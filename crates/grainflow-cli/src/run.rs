@@ -358,6 +358,49 @@ fn load_case(
     })
 }
 
+/// The case of `args`, checked and (for a fresh run) its memory planned; the message if not.
+/// Over `ranks`, a fresh run of a case file has rank 0 alone read and check the initial
+/// particles; the others get their share of them (`grainflow_run::share`).
+fn load_checked(
+    args: &RunArgs,
+    relay: &grainflow_case::input::Relay<'_>,
+    ranks: Option<&std::sync::Arc<dyn grainflow::domain::Comm>>,
+) -> Result<grainflow_case::Case, String> {
+    let bed = match ranks {
+        Some(c) if c.size() > 1 && args.restart.is_none() && !grainflow_case::mfix::is_deck(&args.case) => {
+            if c.rank() == 0 {
+                grainflow_case::Bed::Here
+            } else {
+                grainflow_case::Bed::Elsewhere
+            }
+        }
+        _ => grainflow_case::Bed::Every,
+    };
+    let loaded = load_case(&args.case, &args.overrides, args.motion.as_deref(), &args.set, relay, bed)
+        .and_then(|case| {
+            for w in &case.warnings {
+                eprintln!("warning: {w}");
+            }
+            if args.restart.is_none() && bed != grainflow_case::Bed::Elsewhere {
+                let plan = grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit())
+                    .map_err(|e| format!("{}: {e}", args.case.display()))?;
+                for w in &plan.warnings {
+                    eprintln!("warning: {w}");
+                }
+            }
+            Ok(case)
+        });
+    match (ranks, bed) {
+        (Some(comm), grainflow_case::Bed::Here | grainflow_case::Bed::Elsewhere) => {
+            grainflow_run::share::share_case(&**comm, loaded).map_err(|r| match r.rank {
+                0 => r.message,
+                k => format!("on rank {k}: {}", r.message),
+            })
+        }
+        _ => loaded,
+    }
+}
+
 pub fn main(args: RunArgs) -> ExitCode {
     // MPI first: the ranks other than 0 say nothing from here on.
     #[cfg(feature = "mpi")]
@@ -382,41 +425,7 @@ pub fn main(args: RunArgs) -> ExitCode {
         Some(r) => r,
         None => &grainflow_case::input::direct,
     };
-    // Over ranks, a fresh run of a case file has rank 0 alone read and check the initial
-    // particles; the others get their share of them (`grainflow_run::share`).
-    let bed = match &ranks {
-        Some(_) if rank_count > 1 && args.restart.is_none() && !grainflow_case::mfix::is_deck(&args.case) => {
-            if rank == 0 {
-                grainflow_case::Bed::Here
-            } else {
-                grainflow_case::Bed::Elsewhere
-            }
-        }
-        _ => grainflow_case::Bed::Every,
-    };
-    let loaded = load_case(&args.case, &args.overrides, args.motion.as_deref(), &args.set, relay, bed)
-        .and_then(|case| {
-            for w in &case.warnings {
-                eprintln!("warning: {w}");
-            }
-            if args.restart.is_none() && bed != grainflow_case::Bed::Elsewhere {
-                let plan = grainflow_case::plan::plan(&case, grainflow_case::plan::memory_limit())
-                    .map_err(|e| format!("{}: {e}", args.case.display()))?;
-                for w in &plan.warnings {
-                    eprintln!("warning: {w}");
-                }
-            }
-            Ok(case)
-        });
-    let loaded = match (&ranks, bed) {
-        (Some(comm), grainflow_case::Bed::Here | grainflow_case::Bed::Elsewhere) => {
-            grainflow_run::share::share_case(&**comm, loaded).map_err(|r| match r.rank {
-                0 => r.message,
-                k => format!("on rank {k}: {}", r.message),
-            })
-        }
-        _ => loaded,
-    };
+    let loaded = load_checked(&args, relay, ranks.as_ref());
     let case = match loaded {
         Ok(c) => c,
         Err(e) => {
