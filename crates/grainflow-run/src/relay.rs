@@ -62,11 +62,7 @@ fn pass(comm: &dyn Comm, (kind, bytes): (u64, Vec<u8>)) -> (u64, Vec<u8>) {
     if comm.rank() == 0 {
         let mut words = Vec::with_capacity(2 + bytes.len().div_ceil(8));
         words.extend([kind, bytes.len() as u64]);
-        words.extend(bytes.chunks(8).map(|c| {
-            let mut w = [0u8; 8];
-            w[..c.len()].copy_from_slice(c);
-            u64::from_le_bytes(w)
-        }));
+        words.extend(words_of(&bytes));
         for o in out.iter_mut().skip(1) {
             o.clone_from(&words);
         }
@@ -74,10 +70,23 @@ fn pass(comm: &dyn Comm, (kind, bytes): (u64, Vec<u8>)) -> (u64, Vec<u8>) {
         return (kind, bytes);
     }
     let got = comm.exchange(out).swap_remove(0);
-    let (kind, len) = (got[0], got[1] as usize);
-    let mut bytes: Vec<u8> = got[2..].iter().flat_map(|w| w.to_le_bytes()).collect();
-    bytes.truncate(len);
-    (kind, bytes)
+    (got[0], bytes_of(&got[2..], got[1]))
+}
+
+/// `bytes` as little-endian words, the last padded with zeros.
+pub(crate) fn words_of(bytes: &[u8]) -> impl Iterator<Item = u64> + '_ {
+    bytes.chunks(8).map(|c| {
+        let mut w = [0u8; 8];
+        w[..c.len()].copy_from_slice(c);
+        u64::from_le_bytes(w)
+    })
+}
+
+/// The first `len` bytes of `words` ([`words_of`] undone).
+pub(crate) fn bytes_of(words: &[u64], len: u64) -> Vec<u8> {
+    let mut b: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    b.truncate(len as usize);
+    b
 }
 
 fn failed(name: &str, why: Vec<u8>) -> CaseError {

@@ -211,9 +211,9 @@ pub fn run_case(
     let spread = options.ranks.clone().filter(|c| c.size() > 1);
     let mut sim = match (&options.restart, &spread) {
         (None, None) => Simulation::new(case.config, case.particles)?,
-        // Each rank sets up from its run of the case's particles, in the file's order: no
-        // rank builds a neighbour list of them all.
-        // Handed out by rank 0 (see `crate::share`).
+        // Each rank sets up from its share of the case's particles, in the file's order: no
+        // rank builds a neighbour list of them all. The share handed out by rank 0 (see
+        // `crate::share`), or else its run of the particles every rank read (an MFIX deck).
         (None, Some(comm)) if case.particles_are_share => {
             Simulation::new_over_ranks(case.config, case.particles, comm.clone(), rebalance)?
         }

@@ -3,8 +3,8 @@
 //! ([`grainflow_case::Bed::Elsewhere`]). [`share_case`] then makes the ranks agree on whether
 //! the case holds (rank 0's refusal is every rank's), gives them rank 0's time step and case
 //! hash (both depend on the particles), and sends each rank the particles of the box it will
-//! start with, in the file's order, a chunk at a time. No rank but 0 ever holds the whole set, and rank 0 holds
-//! it only until its share is cut out.
+//! start with, in the file's order, a chunk at a time. No rank but 0 ever holds the whole
+//! set, and rank 0 holds it only until its share is cut out.
 //!
 //! ```text
 //! agreement, from each rank:   [failed, bytes, message words...]
@@ -14,6 +14,7 @@
 //!                              inertia, position, velocity, angular velocity: the bits)
 //! ```
 
+use crate::relay::{bytes_of, words_of};
 use grainflow::domain::Comm;
 use grainflow::{Particles, TimeStepRule, Vec3};
 use grainflow_case::Case;
@@ -137,20 +138,6 @@ fn read_chunk(w: &[u64], p: &mut Particles) {
     }
 }
 
-fn words_of(bytes: &[u8]) -> impl Iterator<Item = u64> + '_ {
-    bytes.chunks(8).map(|c| {
-        let mut w = [0u8; 8];
-        w[..c.len()].copy_from_slice(c);
-        u64::from_le_bytes(w)
-    })
-}
-
-fn bytes_of(words: &[u64], len: u64) -> Vec<u8> {
-    let mut b: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-    b.truncate(len as usize);
-    b
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -159,7 +146,8 @@ mod tests {
     use std::path::Path;
     use std::sync::Arc;
 
-    /// The settling bed of the examples (486 beads of their own sizes) on Hertz contacts, copied into `dir` with `edit` applied to its particle file.
+    /// The settling bed of the examples (486 beads of their own sizes) on Hertz contacts,
+    /// copied into `dir` with `edit` applied to its particle file.
     fn bed_case(dir: &Path, edit: impl Fn(String) -> String) -> std::path::PathBuf {
         let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/settling-bed");
         // Hertz contacts, whose default step is taken from the smallest particles.

@@ -91,8 +91,20 @@ impl Particles {
     /// built (from the back, a block at a time), so that a large bed is never held twice.
     pub fn from_init_vec(mut init: Vec<ParticleInit>) -> Self {
         const BLOCK: usize = 1 << 16;
-        let mut p = Particles::with_capacity(init.len());
-        (p.force, p.torque) = (Vec::new(), Vec::new());
+        let n = init.len();
+        let mut p = Particles {
+            id: Vec::with_capacity(n),
+            phase: Vec::with_capacity(n),
+            radius: Vec::with_capacity(n),
+            mass: Vec::with_capacity(n),
+            inertia: Vec::with_capacity(n),
+            position: Vec::with_capacity(n),
+            velocity: Vec::with_capacity(n),
+            omega: Vec::with_capacity(n),
+            ..Particles::default()
+        };
+        // Last first, so that the first particles are at the end, where they can be let go.
+        init.reverse();
         while !init.is_empty() {
             let from = init.len().saturating_sub(BLOCK);
             for q in init[from..].iter().rev() {
@@ -103,14 +115,6 @@ impl Particles {
                 init.shrink_to_fit();
             }
         }
-        p.id.reverse();
-        p.phase.reverse();
-        p.radius.reverse();
-        p.mass.reverse();
-        p.inertia.reverse();
-        p.position.reverse();
-        p.velocity.reverse();
-        p.omega.reverse();
         p
     }
 

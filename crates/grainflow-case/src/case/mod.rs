@@ -59,8 +59,9 @@ pub struct Case {
     /// `[parallel]`: on ranks, the slowest rank's work over the mean, less 1, beyond which
     /// their boxes are cut again (none: never).
     pub rebalance: Option<f64>,
-    /// True when `particles` is this rank's share of the case's initial particles (a run
-    /// of them in the file's order, handed out by rank 0), false when it is all of them.
+    /// True when `particles` is this rank's share of the case's initial particles (those of
+    /// the box it starts with, in the file's order, handed out by rank 0), false when it is
+    /// all of them.
     pub particles_are_share: bool,
 }
 
