@@ -466,6 +466,10 @@ pub struct RawParallel {
     /// That excess, as a fraction of the mean, >= 0. Default 0.1.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub threshold: Option<f64>,
+    /// What is weighed: "time" (each rank's measured busy time; default) or "work" (the
+    /// particles and their list partners, counted).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub weigh: Option<String>,
 }
 
 /// `[output]`

@@ -542,10 +542,15 @@ pub fn main(args: RunArgs) -> ExitCode {
                     st.domain,
                     if s.wall_seconds > 0.0 { 100.0 * st.domain / s.wall_seconds } else { 0.0 }
                 );
+                let timed = d.time_imbalance(s.ranks.0).map_or(String::new(), |t| {
+                    format!("; the busiest rank's measured time {t:.3} × the mean")
+                });
                 println!(
-                    "balance: the slowest rank's work {:.3} × the mean over the run (work: particles and their list partners); boxes cut again {} times",
+                    "balance: the slowest rank's work {:.3} × the mean over the run (work: particles and their list partners){timed}; boxes cut again {} times; rank 0 spent {:.3} s ({:.0} % of the wall time) in the communicator",
                     d.imbalance(s.ranks.0),
-                    d.recuts
+                    d.recuts,
+                    d.waited as f64 * 1e-9,
+                    if s.wall_seconds > 0.0 { 1e-7 * d.waited as f64 / s.wall_seconds } else { 0.0 }
                 );
             }
             if let Some(line) = thread_choice_line(&s.thread_report) {

@@ -243,6 +243,7 @@ pub fn run_case(
     if let (Some(comm), Some(_)) = (spread, &options.restart) {
         sim.decompose(comm, rebalance)?;
     }
+    sim.weigh_ranks_by(case.weigh);
     check_output_volume(&sim, &output, mesh_loads.columns.len())?;
     let intent = match &options.restart {
         None => Intent::Fresh,
@@ -463,10 +464,14 @@ impl RunInfo<'_> {
                 // The balance over the run: the slowest rank's work ÷ the mean, and re-cuts.
                 let d = sim.domain_stats();
                 s.push_str(&format!(
-                    "slowest_work_over_mean = {:.4}\nrecuts = {}\n",
+                    "slowest_work_over_mean = {:.4}\nrecuts = {}\nrank_0_seconds_in_mpi = {:.3}\n",
                     d.imbalance(sim.ranks()),
-                    d.recuts
+                    d.recuts,
+                    d.waited as f64 * 1e-9
                 ));
+                if let Some(t) = d.time_imbalance(sim.ranks()) {
+                    s.push_str(&format!("busiest_time_over_mean = {t:.4}\n"));
+                }
             }
         }
         if let Some(r) = &self.options.restart {

@@ -33,6 +33,64 @@ pub trait Comm: Send + Sync + std::fmt::Debug {
     }
 }
 
+/// What decides whether the ranks' boxes are cut again, and how the cut weighs their work.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Weigh {
+    /// The particles and their list partners, counted: the same re-cuts on every run of a
+    /// case.
+    #[default]
+    Work,
+    /// Each rank's measured busy time (its steps less the time it spends in the
+    /// communicator): a rank slowed by its processor, or by work the count misses (mesh
+    /// contacts), gets a smaller box. The cuts then differ from run to run; the results do
+    /// not (they never depend on the boxes).
+    Time,
+}
+
+/// A communicator that keeps the time spent in its calls (the waits for the other ranks
+/// included): what a rank did not spend on its own work.
+#[derive(Debug)]
+pub(crate) struct Timed {
+    inner: std::sync::Arc<dyn Comm>,
+    nanos: std::sync::atomic::AtomicU64,
+}
+
+impl Timed {
+    pub(crate) fn new(inner: std::sync::Arc<dyn Comm>) -> Timed {
+        Timed { inner, nanos: std::sync::atomic::AtomicU64::new(0) }
+    }
+
+    /// Nanoseconds spent in calls so far.
+    pub(crate) fn nanos(&self) -> u64 {
+        self.nanos.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    fn timed<T>(&self, f: impl FnOnce(&dyn Comm) -> T) -> T {
+        let t = std::time::Instant::now();
+        let got = f(&*self.inner);
+        self.nanos.fetch_add(t.elapsed().as_nanos() as u64, std::sync::atomic::Ordering::Relaxed);
+        got
+    }
+}
+
+impl Comm for Timed {
+    fn rank(&self) -> usize {
+        self.inner.rank()
+    }
+
+    fn size(&self) -> usize {
+        self.inner.size()
+    }
+
+    fn exchange(&self, out: Vec<Vec<u64>>) -> Vec<Vec<u64>> {
+        self.timed(|c| c.exchange(out))
+    }
+
+    fn all_gather(&self, mine: &[u64]) -> Vec<Vec<u64>> {
+        self.timed(|c| c.all_gather(mine))
+    }
+}
+
 /// Ranks as threads of one process: [`LocalComm::team`] gives one communicator per rank, each
 /// to be used on its own thread.
 #[derive(Debug)]

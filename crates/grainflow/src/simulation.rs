@@ -730,6 +730,7 @@ impl Simulation {
             self.flow.error.get_or_insert(e.to_string());
         }
         self.resort_if_due(par);
+        let busy_from = self.busy_from();
         let start = self.timing.map(|t| (std::time::Instant::now(), t));
         let dt = self.time_step.dt;
         let g = self.gravity;
@@ -805,6 +806,7 @@ impl Simulation {
         }
         self.step += 1;
         self.drifted = false;
+        self.count_busy(busy_from);
         if let (Some((t0, before)), Some(now)) = (start, self.timing.as_mut()) {
             // Whatever the step spent outside the force stages is integration.
             let forces = (now.neighbor - before.neighbor)

@@ -415,6 +415,33 @@ fn a_landing_column_is_rebalanced_and_keeps_the_one_process_bits() {
     assert!(differing > 100, "a 1e-10 change left the state alone ({differing} values differ)");
 }
 
+/// Re-cut by measured time (threshold 0: at the close of every window of measurement in which
+/// the busiest rank was busier than the mean, so nearly always), each rank's particles
+/// weighing by its time per unit of work, the landing column keeps the one process's bits on
+/// 2 and 3 ranks. The ranks step on until a window has closed (they agree when: its figures
+/// are gathered), and one process then runs as many steps.
+#[test]
+fn a_column_rebalanced_by_measured_time_keeps_the_one_process_bits() {
+    for ranks in [2, 3] {
+        let got = on_ranks(ranks, &|comm| {
+            let mut sim = falling_column(false);
+            sim.decompose(comm, Some(0.0)).expect("spread over ranks");
+            sim.weigh_ranks_by(grainflow::domain::Weigh::Time);
+            sim.advance(1_000);
+            while sim.domain_stats().busy_total == 0 && sim.step_index() < 200_000 {
+                sim.advance(500);
+            }
+            (fingerprint(&sim), sim.step_index(), sim.domain_stats())
+        });
+        let (bits, steps, stats) = &got[0];
+        assert!(got.iter().all(|g| (&g.0, g.1) == (bits, *steps)), "{ranks} ranks disagree");
+        assert!(stats.time_imbalance(ranks).is_some(), "no window of measurement closed in {steps} steps");
+        let mut one = falling_column(false);
+        one.advance(*steps);
+        assert!(fingerprint(&one) == *bits, "{ranks} ranks weighed by time depart from one process");
+    }
+}
+
 /// 600 beads resting on a mesh floor (two triangles, 2 mm above the box's) of a walled 40 ×
 /// 20 × 30 mm box, cut across x by two ranks. The second rank's own particles are removed, so
 /// that it holds only ghosts for a while, and then the first rank's particles near the cut,

@@ -59,6 +59,8 @@ pub struct Case {
     /// `[parallel]`: on ranks, the slowest rank's work over the mean, less 1, beyond which
     /// their boxes are cut again (none: never).
     pub rebalance: Option<f64>,
+    /// `[parallel] weigh`: what that imbalance is of (measured time by default).
+    pub weigh: grainflow::domain::Weigh,
     /// True when `particles` is this rank's share of the case's initial particles (those of
     /// the box it starts with, in the file's order, handed out by rank 0), false when it is
     /// all of them.
@@ -326,7 +328,7 @@ fn validate<'h>(
     let contact::Tables { law, pair_params, wall_params } =
         contact::contact(raw.contact, &phases, &mut wall_materials, has_walls, &mut warnings)?;
     let time = time::time(raw.time, &law, &phases)?;
-    let settings::Settings { gravity, skin, output, rebalance } =
+    let settings::Settings { gravity, skin, output, rebalance, weigh } =
         settings::settings(&raw.physics, &raw.neighbor, &raw.output, &raw.parallel)?;
 
     // Insertions and outlets.
@@ -423,6 +425,7 @@ fn validate<'h>(
         mesh_names,
         mesh_torque_about,
         rebalance,
+        weigh,
         particles_are_share: false,
     })
 }

@@ -2,11 +2,12 @@
 //! the output intervals and the ranks' rebalancing.
 
 use super::OutputSettings;
-use super::fields::{check, vec3};
+use super::fields::{check, choose, vec3};
 use crate::error::CaseError;
 use crate::raw::{RawNeighbor, RawOutput, RawParallel, RawPhysics};
 use grainflow::Vec3;
 use grainflow::contact::limits::Range;
+use grainflow::domain::Weigh;
 use grainflow::simulation::STANDARD_GRAVITY;
 
 /// The settings of the four small tables.
@@ -16,6 +17,8 @@ pub(super) struct Settings {
     pub output: OutputSettings,
     /// The ranks' work imbalance that re-cuts their boxes (none: never).
     pub rebalance: Option<f64>,
+    /// What that imbalance is of.
+    pub weigh: Weigh,
 }
 
 /// `[parallel] threshold` by default: a re-cut when the slowest rank has 10 % more work than
@@ -78,5 +81,7 @@ pub(super) fn settings(
         t => t.unwrap_or(DEFAULT_REBALANCE),
     };
     let rebalance = parallel.rebalance.unwrap_or(true).then_some(threshold);
-    Ok(Settings { gravity, skin, output: settings, rebalance })
+    let words = [("time", Weigh::Time), ("work", Weigh::Work)];
+    let weigh = choose("[parallel]", "weigh", parallel.weigh.as_deref(), Weigh::Time, &words)?;
+    Ok(Settings { gravity, skin, output: settings, rebalance, weigh })
 }

@@ -24,7 +24,7 @@
 
 use super::{Common, ContactInfo, ContactPartner, ResortRule, Simulation};
 use crate::boundary::Periodic;
-use crate::domain::{Boxes, Comm, Weighted};
+use crate::domain::{Boxes, Comm, Weigh, Weighted};
 use crate::error::EngineError;
 use crate::math::Vec3;
 use crate::neighbor::{NeighborState, nonzero, pair_key};
@@ -66,6 +66,17 @@ pub(crate) struct Decomposition {
     threshold: Option<f64>,
     /// The step of the last look at the ranks' work.
     since: u64,
+    /// The communicator as timed: its waits are not this rank's work.
+    timed: Arc<crate::domain::Timed>,
+    /// Whether the ranks' measured times decide the re-cuts ([`Weigh::Time`]).
+    by_time: bool,
+    /// Over the window of measurement: this rank's busy nanoseconds (its steps less the time
+    /// spent in the communicator) and its work summed over the steps.
+    busy: u64,
+    window_work: u64,
+    /// What a unit of this rank's work weighs in a cut: 1, or by measured time
+    /// ([`WEIGHT_UNIT`] for a rank as fast as the mean).
+    weight: u64,
 }
 
 /// A prescribed-motion rule by ids: its particle's and its leader's, and the rule as resolved
@@ -102,6 +113,12 @@ pub struct DomainStats {
     pub work_total: u64,
     /// The times the boxes were cut again.
     pub recuts: u64,
+    /// Weighing by time: the busiest rank's busy time and all ranks', ns, each summed over
+    /// the windows of measurement (their ratio times the ranks is the slowest ÷ mean).
+    pub busy_slowest: u64,
+    pub busy_total: u64,
+    /// The time this rank spent in the communicator (sending, and waiting for the others), ns.
+    pub waited: u64,
 }
 
 impl DomainStats {
@@ -113,6 +130,27 @@ impl DomainStats {
             self.work_slowest as f64 * ranks as f64 / self.work_total as f64
         }
     }
+
+    /// The busiest rank's measured time ÷ the mean over the windows of measurement, weighing
+    /// by time (none without a window).
+    pub fn time_imbalance(&self, ranks: usize) -> Option<f64> {
+        (self.busy_total > 0).then(|| self.busy_slowest as f64 * ranks as f64 / self.busy_total as f64)
+    }
+}
+
+/// The weight in a cut by time of a unit of work on a rank as fast as the mean.
+const WEIGHT_UNIT: u64 = 1024;
+/// The mean busy time of a rank over which the ranks' times are compared, ns: long enough
+/// that a few interruptions of a process do not decide a re-cut.
+const MEASURED_NANOS: u64 = 200_000_000;
+
+/// What a unit of work weighs in a cut by time on a rank that was busy `mine[0]` ns for
+/// `mine[1]` units of work, where all ranks were busy `all[0]` ns for `all[1]`: its time per
+/// unit relative to all ranks', in [`WEIGHT_UNIT`]s, within a factor 8 of the mean.
+fn time_weight(mine: [u64; 2], all: [u64; 2]) -> u64 {
+    let per_unit = |[ns, work]: [u64; 2]| ns as f64 / work.max(1) as f64;
+    let relative = per_unit(mine) / per_unit(all).max(f64::MIN_POSITIVE);
+    ((WEIGHT_UNIT as f64 * relative).round() as u64).clamp(WEIGHT_UNIT / 8, WEIGHT_UNIT * 8)
 }
 
 /// Words of a particle that moves to another rank (without its Adams–Bashforth history).
@@ -188,6 +226,8 @@ impl Simulation {
     ) {
         let history = !self.particles.accel_prev.is_empty();
         let ranks = comm.size();
+        let timed = Arc::new(crate::domain::Timed::new(comm));
+        let comm: Arc<dyn Comm> = timed.clone();
         let mut leaders: Vec<u32> = rules.iter().filter_map(|r| r.leader).collect();
         leaders.sort_unstable();
         leaders.dedup();
@@ -206,6 +246,11 @@ impl Simulation {
             leaders,
             threshold: rebalance,
             since: self.step,
+            timed,
+            by_time: false,
+            busy: 0,
+            window_work: 0,
+            weight: 1,
         }));
         // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
         self.sort.rule = ResortRule::Never;
@@ -340,7 +385,17 @@ impl Simulation {
 
     /// What this rank has sent to the others so far (zeros in one process).
     pub fn domain_stats(&self) -> DomainStats {
-        self.domain.as_ref().map_or_else(DomainStats::default, |d| d.stats)
+        self.domain
+            .as_ref()
+            .map_or_else(DomainStats::default, |d| DomainStats { waited: d.timed.nanos(), ..d.stats })
+    }
+
+    /// What decides the re-cuts of a run spread over ranks (see [`Weigh`]); work by default.
+    /// Every rank must call it alike.
+    pub fn weigh_ranks_by(&mut self, weigh: Weigh) {
+        if let Some(d) = self.domain.as_mut() {
+            d.by_time = weigh == Weigh::Time;
+        }
     }
 
     /// The communicator of a run spread over ranks (`None` in one process): for callers that
@@ -469,8 +524,13 @@ impl Simulation {
                 }
             }
         }
+        let weight = self.domain.as_ref().filter(|_| comm.is_some()).map_or(1, |d| d.weight);
         let items: Vec<Weighted> = (0..n)
-            .map(|i| Weighted { position: per.wrap(p.position[i]), work: work[i], id: p.id[i] as u64 })
+            .map(|i| Weighted {
+                position: per.wrap(p.position[i]),
+                work: work[i] * weight,
+                id: p.id[i] as u64,
+            })
             .filter(|w| w.position.is_finite())
             .collect();
         boxes_for(&items, per, ranks, comm)
@@ -566,22 +626,58 @@ impl Simulation {
         for [a, b] in self.neighbors.pairs() {
             work += ((a as usize) < owned) as u64 + ((b as usize) < owned) as u64;
         }
-        let all: Vec<u64> = d.comm.all_gather(&[work]).iter().map(|w| w[0]).collect();
-        let (slowest, total) = (all.iter().copied().max().unwrap_or(0), all.iter().sum::<u64>());
-        let ranks = all.len();
-        let recut = d.threshold.is_some_and(|t| slowest as f64 * ranks as f64 > (1.0 + t) * total as f64);
+        let steps = self.step - d.since;
+        let window_work = d.window_work + steps * work;
+        let all = d.comm.all_gather(&[work, d.busy, window_work]);
+        let sum_max =
+            |k: usize| (all.iter().map(|w| w[k]).sum::<u64>(), all.iter().map(|w| w[k]).max().unwrap_or(0));
+        let ((total, slowest), (busy, busiest), (total_window, _)) = (sum_max(0), sum_max(1), sum_max(2));
+        let ranks = all.len() as u64;
+        // A window of measured time closes once the ranks were busy long enough on average.
+        let measured = d.by_time && busy >= MEASURED_NANOS * ranks;
+        let over = |most: u64, sum: u64, t: f64| (most * ranks) as f64 > (1.0 + t) * sum as f64;
+        let recut = d.threshold.is_some_and(|t| {
+            if d.by_time { measured && over(busiest, busy, t) } else { over(slowest, total, t) }
+        });
+        // By time, a unit of work weighs as this rank's time per unit relative to all ranks'.
+        let weight = if recut && d.by_time {
+            let mine = &all[d.comm.rank()];
+            time_weight([mine[1], mine[2]], [busy, total_window])
+        } else {
+            d.weight
+        };
         let comm = d.comm.clone();
         let step = self.step;
-        let boxes = recut.then(|| self.cut(ranks, Some(&*comm)));
+        if let Some(d) = self.domain.as_mut() {
+            d.weight = weight;
+        }
+        let boxes = recut.then(|| self.cut(ranks as usize, Some(&*comm)));
         let Some(d) = self.domain.as_mut() else { return };
-        let steps = step - d.since;
         d.since = step;
         d.stats.work_slowest += steps * slowest;
         d.stats.work_total += steps * total;
+        (d.busy, d.window_work) = if measured { (0, 0) } else { (d.busy, window_work) };
+        if measured {
+            d.stats.busy_slowest += busiest;
+            d.stats.busy_total += busy;
+        }
         if let Some(boxes) = boxes {
             d.boxes = boxes;
             d.stats.recuts += 1;
         }
+    }
+
+    /// Adds a step's time less its waits to this rank's busy time.
+    pub(super) fn count_busy(&mut self, from: Option<(std::time::Instant, u64)>) {
+        if let (Some((t, waited)), Some(d)) = (from, self.domain.as_mut()) {
+            let spent = t.elapsed().as_nanos() as u64;
+            d.busy += spent.saturating_sub(d.timed.nanos() - waited);
+        }
+    }
+
+    /// When this step starts, for [`count_busy`](Self::count_busy).
+    pub(super) fn busy_from(&self) -> Option<(std::time::Instant, u64)> {
+        self.domain.as_ref().map(|d| (std::time::Instant::now(), d.timed.nanos()))
     }
 
     /// Cuts the boxes again for the particles as they are; they move to their new boxes at
@@ -1299,4 +1395,24 @@ fn push_history(out: &mut Vec<u64>, ids: [u32; 2], h: Vec3) {
 
 fn read_history(w: &[u64]) -> ([u32; 2], Vec3) {
     ([w[0] as u32, w[1] as u32], vec_at(w, 2))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_unit_of_work_weighs_as_its_ranks_time_per_unit_over_the_mean() {
+        // Two ranks of equal work, one busy 2 s, the other 1 s: 4/3 and 2/3 of the mean time
+        // per unit.
+        let all = [3_000_000_000, 2_000];
+        assert_eq!(time_weight([2_000_000_000, 1_000], all), 1365);
+        assert_eq!(time_weight([1_000_000_000, 1_000], all), 683);
+        // As fast as the mean: a unit. Beyond a factor 8 either way (a rank with almost no
+        // work, whose time is its overheads; one that measured no time): the bounds.
+        assert_eq!(time_weight([1_500_000_000, 1_000], all), WEIGHT_UNIT);
+        assert_eq!(time_weight([1_500_000_000, 10], all), 8 * WEIGHT_UNIT);
+        assert_eq!(time_weight([0, 1_000], all), WEIGHT_UNIT / 8);
+        assert_eq!(time_weight([1_000, 0], all), WEIGHT_UNIT / 8);
+    }
 }
