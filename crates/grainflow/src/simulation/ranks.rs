@@ -640,23 +640,22 @@ impl Simulation {
             if d.by_time { measured && over(busiest, busy, t) } else { over(slowest, total, t) }
         });
         // By time, a unit of work weighs as this rank's time per unit relative to all ranks'.
-        let weight = if recut && d.by_time {
+        let weight = (recut && d.by_time).then(|| {
             let mine = &all[d.comm.rank()];
             time_weight([mine[1], mine[2]], [busy, total_window])
-        } else {
-            d.weight
-        };
+        });
         let comm = d.comm.clone();
         let step = self.step;
-        if let Some(d) = self.domain.as_mut() {
-            d.weight = weight;
+        if let (Some(w), Some(d)) = (weight, self.domain.as_mut()) {
+            d.weight = w;
         }
         let boxes = recut.then(|| self.cut(ranks as usize, Some(&*comm)));
         let Some(d) = self.domain.as_mut() else { return };
         d.since = step;
         d.stats.work_slowest += steps * slowest;
         d.stats.work_total += steps * total;
-        (d.busy, d.window_work) = if measured { (0, 0) } else { (d.busy, window_work) };
+        // Counting work, no window is kept.
+        (d.busy, d.window_work) = if measured || !d.by_time { (0, 0) } else { (d.busy, window_work) };
         if measured {
             d.stats.busy_slowest += busiest;
             d.stats.busy_total += busy;
