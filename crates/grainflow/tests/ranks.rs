@@ -263,6 +263,31 @@ fn a_bed_thrown_at_a_turning_mesh_drum_is_bit_identical_on_any_rank_count() {
     );
 }
 
+/// The mesh drum with each rank re-sorting its own particles every 50 steps (at the rebuild
+/// after): the slots change under the pairs' and the mesh contacts' histories and the mesh
+/// candidates, and the run keeps the one process's bits (which sorts by its own rule).
+#[test]
+fn a_mesh_drum_whose_ranks_re_sort_keeps_the_one_process_bits() {
+    let steps = 1_500;
+    let mut one = thrown_at_a_drum(false, true);
+    one.advance(steps);
+    let want = fingerprint(&one);
+    for ranks in [2, 3] {
+        let got = on_ranks(ranks, &|comm| {
+            let mut sim = thrown_at_a_drum(false, true);
+            sim.set_resort(grainflow::ResortRule::Every(50));
+            sim.decompose(comm, Some(0.0)).expect("spread over ranks");
+            sim.advance(steps);
+            (fingerprint(&sim), sim.resorts())
+        });
+        for (r, (bits, sorts)) in got.iter().enumerate() {
+            // One at the start, then at the first rebuild 50 steps after each.
+            assert!(*sorts >= 10, "rank {r} of {ranks} re-sorted only {sorts} times in {steps} steps");
+            assert!(*bits == want, "rank {r} of {ranks}, re-sorting, departs from one process");
+        }
+    }
+}
+
 #[test]
 fn a_bed_thrown_at_a_turning_cylinder_is_bit_identical_on_any_rank_count() {
     let touching = |s: &Simulation| {

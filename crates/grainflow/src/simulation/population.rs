@@ -245,22 +245,33 @@ impl Simulation {
     pub fn sort_spatially(&mut self) -> Result<(), EngineError> {
         let order = morton_order(&self.particles.position, &self.particles.id, self.cell_size());
         self.rearrange(&self.prescribed_last(order))?;
-        self.sort.last_step = self.step;
-        self.sort.gap_after = None;
-        self.sort.sorts += 1;
+        self.sorted_now();
         Ok(())
     }
 
     /// The side of the cells the sort orders by: the neighbour cut-off of the largest
     /// particles.
-    fn cell_size(&self) -> f64 {
+    pub(super) fn cell_size(&self) -> f64 {
         let c = 2.0 * self.particles.max_radius() + self.neighbors.skin();
         if c.is_finite() && c > 0.0 { c } else { 1.0 }
     }
 
-    /// Re-sorts if the rule says it is time (between steps).
+    /// Re-sorts if the rule says it is time (between steps). On ranks each rank lays its own
+    /// particles out at neighbour-list rebuilds instead (see `redistribute`).
     pub(super) fn resort_if_due(&mut self, par: bool) {
-        let due = match self.sort.rule {
+        if self.domain.is_none() && self.resort_due() {
+            if self.kick_pending {
+                self.finish_kick(par);
+            }
+            // Cannot fail: a permutation of every slot keeps every rule's particle.
+            let _ = self.sort_spatially();
+        }
+    }
+
+    /// Whether the rule says it is time to re-sort (looking at the last neighbour-list build
+    /// once).
+    pub(super) fn resort_due(&mut self) -> bool {
+        match self.sort.rule {
             ResortRule::Never => false,
             ResortRule::Every(k) => k > 0 && self.step >= self.sort.last_step + k,
             ResortRule::Auto => {
@@ -279,20 +290,20 @@ impl Simulation {
                     }
                 }
             }
-        };
-        if due {
-            if self.kick_pending {
-                self.finish_kick(par);
-            }
-            // Cannot fail: a permutation of every slot keeps every rule's particle.
-            let _ = self.sort_spatially();
         }
+    }
+
+    /// Notes a sort done now.
+    pub(super) fn sorted_now(&mut self) {
+        self.sort.last_step = self.step;
+        self.sort.gap_after = None;
+        self.sort.sorts += 1;
     }
 }
 
 /// The slots in Morton (Z-curve) order of the cells of side `cell` their positions lie in,
 /// ties broken by id: a function of the positions and ids alone.
-fn morton_order(x: &[Vec3], id: &[u32], cell: f64) -> Vec<usize> {
+pub(super) fn morton_order(x: &[Vec3], id: &[u32], cell: f64) -> Vec<usize> {
     let lo = x.iter().fold(Vec3::splat(f64::INFINITY), |m, p| m.min(*p));
     // 21 bits a coordinate: 2 million cells along each axis.
     let coord = |v: f64, l: f64| (((v - l) / cell).floor().clamp(0.0, (1 << 21) as f64 - 1.0)) as u64;

@@ -252,8 +252,6 @@ impl Simulation {
             window_work: 0,
             weight: 1,
         }));
-        // Slot order no longer follows a space-filling curve: each rebuild lays the slots out.
-        self.sort.rule = ResortRule::Never;
         let rank = self.domain.as_ref().map_or(0, |d| d.comm.rank());
         self.redistribute(initial, 0..0);
         // Each rank keeps the caught particles of its own, and rank 0 the outlets' books.
@@ -968,14 +966,18 @@ impl Simulation {
         let Some(mut d) = self.domain.take() else { return };
         let (me, ranks) = (d.comm.rank(), d.comm.size());
         let per = self.periodic;
+        let owned_before = if initial { self.particles.len() } else { d.owned };
+        // Whether this rank lays its own particles out along the space-filling curve again
+        // (the results do not depend on their order): at the start, then as the rule says.
+        let resort = self.sort.rule != ResortRule::Never && (initial || self.resort_due());
+        let cell = self.cell_size();
         let p = &self.particles;
-        let owned_before = if initial { p.len() } else { d.owned };
         // Each own slot's rank; a ghost's is none.
         const NONE: usize = usize::MAX;
         let dest: Vec<usize> = (0..p.len())
             .map(|i| {
                 if i < owned_before || extra.contains(&i) {
-                    d.boxes.owner(per.wrap(p.position[i])).unwrap_or(me)
+                    d.boxes.owner_near(per.wrap(p.position[i]), me).unwrap_or(me)
                 } else {
                     NONE
                 }
@@ -983,7 +985,6 @@ impl Simulation {
             .collect();
         let leaves = |i: usize| dest[i] != me && dest[i] != NONE;
         // Only the histories that travel need their particles' ids.
-        let pairs = self.neighbors.pairs_with_history();
         let walls = self.histories_by_id_of_walls();
         // The other sources' histories, by ids, kept here or sent with their particles.
         let carried = self.sources.carry();
@@ -1021,7 +1022,7 @@ impl Simulation {
                 }
             }
             let mut histories: Vec<Vec<u64>> = vec![Vec::new(); ranks];
-            for &([a, b], h) in &pairs {
+            self.neighbors.for_pairs_with_history(leaves, |[a, b], h| {
                 let mut sent = usize::MAX;
                 for s in [a as usize, b as usize] {
                     if leaves(s) && dest[s] != sent {
@@ -1030,7 +1031,7 @@ impl Simulation {
                         push_history(&mut histories[sent], ids, h);
                     }
                 }
-            }
+            });
             let mut wall_words: Vec<Vec<u64>> = vec![Vec::new(); ranks];
             for &(id, w, h, i) in &walls {
                 if leaves(i as usize) {
@@ -1093,6 +1094,23 @@ impl Simulation {
                 }
             }
         }
+        // Each kept slot's new one (what the sources take).
+        let mut new_of = vec![NO_SLOT; dest.len()];
+        for (k, &i) in kept.iter().enumerate() {
+            new_of[i] = k as u32;
+        }
+        if resort {
+            let order = super::population::morton_order(&next.position, &next.id, cell);
+            next = next.gathered(&order);
+            let mut at = vec![NO_SLOT; order.len()];
+            for (k, &i) in order.iter().enumerate() {
+                at[i] = k as u32;
+            }
+            for s in new_of.iter_mut().filter(|s| **s != NO_SLOT) {
+                *s = at[*s as usize];
+            }
+            self.sorted_now();
+        }
         // The ghosts: each own particle to every rank whose box lies within reach.
         let owned = next.len();
         let mut near = Vec::new();
@@ -1117,30 +1135,30 @@ impl Simulation {
             }
             ghosts[r] = start..next.len();
         }
-        // The list's state under the new slots; pairs of two ghosts are left out. The kept
-        // particles keep their order, so their pairs stay in list order: a stable sort puts
-        // the few others among them, and keeps the pair held here before one that arrived
-        // (the same bits: both ranks evaluated it).
+        // The list's state under the new slots; pairs of two ghosts are left out. Unless laid
+        // out again, the kept particles keep their order, so their pairs stay in list order:
+        // a stable sort puts the few others among them, and keeps the pair held here before
+        // one that arrived (the same bits: both ranks evaluated it).
         let slot_of = SlotsById::new(&next.id);
-        // Each kept slot's new one (what the sources take), then every old slot's: the
-        // others by id, if held here again (as a ghost, or one that left and came back).
-        let mut new_of = vec![NO_SLOT; dest.len()];
-        for (k, &i) in kept.iter().enumerate() {
-            new_of[i] = k as u32;
-        }
+        // Every old slot's new one: the kept as above, the others by id, if held here again
+        // (as a ghost, or one that left and came back).
         let mut new_of_old = new_of.clone();
         for (i, s) in new_of_old.iter_mut().enumerate().filter(|(_, s)| **s == NO_SLOT) {
             *s = slot_of.get(old_ids[i]);
         }
-        let mut keyed: Vec<(u64, Vec3)> = Vec::with_capacity(pairs.len() + arrived.len());
+        let mut keyed: Vec<(u64, Vec3)> =
+            Vec::with_capacity(self.neighbors.pair_contact_count() + arrived.len());
         let mut keep = |a: u32, b: u32, h: Vec3| {
             if a != NO_SLOT && b != NO_SLOT && ((a as usize) < owned || (b as usize) < owned) {
                 keyed.push(if a < b { (pair_key(a, b), h) } else { (pair_key(b, a), -h) });
             }
         };
-        for &([a, b], h) in &pairs {
-            keep(new_of_old[a as usize], new_of_old[b as usize], h);
-        }
+        self.neighbors.for_pairs_with_history(
+            |_| true,
+            |[a, b], h| {
+                keep(new_of_old[a as usize], new_of_old[b as usize], h);
+            },
+        );
         for &([a, b], h) in &arrived {
             keep(slot_of.get(a), slot_of.get(b), h);
         }

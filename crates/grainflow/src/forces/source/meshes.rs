@@ -272,16 +272,19 @@ impl Meshes {
             h.slot = k;
             k != u32::MAX
         });
-        // Stable: the kept records are in order already (`new_of` keeps the slots' order).
+        // Stable: the kept records are mostly in order already (`new_of` keeps the slots'
+        // order, unless a rank laid its particles out again).
         self.history.sort_by_key(|h| (h.slot, h.mesh, h.triangle));
         if !self.ready(new_of.len()) || !self.centres.len().is_multiple_of(new_of.len().max(1)) {
             self.built = false;
             return;
         }
         let meshes = self.centres.len() / new_of.len().max(1);
-        let n = new_of.iter().filter(|&&k| k != u32::MAX).count();
+        // The new slots run up to the last one named; one named by none has no candidates
+        // yet (they are found at the next evaluation, as for an appended slot).
+        let n = new_of.iter().filter(|&&k| k != u32::MAX).map(|&k| k as usize + 1).max().unwrap_or(0);
         let mut span = vec![Span::default(); n];
-        let mut centres = vec![Vec3::ZERO; n * meshes];
+        let mut centres = vec![Vec3::INFINITY; n * meshes];
         for (old, &k) in new_of.iter().enumerate() {
             if k == u32::MAX {
                 self.garbage += self.span[old].cap as usize;
@@ -867,8 +870,7 @@ impl ContactSource for Meshes {
 
     fn redistributed(&mut self, new_of: &[u32], n: usize) {
         self.remap(new_of);
-        let kept = new_of.iter().filter(|&&k| k != u32::MAX).count();
-        self.append(kept, n);
+        self.append(self.built_n, n);
         self.redistributed = self.built;
     }
 
