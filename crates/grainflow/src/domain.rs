@@ -165,6 +165,12 @@ impl Boxes {
     /// The rank whose box holds `x` (`lo ≤ x < hi` on every axis; a point on the domain's upper
     /// faces belongs to the box that ends there), or `None` outside the domain.
     pub fn owner(&self, x: Vec3) -> Option<usize> {
+        self.owner_near(x, 0)
+    }
+
+    /// [`owner`](Self::owner), looking at the box of `likely` first (the same answer: the
+    /// boxes do not overlap).
+    pub fn owner_near(&self, x: Vec3, likely: usize) -> Option<usize> {
         let [lo, hi] = self.domain;
         let inside = |b: &[Vec3; 2]| {
             (0..3).all(|k| {
@@ -174,6 +180,9 @@ impl Boxes {
         };
         if (0..3).any(|k| !(x[k] >= lo[k] && x[k] <= hi[k])) {
             return None;
+        }
+        if self.boxes.get(likely).is_some_and(inside) {
+            return Some(likely);
         }
         self.boxes.iter().position(inside)
     }
@@ -191,6 +200,13 @@ impl Boxes {
         periodic: &Periodic,
         out: &mut Vec<(usize, Vec3)>,
     ) {
+        // At least `reach` inside its own box, a particle is `reach` or more from every other
+        // box (they do not overlap) and every periodic image is as far outside the domain.
+        if let Some([lo, hi]) = self.boxes.get(own)
+            && (x - *lo).min(*hi - x).min_element() >= reach
+        {
+            return;
+        }
         let length = periodic.hi - periodic.lo;
         let steps = |k: usize| if periodic.axes[k] { -1..=1 } else { 0..=0 };
         for sx in steps(0) {

@@ -307,8 +307,22 @@ impl NeighborList {
         }
     }
 
-    pub(crate) fn pairs_with_history(&self) -> Vec<([u32; 2], Vec3)> {
-        self.each_pair_with_history().collect()
+    /// Calls `f` with each pair in contact with a non-zero history of which `wanted` holds for
+    /// either slot, by slots, in list order (the slots are tested before the history is read).
+    pub(crate) fn for_pairs_with_history(
+        &self,
+        wanted: impl Fn(usize) -> bool,
+        mut f: impl FnMut([u32; 2], Vec3),
+    ) {
+        for a in 0..self.offsets.len().saturating_sub(1) {
+            let (start, end, a_wanted) = (self.offsets[a], self.offsets[a + 1], wanted(a));
+            for k in start..end {
+                let b = self.partners[k];
+                if (a_wanted || wanted(b as usize)) && self.in_contact[k] && nonzero(self.pair_history[k]) {
+                    f([a as u32, b], self.pair_history[k]);
+                }
+            }
+        }
     }
 
     /// The pairs in contact with a non-zero history, by slots, in list order.

@@ -129,7 +129,11 @@ impl Particles {
                 v[k] = v[s as usize];
             }
             v.truncate(slots.len());
-            v.shrink_to_fit();
+            // Room is kept for what arrives next (particles from other ranks, ghosts), unless
+            // most of the set went.
+            if v.capacity() > 2 * slots.len() + 1024 {
+                v.shrink_to_fit();
+            }
         }
         debug_assert!(slots.windows(2).all(|w| w[0] < w[1]));
         keep(&mut self.id, slots);
