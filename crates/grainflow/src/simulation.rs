@@ -450,6 +450,15 @@ impl Simulation {
         &mut self.particles
     }
 
+    /// Hands over the particles' storage and goes on with a copy of it: the state is the
+    /// same to the bit, in storage of its own. For a reader that holds views into the
+    /// storage (the Python package's arrays): they stay valid, as they were, whatever the
+    /// simulation does next.
+    pub fn swap_out_particles(&mut self) -> Particles {
+        let copy = self.particles.clone();
+        std::mem::replace(&mut self.particles, copy)
+    }
+
     /// The phases.
     pub fn phases(&self) -> &[Phase] {
         &self.phases

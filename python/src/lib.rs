@@ -1,0 +1,662 @@
+//! grainflow in Python: the `grainflow._grainflow` extension module, which the `grainflow`
+//! package re-exports. A thin front end over the engine (`grainflow`) and the case layer
+//! (`grainflow-case`): cases are read and validated exactly as `grainflow run` reads them, and
+//! the simulation steps with the same bits.
+//!
+//! Views: `Simulation.particles.position` and its siblings are numpy arrays over the engine's
+//! own storage, read-only, made without copying. While a view is alive, a call that changes
+//! the simulation first hands the viewed storage over to the views (the engine goes on in a
+//! copy, one per call): a view never dangles and never changes under its reader; it shows the
+//! particles as they were when it was read.
+
+use std::fmt::Display;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use grainflow::timestep::{TimeStepRule, fixed_step_count, step_count};
+use grainflow::{Particles, Simulation, Vec3};
+use numpy::ndarray::{ArrayView1, ArrayView2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+create_exception!(_grainflow, GrainflowError, PyException, "Base of grainflow's exceptions.");
+create_exception!(
+    _grainflow,
+    CaseError,
+    GrainflowError,
+    "A case that cannot run: the message names the table, key and value, as `grainflow run` does."
+);
+create_exception!(
+    _grainflow,
+    EngineError,
+    GrainflowError,
+    "A request the simulation refuses (an unknown id, a value out of range, a run past its end)."
+);
+create_exception!(
+    _grainflow,
+    InternalError,
+    GrainflowError,
+    "A defect inside grainflow (a Rust panic); the simulation cannot be used afterwards."
+);
+
+// The views read `Vec3` as three f64 in a row.
+const _: () = assert!(std::mem::size_of::<Vec3>() == 3 * std::mem::size_of::<f64>());
+
+fn case_error(e: impl Display) -> PyErr {
+    CaseError::new_err(e.to_string())
+}
+
+fn engine_error(e: impl Display) -> PyErr {
+    EngineError::new_err(e.to_string())
+}
+
+/// The message of a caught panic.
+fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic without a message".into())
+}
+
+/// `f`, with a panic turned into [`InternalError`].
+fn guarded<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    catch_unwind(AssertUnwindSafe(f))
+        .unwrap_or_else(|p| Err(InternalError::new_err(format!("internal error: {}", panic_text(&*p)))))
+}
+
+/// The storage that one generation of views reads: the engine's until a change, then handed
+/// over to them (see the module's doc).
+#[pyclass(frozen, module = "grainflow._grainflow")]
+struct Storage {
+    held: Mutex<Option<Particles>>,
+}
+
+/// A simulation of a case, stepped from Python.
+#[pyclass(name = "Simulation", module = "grainflow._grainflow")]
+struct PySim {
+    sim: Simulation,
+    /// How the case's time step was chosen (a run's step count follows it).
+    rule: TimeStepRule,
+    t_start: f64,
+    t_stop: f64,
+    /// The case's hash, which checkpoints carry.
+    hash: String,
+    /// The storage the views of the current generation read, if any were made.
+    views: Option<Py<Storage>>,
+    /// Set when a panic left the simulation in an unknown state.
+    broken: bool,
+}
+
+impl PySim {
+    fn from_loaded(case: grainflow_case::Case, threads: Option<usize>) -> PyResult<Self> {
+        for w in &case.warnings {
+            Python::attach(|py| {
+                let warnings = py.import("warnings")?;
+                warnings.call_method1("warn", (format!("grainflow: {w}"),)).map(|_| ())
+            })?;
+        }
+        let (rule, t_start, t_stop) = (case.config.time_step, case.config.t_start, case.config.t_stop);
+        let hash = case.hash.clone();
+        let mut sim = Simulation::new(case.config, case.particles).map_err(engine_error)?;
+        if let Some(t) = threads {
+            sim.set_threads(t).map_err(engine_error)?;
+        }
+        Ok(PySim { sim, rule, t_start, t_stop, hash, views: None, broken: false })
+    }
+
+    fn usable(&self) -> PyResult<()> {
+        if self.broken {
+            return Err(InternalError::new_err(
+                "an earlier internal error left this simulation in an unknown state: make a new one",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Before a change: live views take over the storage they read.
+    fn retire_views(&mut self, py: Python<'_>) {
+        if let Some(s) = self.views.take()
+            && unsafe { pyo3::ffi::Py_REFCNT(s.bind(py).as_ptr()) } > 1
+        {
+            let old = self.sim.swap_out_particles();
+            *s.get().held.lock().unwrap_or_else(|e| e.into_inner()) = Some(old);
+        }
+    }
+
+    /// The storage of the current generation of views.
+    fn storage(&mut self, py: Python<'_>) -> PyResult<Py<Storage>> {
+        if let Some(s) = &self.views {
+            return Ok(s.clone_ref(py));
+        }
+        let s = Py::new(py, Storage { held: Mutex::new(None) })?;
+        self.views = Some(s.clone_ref(py));
+        Ok(s)
+    }
+
+    /// Steps `n` times without the GIL (fewer if the run ends first).
+    fn advance(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
+        self.usable()?;
+        self.retire_views(py);
+        let sim = &mut self.sim;
+        let done = py.detach(|| catch_unwind(AssertUnwindSafe(|| sim.advance(n))));
+        done.map_err(|p| {
+            self.broken = true;
+            InternalError::new_err(format!("internal error: {}", panic_text(&*p)))
+        })
+    }
+
+    /// The step a run to `t` ends at (as `grainflow run` counts steps for `t_stop = t`).
+    fn steps_until(&self, t: f64) -> PyResult<u64> {
+        if !t.is_finite() || t <= self.t_start {
+            return Err(engine_error(format!(
+                "until = {t} s: the end of a run must be finite and after the start time {} s",
+                self.t_start
+            )));
+        }
+        if t > self.t_stop {
+            return Err(engine_error(format!(
+                "until = {t} s is after the case's end time t_stop = {} s: set a later t_stop in the case",
+                self.t_stop
+            )));
+        }
+        let (span, dt) = (t - self.t_start, self.sim.dt());
+        Ok(match self.rule {
+            TimeStepRule::Mfix { .. } => step_count(span, dt),
+            TimeStepRule::Fixed(_) => fixed_step_count(span, dt),
+        })
+    }
+
+    /// The slots of `ids`, each an id of a particle of the simulation.
+    fn slots_of(&self, ids: &[i64]) -> PyResult<Vec<usize>> {
+        let p = self.sim.particles();
+        ids.iter()
+            .map(|&id| {
+                u32::try_from(id)
+                    .ok()
+                    .and_then(|id| p.index_of(id))
+                    .ok_or_else(|| engine_error(format!("no particle has id {id}")))
+            })
+            .collect()
+    }
+
+    /// Sets one vector of the particles `ids` (checked: known ids, finite values, one row each).
+    fn set_vectors(
+        &mut self,
+        py: Python<'_>,
+        what: &str,
+        ids: &[i64],
+        values: ArrayView2<'_, f64>,
+        field: fn(&mut Particles) -> &mut Vec<Vec3>,
+    ) -> PyResult<()> {
+        self.usable()?;
+        if values.shape() != [ids.len(), 3] {
+            return Err(engine_error(format!(
+                "{what}: {} ids need {} rows of 3 values, got an array of shape {:?}",
+                ids.len(),
+                ids.len(),
+                values.shape()
+            )));
+        }
+        if let Some(k) = values.rows().into_iter().position(|r| r.iter().any(|v| !v.is_finite())) {
+            return Err(engine_error(format!("{what}: the values for particle {} are not finite", ids[k])));
+        }
+        let slots = self.slots_of(ids)?;
+        self.retire_views(py);
+        let v = field(self.sim.particles_mut());
+        for (row, &i) in values.rows().into_iter().zip(&slots) {
+            v[i] = Vec3::new(row[0], row[1], row[2]);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for PySim {
+    fn drop(&mut self) {
+        // Views outliving the simulation keep its storage.
+        if self.views.is_some() {
+            Python::attach(|py| self.retire_views(py));
+        }
+    }
+}
+
+/// A case's tables (a dict) as TOML, refusing what TOML cannot hold, by its key.
+fn to_toml(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+    let bad = |what: &str| case_error(format!("`{key}`: {what} cannot be written in a case file"));
+    if v.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(v.extract()?));
+    }
+    if v.is_instance_of::<PyInt>() {
+        return v.extract::<i64>().map(toml::Value::Integer).map_err(|_| bad("an integer beyond 64 bits"));
+    }
+    if v.is_instance_of::<PyFloat>() {
+        return Ok(toml::Value::Float(v.extract()?));
+    }
+    if v.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(v.extract()?));
+    }
+    if let Ok(d) = v.cast::<PyDict>() {
+        let mut t = toml::map::Map::new();
+        for (k, x) in d.iter() {
+            let name: String = k.extract().map_err(|_| bad("a table key that is not a string"))?;
+            let path = if key.is_empty() { name.clone() } else { format!("{key}.{name}") };
+            t.insert(name, to_toml(&x, &path)?);
+        }
+        return Ok(toml::Value::Table(t));
+    }
+    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+        let items: Vec<toml::Value> = v
+            .try_iter()?
+            .enumerate()
+            .map(|(k, x)| to_toml(&x?, &format!("{key}[{k}]")))
+            .collect::<PyResult<_>>()?;
+        return Ok(toml::Value::Array(items));
+    }
+    // numpy scalars and arrays, and anything else with a list or a number behind it.
+    if let Ok(list) = v.call_method0("tolist")
+        && !list.is(v)
+    {
+        return to_toml(&list, key);
+    }
+    Err(bad(&format!("a value of type {}", v.get_type().name()?)))
+}
+
+/// A case file read as `grainflow run` reads it (a TOML case, or an MFIX deck with its
+/// `KEY=VALUE` overrides and motion file); a TOML case takes overrides as `--set` does, by
+/// dotted keys (`{"time.t_stop": 0.1}`).
+fn load_case(
+    path: &Path,
+    overrides: &[(String, Bound<'_, PyAny>)],
+    motion: Option<&Path>,
+) -> PyResult<grainflow_case::Case> {
+    if grainflow_case::mfix::is_deck(path) {
+        let sets: Vec<String> =
+            overrides.iter().map(|(k, v)| Ok(format!("{k}={}", v.str()?))).collect::<PyResult<_>>()?;
+        return grainflow_case::mfix::load(path, &sets, motion).map(|d| d.case).map_err(case_error);
+    }
+    if motion.is_some() {
+        return Err(case_error(format!(
+            "motion applies to MFIX decks (*.dat, *.mfx) only; {} is a TOML case file: put the rules in its [[motion]] tables",
+            path.display()
+        )));
+    }
+    let sets = overrides
+        .iter()
+        .map(|(k, v)| {
+            let value = to_toml(v, k)?;
+            grainflow_case::SetOverride::parse(&format!("{k}={value}")).map_err(case_error)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    grainflow_case::load_with(path, &sets).map_err(|e| match e {
+        // Syntax and read errors name the file already; the others name table and key.
+        grainflow_case::CaseError::Syntax(_) | grainflow_case::CaseError::Read { .. } => case_error(e),
+        _ => case_error(format!("{}: {e}", path.display())),
+    })
+}
+
+/// Case text validated as a case file in `base_dir` (which the files it names are read from).
+fn parse_case(text: &str, base_dir: &Path) -> PyResult<grainflow_case::Case> {
+    let read = |name: &str| -> Result<String, grainflow_case::CaseError> {
+        let path = base_dir.join(name);
+        std::fs::read_to_string(&path).map_err(|source| grainflow_case::CaseError::Read { path, source })
+    };
+    grainflow_case::parse(text, "case text", &read).map_err(case_error)
+}
+
+fn dict_items<'py>(d: Option<&Bound<'py, PyDict>>) -> PyResult<Vec<(String, Bound<'py, PyAny>)>> {
+    d.map_or(Ok(Vec::new()), |d| {
+        d.iter()
+            .map(|(k, v)| {
+                Ok((k.extract::<String>().map_err(|_| case_error("an override's key must be a string"))?, v))
+            })
+            .collect()
+    })
+}
+
+#[pymethods]
+impl PySim {
+    /// Reads a TOML case or an MFIX deck, exactly as `grainflow run` does.
+    #[staticmethod]
+    #[pyo3(signature = (path, threads=None, overrides=None, motion=None))]
+    fn from_case(
+        path: PathBuf,
+        threads: Option<usize>,
+        overrides: Option<&Bound<'_, PyDict>>,
+        motion: Option<PathBuf>,
+    ) -> PyResult<Self> {
+        guarded(|| {
+            let case = load_case(&path, &dict_items(overrides)?, motion.as_deref())?;
+            Self::from_loaded(case, threads)
+        })
+    }
+
+    /// A case given as the text of a case file; the files it names are read from `base_dir`.
+    #[staticmethod]
+    #[pyo3(signature = (text, base_dir=PathBuf::from("."), threads=None))]
+    fn from_case_text(text: &str, base_dir: PathBuf, threads: Option<usize>) -> PyResult<Self> {
+        guarded(|| Self::from_loaded(parse_case(text, &base_dir)?, threads))
+    }
+
+    /// A case given as a dict of its tables (the case file's structure, in Python values).
+    #[staticmethod]
+    #[pyo3(signature = (d, base_dir=PathBuf::from("."), threads=None))]
+    fn from_dict(d: &Bound<'_, PyDict>, base_dir: PathBuf, threads: Option<usize>) -> PyResult<Self> {
+        guarded(|| {
+            let text = toml::to_string(&to_toml(d.as_any(), "")?).map_err(case_error)?;
+            Self::from_loaded(parse_case(&text, &base_dir)?, threads)
+        })
+    }
+
+    /// Continues from a checkpoint written by `checkpoint` or by `grainflow run`, for `case`
+    /// (the case file it was written for, or one changed on purpose with
+    /// `accept_changed_case=True`).
+    #[staticmethod]
+    #[pyo3(signature = (path, case, threads=None, accept_changed_case=false))]
+    fn restart(
+        path: PathBuf,
+        case: PathBuf,
+        threads: Option<usize>,
+        accept_changed_case: bool,
+    ) -> PyResult<Self> {
+        guarded(|| {
+            let case = load_case(&case, &[], None)?;
+            let (rule, t_start, t_stop) = (case.config.time_step, case.config.t_start, case.config.t_stop);
+            let hash = case.hash.clone();
+            let file =
+                std::fs::File::open(&path).map_err(|e| engine_error(format!("{}: {e}", path.display())))?;
+            let len = file.metadata().map_err(|e| engine_error(format!("{}: {e}", path.display())))?.len();
+            let expected = (!accept_changed_case).then_some(hash.as_str());
+            let reader = std::io::BufReader::with_capacity(1 << 20, file);
+            let mut sim = Simulation::restore_from(case.config, reader, len, expected)
+                .map_err(|e| engine_error(format!("{}: {e}", path.display())))?;
+            if let Some(t) = threads {
+                sim.set_threads(t).map_err(engine_error)?;
+            }
+            Ok(PySim { sim, rule, t_start, t_stop, hash, views: None, broken: false })
+        })
+    }
+
+    /// Takes `n` steps (fewer if the run ends first), without holding the GIL.
+    #[pyo3(signature = (n=1))]
+    fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
+        self.advance(py, n)
+    }
+
+    /// Runs to the step `grainflow run` ends at for `t_stop = until` (default: the case's end),
+    /// calling `callback(sim)` every `every` s of simulated time and at the end. A callback
+    /// that raises stops the run at the last completed step, and its exception propagates.
+    #[pyo3(signature = (until=None, every=None, callback=None))]
+    fn run(
+        slf: &Bound<'_, Self>,
+        until: Option<f64>,
+        every: Option<f64>,
+        callback: Option<Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let py = slf.py();
+        let (end, dt) = {
+            let s = slf.borrow();
+            s.usable()?;
+            (s.steps_until(until.unwrap_or(s.t_stop))?, s.sim.dt())
+        };
+        let chunk = match every {
+            None => u64::MAX,
+            Some(e) if e.is_finite() && e > 0.0 => ((e / dt).round() as u64).max(1),
+            Some(e) => return Err(engine_error(format!("every = {e} s: must be a positive time"))),
+        };
+        loop {
+            let now = slf.borrow().sim.step_index();
+            if now >= end {
+                break;
+            }
+            let n = chunk.min(end - now);
+            slf.borrow_mut().advance(py, n)?;
+            if let Some(f) = &callback {
+                f.call1((slf,))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Simulated time, s.
+    #[getter]
+    fn time(&self) -> f64 {
+        self.sim.time()
+    }
+
+    /// The time step, s.
+    #[getter]
+    fn dt(&self) -> f64 {
+        self.sim.dt()
+    }
+
+    /// Steps taken since the run's start.
+    #[getter]
+    fn step_count(&self) -> u64 {
+        self.sim.step_index()
+    }
+
+    /// Steps of the whole run (to the case's t_stop).
+    #[getter]
+    fn total_steps(&self) -> u64 {
+        self.sim.total_steps()
+    }
+
+    /// The case's end time, s.
+    #[getter]
+    fn t_stop(&self) -> f64 {
+        self.t_stop
+    }
+
+    /// The phases' names, by phase index.
+    #[getter]
+    fn phases(&self) -> Vec<String> {
+        self.sim.phases().iter().map(|p| p.name.clone()).collect()
+    }
+
+    /// The particles, as read-only numpy views of the engine's storage.
+    #[getter]
+    fn particles(slf: &Bound<'_, Self>) -> ParticleViews {
+        ParticleViews { sim: slf.clone().unbind() }
+    }
+
+    /// Sets the velocities (m/s) of the particles `ids`, one row of 3 each.
+    fn set_velocity(
+        &mut self,
+        py: Python<'_>,
+        ids: PyReadonlyArray1<'_, i64>,
+        v: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let ids = ids.as_array().to_vec();
+        guarded(|| self.set_vectors(py, "set_velocity", &ids, v.as_array(), |p| &mut p.velocity))
+    }
+
+    /// Sets the angular velocities (rad/s) of the particles `ids`, one row of 3 each.
+    fn set_omega(
+        &mut self,
+        py: Python<'_>,
+        ids: PyReadonlyArray1<'_, i64>,
+        w: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let ids = ids.as_array().to_vec();
+        guarded(|| self.set_vectors(py, "set_omega", &ids, w.as_array(), |p| &mut p.omega))
+    }
+
+    /// Moves the particles `ids` to positions `x` (m), one row of 3 each.
+    fn set_position(
+        &mut self,
+        py: Python<'_>,
+        ids: PyReadonlyArray1<'_, i64>,
+        x: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let ids = ids.as_array().to_vec();
+        guarded(|| self.set_vectors(py, "set_position", &ids, x.as_array(), |p| &mut p.position))
+    }
+
+    /// Writes a checkpoint to `path` (written whole or not at all), which
+    /// `Simulation.restart` and `grainflow run --restart` continue from.
+    fn checkpoint(&self, path: PathBuf) -> PyResult<()> {
+        self.usable()?;
+        guarded(|| {
+            grainflow_run::output::write_atomic_with(&path, |w| self.sim.write_checkpoint(&self.hash, w))
+                .map_err(|e| engine_error(format!("{}: {e}", path.display())))
+        })
+    }
+
+    /// Kinetic energies (J) and the largest overlap over radius, as a dict.
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = self.sim.diagnostics();
+        let out = PyDict::new(py);
+        out.set_item("kinetic_translational", d.kinetic_translational)?;
+        out.set_item("kinetic_rotational", d.kinetic_rotational)?;
+        out.set_item("potential", d.potential)?;
+        out.set_item("elastic", d.elastic)?;
+        out.set_item("max_overlap_ratio", d.max_overlap_ratio)?;
+        Ok(out)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<grainflow.Simulation: {} particles, step {} of {}, t = {} s>",
+            self.sim.particles().len(),
+            self.sim.step_index(),
+            self.sim.total_steps(),
+            self.sim.time()
+        )
+    }
+
+    /// Raises InternalError from inside the engine's call guard: for the tests of that path.
+    #[staticmethod]
+    fn _panic_for_test() -> PyResult<()> {
+        guarded(|| panic!("a panic raised on purpose"))
+    }
+}
+
+/// The particles of a simulation: each attribute a read-only numpy view, made without copying.
+#[pyclass(frozen, module = "grainflow._grainflow")]
+struct ParticleViews {
+    sim: Py<PySim>,
+}
+
+/// A read-only view of `len` rows of `cols` values of type `T` at `ptr`, kept alive by `owner`.
+fn view<'py, T: numpy::Element>(
+    py: Python<'py>,
+    ptr: *const T,
+    len: usize,
+    cols: Option<usize>,
+    owner: Py<Storage>,
+) -> PyResult<Bound<'py, PyAny>> {
+    // An empty Vec's pointer is dangling but aligned and never read.
+    let array = match cols {
+        None => {
+            let a = unsafe { ArrayView1::from_shape_ptr(len, ptr) };
+            unsafe { PyArray1::borrow_from_array(&a, owner.into_bound(py).into_any()) }.into_any()
+        }
+        Some(c) => {
+            let a = unsafe { ArrayView2::from_shape_ptr((len, c), ptr) };
+            unsafe { PyArray2::borrow_from_array(&a, owner.into_bound(py).into_any()) }.into_any()
+        }
+    };
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("write", false)?;
+    array.call_method("setflags", (), Some(&kwargs))?;
+    Ok(array)
+}
+
+impl ParticleViews {
+    fn vectors<'py>(&self, py: Python<'py>, pick: fn(&Particles) -> &[Vec3]) -> PyResult<Bound<'py, PyAny>> {
+        let mut s = self.sim.bind(py).borrow_mut();
+        s.usable()?;
+        let owner = s.storage(py)?;
+        let v = pick(s.sim.particles());
+        view(py, v.as_ptr() as *const f64, v.len(), Some(3), owner)
+    }
+
+    fn scalars<'py, T: numpy::Element>(
+        &self,
+        py: Python<'py>,
+        pick: fn(&Particles) -> &[T],
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let mut s = self.sim.bind(py).borrow_mut();
+        s.usable()?;
+        let owner = s.storage(py)?;
+        let v = pick(s.sim.particles());
+        view(py, v.as_ptr(), v.len(), None, owner)
+    }
+}
+
+#[pymethods]
+impl ParticleViews {
+    /// Ids (uint32), by slot.
+    #[getter]
+    fn ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.scalars(py, |p| &p.id)
+    }
+
+    /// Phase index of each particle (uint32; `Simulation.phases` names them).
+    #[getter]
+    fn phase<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.scalars(py, |p| &p.phase)
+    }
+
+    /// Radii, m.
+    #[getter]
+    fn radius<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.scalars(py, |p| &p.radius)
+    }
+
+    /// Masses, kg.
+    #[getter]
+    fn mass<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.scalars(py, |p| &p.mass)
+    }
+
+    /// Positions, m (N×3).
+    #[getter]
+    fn position<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.vectors(py, |p| &p.position)
+    }
+
+    /// Velocities, m/s (N×3).
+    #[getter]
+    fn velocity<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.vectors(py, |p| &p.velocity)
+    }
+
+    /// Angular velocities, rad/s (N×3).
+    #[getter]
+    fn omega<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.vectors(py, |p| &p.omega)
+    }
+
+    /// Contact forces of the last evaluation, N (N×3).
+    #[getter]
+    fn force<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.vectors(py, |p| &p.force)
+    }
+
+    /// Contact torques of the last evaluation, N·m (N×3).
+    #[getter]
+    fn torque<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.vectors(py, |p| &p.torque)
+    }
+
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.sim.bind(py).borrow().sim.particles().len()
+    }
+}
+
+#[pymodule]
+fn _grainflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_class::<PySim>()?;
+    m.add_class::<ParticleViews>()?;
+    m.add("GrainflowError", py.get_type::<GrainflowError>())?;
+    m.add("CaseError", py.get_type::<CaseError>())?;
+    m.add("EngineError", py.get_type::<EngineError>())?;
+    m.add("InternalError", py.get_type::<InternalError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
