@@ -17,7 +17,7 @@ use std::sync::Mutex;
 use grainflow::timestep::{TimeStepRule, fixed_step_count, step_count};
 use grainflow::{Particles, Simulation, Vec3};
 use numpy::ndarray::{ArrayView1, ArrayView2};
-use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
@@ -85,6 +85,9 @@ struct PySim {
     t_stop: f64,
     /// The case's hash, which checkpoints carry.
     hash: String,
+    /// The meshes' names, and the points their torques are taken about, by mesh index.
+    mesh_names: Vec<String>,
+    torque_about: Vec<Vec3>,
     /// The storage the views of the current generation read, if any were made.
     views: Option<Py<Storage>>,
     /// Set when a panic left the simulation in an unknown state.
@@ -100,12 +103,38 @@ impl PySim {
             })?;
         }
         let (rule, t_start, t_stop) = (case.config.time_step, case.config.t_start, case.config.t_stop);
-        let hash = case.hash.clone();
+        let (hash, mesh_names, torque_about) = (case.hash.clone(), case.mesh_names, case.mesh_torque_about);
         let mut sim = Simulation::new(case.config, case.particles).map_err(engine_error)?;
         if let Some(t) = threads {
             sim.set_threads(t).map_err(engine_error)?;
         }
-        Ok(PySim { sim, rule, t_start, t_stop, hash, views: None, broken: false })
+        Ok(PySim { sim, rule, t_start, t_stop, hash, mesh_names, torque_about, views: None, broken: false })
+    }
+
+    /// The index of the phase `phase` (a name or an index; none: the only phase).
+    fn phase_index(&self, phase: Option<&Bound<'_, PyAny>>) -> PyResult<usize> {
+        let names: Vec<&str> = self.sim.phases().iter().map(|p| p.name.as_str()).collect();
+        let Some(phase) = phase else {
+            return if names.len() == 1 {
+                Ok(0)
+            } else {
+                Err(engine_error(format!(
+                    "the case has {} phases ({}): name one",
+                    names.len(),
+                    names.join(", ")
+                )))
+            };
+        };
+        if let Ok(name) = phase.extract::<String>() {
+            return names.iter().position(|n| *n == name).ok_or_else(|| {
+                engine_error(format!("no phase is named '{name}' (the case has {})", names.join(", ")))
+            });
+        }
+        let k: i64 = phase.extract().map_err(|_| engine_error("phase: a phase's name or index"))?;
+        usize::try_from(k)
+            .ok()
+            .filter(|&k| k < names.len())
+            .ok_or_else(|| engine_error(format!("phase {k}: the case has phases 0 to {}", names.len() - 1)))
     }
 
     fn usable(&self) -> PyResult<()> {
@@ -364,7 +393,8 @@ impl PySim {
         guarded(|| {
             let case = load_case(&case, &[], None)?;
             let (rule, t_start, t_stop) = (case.config.time_step, case.config.t_start, case.config.t_stop);
-            let hash = case.hash.clone();
+            let (hash, mesh_names, torque_about) =
+                (case.hash.clone(), case.mesh_names, case.mesh_torque_about);
             let file =
                 std::fs::File::open(&path).map_err(|e| engine_error(format!("{}: {e}", path.display())))?;
             let len = file.metadata().map_err(|e| engine_error(format!("{}: {e}", path.display())))?.len();
@@ -375,7 +405,17 @@ impl PySim {
             if let Some(t) = threads {
                 sim.set_threads(t).map_err(engine_error)?;
             }
-            Ok(PySim { sim, rule, t_start, t_stop, hash, views: None, broken: false })
+            Ok(PySim {
+                sim,
+                rule,
+                t_start,
+                t_stop,
+                hash,
+                mesh_names,
+                torque_about,
+                views: None,
+                broken: false,
+            })
         })
     }
 
@@ -493,6 +533,164 @@ impl PySim {
     ) -> PyResult<()> {
         let ids = ids.as_array().to_vec();
         guarded(|| self.set_vectors(py, "set_position", &ids, x.as_array(), |p| &mut p.position))
+    }
+
+    /// Adds particles between steps at `positions` (m, one row of 3 each) with `diameters`
+    /// (m), velocities (m/s) and spins (rad/s) zero unless given, of `phase` (its name or
+    /// index; the only phase by default) and its density; returns their new ids. The books
+    /// count them as added. Overlaps are not checked: the contact law pushes them apart.
+    #[pyo3(signature = (positions, diameters, velocities=None, phase=None, omega=None))]
+    fn insert<'py>(
+        &mut self,
+        py: Python<'py>,
+        positions: PyReadonlyArray2<'_, f64>,
+        diameters: PyReadonlyArray1<'_, f64>,
+        velocities: Option<PyReadonlyArray2<'_, f64>>,
+        phase: Option<&Bound<'_, PyAny>>,
+        omega: Option<PyReadonlyArray2<'_, f64>>,
+    ) -> PyResult<Bound<'py, PyArray1<u32>>> {
+        self.usable()?;
+        let (x, d) = (positions.as_array(), diameters.as_array());
+        let n = d.len();
+        let rows = |what: &str, a: &ArrayView2<'_, f64>| -> PyResult<()> {
+            if a.shape() == [n, 3] {
+                Ok(())
+            } else {
+                Err(engine_error(format!(
+                    "insert: {n} diameters need {what} of shape ({n}, 3), got {:?}",
+                    a.shape()
+                )))
+            }
+        };
+        rows("positions", &x)?;
+        let v = velocities.as_ref().map(|v| v.as_array());
+        let w = omega.as_ref().map(|w| w.as_array());
+        if let Some(v) = &v {
+            rows("velocities", v)?;
+        }
+        if let Some(w) = &w {
+            rows("omega", w)?;
+        }
+        let k = self.phase_index(phase)?;
+        let density = self.sim.phases()[k].density;
+        let first = self.sim.next_free_id();
+        if first + n as u64 > u32::MAX as u64 {
+            return Err(engine_error(format!("insert: ids beyond {} are not supported", u32::MAX)));
+        }
+        let row = |a: &Option<ArrayView2<'_, f64>>, i: usize| {
+            a.as_ref().map_or(Vec3::ZERO, |a| Vec3::new(a[[i, 0]], a[[i, 1]], a[[i, 2]]))
+        };
+        let new: Vec<grainflow::state::ParticleInit> = (0..n)
+            .map(|i| grainflow::state::ParticleInit {
+                id: (first + i as u64) as u32,
+                phase: k as u32,
+                radius: 0.5 * d[i],
+                density,
+                position: Vec3::new(x[[i, 0]], x[[i, 1]], x[[i, 2]]),
+                velocity: row(&v, i),
+                omega: row(&w, i),
+            })
+            .collect();
+        self.retire_views(py);
+        guarded(|| self.sim.insert(&new).map_err(engine_error))?;
+        let ids: Vec<u32> = new.iter().map(|q| q.id).collect();
+        Ok(PyArray1::from_vec(py, ids))
+    }
+
+    /// Removes the particles `ids` between steps (each must exist); returns how many. The
+    /// books count them as taken.
+    fn remove(&mut self, py: Python<'_>, ids: PyReadonlyArray1<'_, i64>) -> PyResult<usize> {
+        self.usable()?;
+        let ids = ids.as_array().to_vec();
+        self.slots_of(&ids)?;
+        let ids: Vec<u32> = ids.iter().map(|&i| i as u32).collect();
+        self.retire_views(py);
+        guarded(|| self.sim.remove_ids(&ids).map_err(engine_error))
+    }
+
+    /// The mass books: for `initial`, `inserted` (by the case's insertions), `added` (by
+    /// `insert`), `removed` (by outlets), `taken` (by `remove`) and `present`, a (count, kg)
+    /// pair each, and `closes`: initial + inserted + added = present + removed + taken, exactly
+    /// (in the books' mass quanta).
+    fn books<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let b = self.sim.flow_books();
+        let out = PyDict::new(py);
+        let pair = |t: grainflow::Tally| (t.count, b.mass(t));
+        out.set_item("initial", pair(b.initial))?;
+        out.set_item("inserted", pair(b.inserted_total()))?;
+        out.set_item("added", pair(b.added))?;
+        out.set_item("removed", pair(b.removed_total()))?;
+        out.set_item("taken", pair(b.taken))?;
+        out.set_item("present", pair(b.present))?;
+        out.set_item("closes", b.close())?;
+        Ok(out)
+    }
+
+    /// The contacts of the current state, as arrays: `id` (the particle the normal points
+    /// from), `other` (the partner: "particle", or the wall's, mesh's or cylinder's name),
+    /// `other_id` (the partner particle's id, −1 for a wall), `triangle` (a mesh's triangle,
+    /// −1 otherwise), `point` and `normal` (N×3, m), `overlap` (m), `normal_force` and
+    /// `tangential_force` (N).
+    fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.usable()?;
+        let c = guarded(|| Ok(self.sim.contacts()))?;
+        let ids = &self.sim.particles().id;
+        let (walls, cylinders) = (self.sim.walls(), self.sim.cylinders());
+        let mut other = Vec::with_capacity(c.len());
+        let (mut other_id, mut triangle) = (Vec::with_capacity(c.len()), Vec::with_capacity(c.len()));
+        for k in &c {
+            let (name, id, t) = match k.other {
+                grainflow::ContactPartner::Particle(j) => ("particle".to_string(), ids[j] as i64, -1),
+                grainflow::ContactPartner::Wall(w) => (walls[w].name.clone(), -1, -1),
+                grainflow::ContactPartner::Mesh { mesh, triangle } => (
+                    self.mesh_names.get(mesh).cloned().unwrap_or_else(|| format!("mesh {mesh}")),
+                    -1,
+                    triangle as i64,
+                ),
+                grainflow::ContactPartner::Cylinder(k) => (cylinders[k].name.clone(), -1, -1),
+            };
+            other.push(name);
+            other_id.push(id);
+            triangle.push(t);
+        }
+        let vecs = |f: fn(&grainflow::ContactInfo) -> Vec3| -> PyResult<Bound<'py, PyArray2<f64>>> {
+            let flat: Vec<f64> = c.iter().flat_map(|k| f(k).to_array()).collect();
+            PyArray1::from_vec(py, flat).reshape([c.len(), 3])
+        };
+        let out = PyDict::new(py);
+        out.set_item("id", PyArray1::from_vec(py, c.iter().map(|k| ids[k.particle]).collect()))?;
+        out.set_item("other", other)?;
+        out.set_item("other_id", PyArray1::from_vec(py, other_id))?;
+        out.set_item("triangle", PyArray1::from_vec(py, triangle))?;
+        out.set_item("point", vecs(|k| k.point)?)?;
+        out.set_item("normal", vecs(|k| k.normal)?)?;
+        out.set_item("overlap", PyArray1::from_vec(py, c.iter().map(|k| k.overlap).collect()))?;
+        out.set_item("normal_force", PyArray1::from_vec(py, c.iter().map(|k| k.normal_force).collect()))?;
+        out.set_item(
+            "tangential_force",
+            PyArray1::from_vec(py, c.iter().map(|k| k.tangential_force).collect()),
+        )?;
+        Ok(out)
+    }
+
+    /// The meshes by name: for each, `translation` (m) and `rotation` (a unit quaternion x, y,
+    /// z, w) of its pose now, and the `force` (N) and `torque` (N·m, about the case's point for
+    /// it) the particles exerted on it at the last force evaluation.
+    #[getter]
+    fn meshes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.usable()?;
+        let out = PyDict::new(py);
+        for (m, name) in self.mesh_names.iter().enumerate() {
+            let about = self.torque_about.get(m).copied().unwrap_or(Vec3::ZERO);
+            let (pose, load) = (self.sim.mesh_pose(m), self.sim.mesh_load(m, about));
+            let d = PyDict::new(py);
+            d.set_item("translation", pose.translation.to_array())?;
+            d.set_item("rotation", pose.rotation.to_array())?;
+            d.set_item("force", load.force.to_array())?;
+            d.set_item("torque", load.torque.to_array())?;
+            out.set_item(name, d)?;
+        }
+        Ok(out)
     }
 
     /// Writes a checkpoint to `path` (written whole or not at all), which

@@ -77,6 +77,11 @@ pub struct FlowBooks {
     pub removed: Vec<Tally>,
     /// There now.
     pub present: Tally,
+    /// Added between steps by [`Simulation::insert`] (a user's hook or script).
+    pub added: Tally,
+    /// Removed between steps by [`Simulation::remove_ids`] or
+    /// [`Simulation::remove_where`].
+    pub taken: Tally,
     /// Particles each insertion drew but could not place (no room left in its region).
     pub missed: Vec<u64>,
     /// Particles each insertion has drawn so far, placed or not: `asked = inserted + missed`.
@@ -101,11 +106,13 @@ impl FlowBooks {
         sum(&self.removed)
     }
 
-    /// True if initial + inserted = present + removed, in counts and in mass units.
+    /// True if initial + inserted + added = present + removed + taken, in counts and in mass
+    /// units.
     pub fn close(&self) -> bool {
         let (i, r) = (self.inserted_total(), self.removed_total());
-        self.initial.count + i.count == self.present.count + r.count
-            && self.initial.units + i.units == self.present.units + r.units
+        self.initial.count + i.count + self.added.count == self.present.count + r.count + self.taken.count
+            && self.initial.units + i.units + self.added.units
+                == self.present.units + r.units + self.taken.units
     }
 }
 
@@ -154,6 +161,10 @@ pub(crate) struct FlowStage {
     removed: Vec<Tally>,
     /// The next inserted particle's id.
     next_id: u64,
+    /// Particles added between steps ([`Simulation::insert`]), alike on every rank.
+    added: Tally,
+    /// Particles removed between steps ([`Simulation::remove_ids`]): this rank's.
+    taken: Tally,
     /// log₂ of the books' quantum.
     quantum_exp: i32,
     initial: Tally,
@@ -231,6 +242,8 @@ impl FlowStage {
             outlets,
             feeds,
             next_id,
+            added: Tally::default(),
+            taken: Tally::default(),
             quantum_exp,
             initial: Tally::default(),
             error: None,
@@ -294,6 +307,9 @@ impl FlowStage {
         // The particles caught and not yet removed (a checkpoint without them has none).
         w.push(self.pending.len() as u64);
         w.extend(self.pending.iter().flat_map(|(&id, &o)| [id as u64, o as u64]));
+        // Then those added and removed between steps (a checkpoint without them had none).
+        w.extend(self.added.words());
+        w.extend(self.taken.words());
         w
     }
 
@@ -309,13 +325,15 @@ impl FlowStage {
         }
         let base = 7 + 10 * f + 3 * o;
         let caught = w.get(base).map_or(0, |&n| n as usize);
-        if !(w.len() == base
-            || (w.len() > base && (w.len() - base - 1) / 2 == caught && (w.len() - base) % 2 == 1))
-        {
+        // Older checkpoints end before the caught particles, or after them.
+        let after_caught = base + 1 + 2 * caught;
+        let by_hand = w.len() == after_caught + 6;
+        if !(w.len() == base || w.len() == after_caught || by_hand) {
             return Err("the checkpoint's insertion state has the wrong length".into());
         }
         self.pending.clear();
-        for c in w.get(base + 1..).unwrap_or(&[]).chunks_exact(2) {
+        let caught_words = w.get(base + 1..after_caught.min(w.len())).unwrap_or(&[]);
+        for c in caught_words.chunks_exact(2) {
             if c[1] >= o as u64 || c[0] > u32::MAX as u64 {
                 return Err("the checkpoint's caught particles name no outlet of the case".into());
             }
@@ -336,6 +354,11 @@ impl FlowStage {
         for (k, t) in self.removed.iter_mut().enumerate() {
             *t = tally(&w[7 + 10 * f + 3 * k..]);
         }
+        (self.added, self.taken) = if by_hand {
+            (tally(&w[after_caught..]), tally(&w[after_caught + 3..]))
+        } else {
+            (Tally::default(), Tally::default())
+        };
         Ok(())
     }
 }
@@ -343,12 +366,31 @@ impl FlowStage {
 /// A rank's part of the flow state (what it caught and removed): the rest every rank holds
 /// alike.
 impl FlowStage {
+    /// Counts particles of masses `m` added between steps (`added`) or removed (not).
+    pub(super) fn count_by_hand(&mut self, m: impl Iterator<Item = f64>, added: bool) {
+        let t = self.tally(m);
+        let to = if added { &mut self.added } else { &mut self.taken };
+        to.count += t.count;
+        to.units += t.units;
+    }
+
+    /// Makes the next inserted particle's id at least `id` + 1.
+    pub(super) fn id_used(&mut self, id: u32) {
+        self.next_id = self.next_id.max(id as u64 + 1);
+    }
+
+    /// The id the next inserted particle takes.
+    pub(super) fn next_id(&self) -> u64 {
+        self.next_id
+    }
+
     /// This rank's caught particles and its outlets' removals, as words: the caught count,
     /// (id, outlet) pairs, then per outlet its tally's three words.
     pub(super) fn rank_words(&self) -> Vec<u64> {
         let mut w = vec![self.pending.len() as u64];
         w.extend(self.pending.iter().flat_map(|(&id, &o)| [id as u64, o as u64]));
         w.extend(self.removed.iter().flat_map(Tally::words));
+        w.extend(self.taken.words());
         w
     }
 
@@ -363,7 +405,9 @@ impl FlowStage {
         for (k, t) in self.removed.iter_mut().enumerate() {
             t.add_words(&w[at + 3 * k..]);
         }
-        at + 3 * self.removed.len()
+        let at = at + 3 * self.removed.len();
+        self.taken.add_words(&w[at..]);
+        at + 3
     }
 
     /// Keeps this rank's part of a whole run's flow state: the caught particles among `own`
@@ -372,6 +416,7 @@ impl FlowStage {
         self.pending.retain(|id, _| own.binary_search(id).is_ok());
         if rank != 0 {
             self.removed.iter_mut().for_each(|t| *t = Tally::default());
+            self.taken = Tally::default();
         }
     }
 
@@ -459,12 +504,15 @@ impl Simulation {
         let st = &self.flow;
         let mut present = st.tally(self.particles.mass[..self.owned()].iter().copied());
         let mut removed = st.removed.clone();
+        let mut taken = st.taken;
         if let Some(comm) = self.comm() {
-            // Each rank counts its own particles and what its outlets removed; what was
-            // inserted every rank counts alike (each places every batch).
-            let mine: Vec<u64> = std::iter::once(&present).chain(&removed).flat_map(Tally::words).collect();
+            // Each rank counts its own particles and what its outlets and removals between
+            // steps removed; what was inserted or added every rank counts alike (each places
+            // every batch, and is given every added particle).
+            let mine: Vec<u64> =
+                [&present, &taken].into_iter().chain(&removed).flat_map(Tally::words).collect();
             let all = comm.all_gather(&mine);
-            for (k, t) in std::iter::once(&mut present).chain(&mut removed).enumerate() {
+            for (k, t) in [&mut present, &mut taken].into_iter().chain(&mut removed).enumerate() {
                 *t = Tally::default();
                 for w in &all {
                     t.add_words(&w[3 * k..]);
@@ -477,6 +525,8 @@ impl Simulation {
             inserted: st.feeds.iter().map(|f| f.placed).collect(),
             removed,
             present,
+            added: st.added,
+            taken,
             missed: st.feeds.iter().map(|f| f.missed).collect(),
             asked: st.feeds.iter().map(|f| f.drawn.0).collect(),
             asked_mass: st.feeds.iter().map(|f| f.drawn.2).collect(),
@@ -625,7 +675,7 @@ impl Simulation {
         for &(i, _) in &gone {
             leaving[i] = true;
         }
-        self.remove_where(|_, i| leaving[i])?;
+        self.remove_slots_where(|_, i| leaving[i])?;
         Ok(())
     }
 
@@ -677,7 +727,7 @@ impl Simulation {
     fn add_inserted(&mut self, k: usize, new: &[ParticleInit]) -> Result<(), EngineError> {
         let units: Vec<i128> =
             crate::state::Particles::from_init(new).mass.iter().map(|&m| self.flow.units(m)).collect();
-        self.insert(new)?;
+        self.insert_uncounted(new)?;
         for u in units {
             self.flow.feeds[k].placed.add(u);
         }

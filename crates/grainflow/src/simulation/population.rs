@@ -124,7 +124,27 @@ impl Simulation {
     /// pushed out by the contact law.
     ///
     /// On ranks every rank must call it with the same particles: each keeps those in its box.
+    ///
+    /// The books count them as added ([`FlowBooks::added`](crate::simulation::FlowBooks)),
+    /// and the case's insertions number their particles after the largest id given here.
     pub fn insert(&mut self, new: &[ParticleInit]) -> Result<(), EngineError> {
+        self.insert_uncounted(new)?;
+        let masses = crate::state::Particles::from_init(new).mass;
+        self.flow.count_by_hand(masses.into_iter(), true);
+        if let Some(top) = new.iter().map(|q| q.id).max() {
+            self.flow.id_used(top);
+        }
+        Ok(())
+    }
+
+    /// The id a particle added next should take to follow every id so far and come before
+    /// those the case's insertions give next (one above the largest).
+    pub fn next_free_id(&self) -> u64 {
+        self.flow.next_id()
+    }
+
+    /// [`insert`](Self::insert), not counted in the books (the insertions count their own).
+    pub(super) fn insert_uncounted(&mut self, new: &[ParticleInit]) -> Result<(), EngineError> {
         if self.comm().is_some() { self.insert_over_ranks(new) } else { self.append_new(new) }
     }
 
@@ -199,21 +219,40 @@ impl Simulation {
     /// Removes the particles with the given ids between steps (with their contacts'
     /// histories); returns how many there were. Particles under prescribed motion cannot be
     /// removed. On ranks every rank must call it with the same ids.
+    /// The books count them as taken ([`FlowBooks::taken`](crate::simulation::FlowBooks)).
     pub fn remove_ids(&mut self, ids: &[u32]) -> Result<usize, EngineError> {
         let mut gone: Vec<u32> = ids.to_vec();
         gone.sort_unstable();
         if self.comm().is_some() {
             let p = &self.particles;
-            let mine: Vec<u32> =
-                (0..self.owned()).map(|i| p.id[i]).filter(|id| gone.binary_search(id).is_ok()).collect();
-            return self.remove_over_ranks(&mine);
+            let mine: Vec<usize> =
+                (0..self.owned()).filter(|&i| gone.binary_search(&p.id[i]).is_ok()).collect();
+            let masses: Vec<f64> = mine.iter().map(|&i| p.mass[i]).collect();
+            let mine: Vec<u32> = mine.iter().map(|&i| p.id[i]).collect();
+            let removed = self.remove_over_ranks(&mine)?;
+            self.flow.count_by_hand(masses.into_iter(), false);
+            return Ok(removed);
         }
         self.remove_where(|p, i| gone.binary_search(&p.id[i]).is_ok())
     }
 
     /// Removes the particles (slots `i` of the particle arrays) for which `leaving` is true,
-    /// between steps; returns how many.
+    /// between steps; returns how many. The books count them as taken.
     pub fn remove_where(
+        &mut self,
+        mut leaving: impl FnMut(&crate::state::Particles, usize) -> bool,
+    ) -> Result<usize, EngineError> {
+        let p = &self.particles;
+        let marked: Vec<bool> = (0..p.len()).map(|i| leaving(p, i)).collect();
+        let masses: Vec<f64> = (0..self.owned()).filter(|&i| marked[i]).map(|i| p.mass[i]).collect();
+        let removed = self.remove_slots_where(|_, i| marked[i])?;
+        self.flow.count_by_hand(masses.into_iter(), false);
+        Ok(removed)
+    }
+
+    /// [`remove_where`](Self::remove_where), not counted in the books (the outlets count their
+    /// own).
+    pub(super) fn remove_slots_where(
         &mut self,
         mut leaving: impl FnMut(&crate::state::Particles, usize) -> bool,
     ) -> Result<usize, EngineError> {
