@@ -56,6 +56,31 @@ class ParticleViews:
         """Contact torques of the last force evaluation, N·m, (N, 3)."""
     def __len__(self) -> int: ...
 
+class Mesh:
+    """A mesh of a simulation: where it is, the load on it, and its motion from now on."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def translation(self) -> list[float]:
+        """The translation of its pose now, m."""
+    @property
+    def rotation(self) -> list[float]:
+        """The rotation of its pose now, a unit quaternion (x, y, z, w)."""
+    @property
+    def force(self) -> list[float]:
+        """The force of the particles on it at the last force evaluation, N."""
+    @property
+    def torque(self) -> list[float]:
+        """The torque of that load about the case's point for it, N·m."""
+    def set_omega(
+        self, omega: float, axis: Optional[list[float]] = None, origin: Optional[list[float]] = None
+    ) -> None:
+        """Turns at `omega` rad/s from now on, about `axis` through `origin` (m; both default to
+        its motion's if it turns), from where it is."""
+    def set_velocity(self, velocity: list[float]) -> None:
+        """Moves at `velocity` m/s from now on (zero stops it where it is)."""
+
 class Simulation:
     """A simulation of a case, stepped from Python with the bits of `grainflow run`."""
 
@@ -121,8 +146,30 @@ class Simulation:
         """Sets the angular velocities (rad/s), as `set_velocity`."""
     def set_position(self, ids: npt.NDArray[np.int64], x: npt.NDArray[np.float64]) -> None:
         """Moves the particles to `x` (m), as `set_velocity`."""
+    def insert(
+        self,
+        positions: npt.NDArray[np.float64],
+        diameters: npt.NDArray[np.float64],
+        velocities: Optional[npt.NDArray[np.float64]] = None,
+        phase: Optional[Union[str, int]] = None,
+        omega: Optional[npt.NDArray[np.float64]] = None,
+    ) -> npt.NDArray[np.uint32]:
+        """Adds particles (positions m, diameters m, velocities m/s, spins rad/s) of `phase`
+        (name or index; the only phase by default); returns their new ids."""
+    def remove(self, ids: npt.NDArray[np.int64]) -> int:
+        """Removes the particles `ids` (each must exist); returns how many."""
+    def books(self) -> Dict[str, Any]:
+        """The mass books as (count, kg) pairs: initial, inserted, added, removed, taken,
+        present; and `closes`."""
+    def contacts(self) -> Dict[str, Any]:
+        """The contacts now: id, other, other_id, triangle, point (m), normal, overlap (m),
+        normal_force and tangential_force (N)."""
+    @property
+    def meshes(self) -> Dict[str, Mesh]:
+        """The meshes by name."""
     def checkpoint(self, path: _Path) -> None:
-        """Writes a checkpoint, whole or not at all."""
+        """Writes a checkpoint, whole or not at all (refused once a mesh's motion was set
+        from Python, which it does not record yet)."""
     def diagnostics(self) -> Dict[str, float]:
         """kinetic_translational, kinetic_rotational, potential, elastic (J), max_overlap_ratio."""
 

@@ -673,22 +673,13 @@ impl PySim {
         Ok(out)
     }
 
-    /// The meshes by name: for each, `translation` (m) and `rotation` (a unit quaternion x, y,
-    /// z, w) of its pose now, and the `force` (N) and `torque` (N·m, about the case's point for
-    /// it) the particles exerted on it at the last force evaluation.
+    /// The meshes by name, each a `Mesh`: its pose and load, and its motion to set.
     #[getter]
-    fn meshes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.usable()?;
+    fn meshes<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
+        let py = slf.py();
         let out = PyDict::new(py);
-        for (m, name) in self.mesh_names.iter().enumerate() {
-            let about = self.torque_about.get(m).copied().unwrap_or(Vec3::ZERO);
-            let (pose, load) = (self.sim.mesh_pose(m), self.sim.mesh_load(m, about));
-            let d = PyDict::new(py);
-            d.set_item("translation", pose.translation.to_array())?;
-            d.set_item("rotation", pose.rotation.to_array())?;
-            d.set_item("force", load.force.to_array())?;
-            d.set_item("torque", load.torque.to_array())?;
-            out.set_item(name, d)?;
+        for (index, name) in slf.borrow().mesh_names.iter().enumerate() {
+            out.set_item(name, MeshHandle { sim: slf.clone().unbind(), index, name: name.clone() })?;
         }
         Ok(out)
     }
@@ -697,6 +688,11 @@ impl PySim {
     /// `Simulation.restart` and `grainflow run --restart` continue from.
     fn checkpoint(&self, path: PathBuf) -> PyResult<()> {
         self.usable()?;
+        if self.sim.has_scripted_motion() {
+            return Err(engine_error(
+                "a mesh's motion was set from Python, which a checkpoint does not record yet: it would restart with the case's motion",
+            ));
+        }
         guarded(|| {
             grainflow_run::output::write_atomic_with(&path, |w| self.sim.write_checkpoint(&self.hash, w))
                 .map_err(|e| engine_error(format!("{}: {e}", path.display())))
@@ -729,6 +725,109 @@ impl PySim {
     #[staticmethod]
     fn _panic_for_test() -> PyResult<()> {
         guarded(|| panic!("a panic raised on purpose"))
+    }
+}
+
+/// A mesh of a simulation: where it is, the load on it, and its motion from now on.
+#[pyclass(frozen, name = "Mesh", module = "grainflow._grainflow")]
+struct MeshHandle {
+    sim: Py<PySim>,
+    index: usize,
+    name: String,
+}
+
+impl MeshHandle {
+    fn set(&self, py: Python<'_>, motion: grainflow::mesh::MeshMotion) -> PyResult<()> {
+        let mut s = self.sim.bind(py).borrow_mut();
+        s.usable()?;
+        let m = self.index;
+        guarded(|| s.sim.set_mesh_motion(m, motion).map_err(engine_error))
+    }
+}
+
+fn unit(a: [f64; 3], what: &str) -> PyResult<Vec3> {
+    let v = Vec3::from_array(a);
+    let n = v.length();
+    if n.is_finite() && n > 0.0 {
+        Ok(v / n)
+    } else {
+        Err(engine_error(format!("{what}: a non-zero finite vector")))
+    }
+}
+
+#[pymethods]
+impl MeshHandle {
+    /// The mesh's name in the case.
+    #[getter]
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+
+    /// The translation of its pose now, m (from the mesh as loaded).
+    #[getter]
+    fn translation(&self, py: Python<'_>) -> [f64; 3] {
+        self.sim.bind(py).borrow().sim.mesh_pose(self.index).translation.to_array()
+    }
+
+    /// The rotation of its pose now, a unit quaternion (x, y, z, w).
+    #[getter]
+    fn rotation(&self, py: Python<'_>) -> [f64; 4] {
+        self.sim.bind(py).borrow().sim.mesh_pose(self.index).rotation.to_array()
+    }
+
+    /// The force the particles exerted on it at the last force evaluation, N.
+    #[getter]
+    fn force(&self, py: Python<'_>) -> [f64; 3] {
+        let s = self.sim.bind(py).borrow();
+        s.sim.mesh_load(self.index, Vec3::ZERO).force.to_array()
+    }
+
+    /// The torque of that load about the case's point for this mesh (its `torque_about`,
+    /// else the origin), N·m.
+    #[getter]
+    fn torque(&self, py: Python<'_>) -> [f64; 3] {
+        let s = self.sim.bind(py).borrow();
+        let about = s.torque_about.get(self.index).copied().unwrap_or(Vec3::ZERO);
+        s.sim.mesh_load(self.index, about).torque.to_array()
+    }
+
+    /// From now on, turns at `omega` rad/s about the axis through `origin` (m) along `axis`
+    /// (right-hand rule); both default to those of its motion if it turns. It goes on from
+    /// where it is. Between steps, e.g. in a `run` callback.
+    #[pyo3(signature = (omega, axis=None, origin=None))]
+    fn set_omega(
+        &self,
+        py: Python<'_>,
+        omega: f64,
+        axis: Option<[f64; 3]>,
+        origin: Option<[f64; 3]>,
+    ) -> PyResult<()> {
+        let now = self.sim.bind(py).borrow().sim.meshes()[self.index].motion;
+        let (axis0, origin0) = match now {
+            grainflow::mesh::MeshMotion::Rotate { axis, origin, .. } => (Some(axis), Some(origin)),
+            _ => (None, None),
+        };
+        let axis = match axis {
+            Some(a) => unit(a, "axis")?,
+            None => axis0
+                .ok_or_else(|| engine_error(format!("mesh '{}' does not turn: give the axis", self.name)))?,
+        };
+        let origin = match origin {
+            Some(o) => Vec3::from_array(o),
+            None => origin0.ok_or_else(|| {
+                engine_error(format!("mesh '{}' does not turn: give the origin", self.name))
+            })?,
+        };
+        self.set(py, grainflow::mesh::MeshMotion::Rotate { origin, axis, omega, ramp: 0.0 })
+    }
+
+    /// From now on, moves at `velocity` m/s (zero stops it where it is).
+    fn set_velocity(&self, py: Python<'_>, velocity: [f64; 3]) -> PyResult<()> {
+        self.set(py, grainflow::mesh::MeshMotion::Translate { velocity: Vec3::from_array(velocity) })
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<grainflow.Mesh '{}'>", self.name)
     }
 }
 
@@ -851,6 +950,7 @@ fn _grainflow(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_class::<PySim>()?;
     m.add_class::<ParticleViews>()?;
+    m.add_class::<MeshHandle>()?;
     m.add("GrainflowError", py.get_type::<GrainflowError>())?;
     m.add("CaseError", py.get_type::<CaseError>())?;
     m.add("EngineError", py.get_type::<EngineError>())?;

@@ -95,10 +95,48 @@ def test_a_mesh_is_named_and_its_load_balances_the_beads_momentum():
     after = np.sum(np.asarray(p.mass)[:, None] * p.velocity, axis=0)
     drum = sim.meshes["drum"]
     weight = float(np.sum(p.mass)) * np.array([0.0, -9.80665, 0.0])
-    expected = weight - np.array(drum["force"])
+    expected = weight - np.array(drum.force)
     np.testing.assert_allclose((after - before) / sim.dt, expected, rtol=0, atol=1e-9 * np.linalg.norm(weight))
-    assert drum["force"][1] < 0  # the beads press on it
-    assert np.linalg.norm(drum["rotation"]) == pytest.approx(1.0, rel=1e-12)
+    assert drum.force[1] < 0  # the beads press on it
+    assert np.linalg.norm(drum.rotation) == pytest.approx(1.0, rel=1e-12)
     c = sim.contacts()
     on_drum = np.array([name == "drum" for name in c["other"]])
     assert on_drum.any() and np.all(c["triangle"][on_drum] >= 0)
+
+
+def angle_of(q):
+    """The rotation angle of a unit quaternion (x, y, z, w), rad."""
+    return 2.0 * math.atan2(math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2), q[3])
+
+
+def drum(t_stop=0.05):
+    return grainflow.Simulation.from_case(EXAMPLES / "rotating-drum" / "case.toml", overrides={"time.t_stop": t_stop})
+
+
+def test_a_drum_set_turning_from_python_turns_at_that_rate():
+    sim = drum()
+    sim.step(100)
+    mesh = sim.meshes["drum"]
+    before = angle_of(mesh.rotation)
+    mesh.set_omega(3.0)
+    sim.step(200)
+    # From where it was, 3 rad/s for 200 steps (the quaternion's angle to 1e-12 rad).
+    assert angle_of(mesh.rotation) - before == pytest.approx(3.0 * 200 * sim.dt, abs=1e-12)
+    with pytest.raises(grainflow.EngineError, match="does not record"):
+        sim.checkpoint("never-written.gfc")
+
+
+def test_a_mesh_set_moving_translates_and_refuses_bad_motions():
+    sim = drum()
+    mesh = sim.meshes["drum"]
+    sim.step(10)
+    x0 = np.array(mesh.translation)
+    mesh.set_velocity([0.0, 0.0, 0.01])
+    sim.step(100)
+    np.testing.assert_allclose(np.array(mesh.translation) - x0, [0.0, 0.0, 0.01 * 100 * sim.dt], atol=1e-15)
+    with pytest.raises(grainflow.EngineError, match="give the axis"):
+        mesh.set_omega(1.0)
+    with pytest.raises(grainflow.EngineError, match="axis"):
+        mesh.set_omega(1.0, axis=[0.0, 0.0, 0.0], origin=[0.0, 0.0, 0.0])
+    with pytest.raises(grainflow.EngineError):
+        mesh.set_velocity([float("nan"), 0.0, 0.0])

@@ -194,7 +194,9 @@ pub struct Simulation {
     /// Runs of slots that are integrated (every slot not under prescribed motion).
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
-    forces_current: bool,
+    pub(crate) forces_current: bool,
+    /// Whether a mesh's motion was set between steps (which checkpoints do not record yet).
+    pub(crate) scripted_motion: bool,
     /// The caller's name for the run this state belongs to, carried through checkpoints.
     run_id: String,
     /// The caller's record kept with the state in checkpoints (see
@@ -416,6 +418,7 @@ impl Simulation {
             free,
             history_started: false,
             forces_current: false,
+            scripted_motion: false,
             kick_pending: false,
             drifted: false,
             run_id: String::new(),
@@ -1077,7 +1080,7 @@ impl Simulation {
     }
 }
 
-fn check_mesh_motion(m: &MeshWall) -> Result<(), EngineError> {
+pub(crate) fn check_mesh_motion(m: &MeshWall) -> Result<(), EngineError> {
     use crate::mesh::{MeshMotion, SurfaceMotion};
     let unit = |a: Vec3| a.is_finite() && (a.length() - 1.0).abs() < 1e-12;
     let ok = match m.motion {

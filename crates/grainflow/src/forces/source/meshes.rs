@@ -30,8 +30,10 @@ use crate::contact::law::{normal_spring_energy, parts};
 use crate::contact::pair::{PairInput, wall_law};
 use crate::contact::submodel::{NormalSubModel, TangentialSubModel};
 use crate::contact::{ContactCoeffs, ContactLaw, LeverArm};
+use crate::error::EngineError;
 use crate::forces::{Peak, Quanta, Quantum, max_peak};
 use crate::math::Vec3;
+use crate::mesh::MeshMotion;
 use crate::mesh::grid::NearScratch;
 use crate::mesh::motion::Anchor;
 use crate::mesh::{Mesh, MeshContact, MeshWall, Pose, SurfaceMotion, TriangleGrid, sphere_contacts};
@@ -979,6 +981,39 @@ impl Simulation {
     /// Spread over ranks, the sums are over every rank's contacts: collective.
     pub fn mesh_load(&self, m: usize, about: Vec3) -> MeshLoad {
         self.wall_load_over_ranks(&self.sources.meshes.loads_of(m), about)
+    }
+
+    /// Gives mesh `m` the motion `motion` from now on, for the rest of the run: it goes on from
+    /// where it is, anchored at this time (between steps; a user's hook or script prescribing
+    /// a mesh's motion, as MFIX's user functions do). The motion is checked as a case's is. A
+    /// checkpoint does not record it: [`has_scripted_motion`](Self::has_scripted_motion) tells
+    /// a writer to refuse.
+    pub fn set_mesh_motion(&mut self, m: usize, motion: MeshMotion) -> Result<(), EngineError> {
+        let n = self.sources.meshes.walls.len();
+        if m >= n {
+            return Err(EngineError::BadReference(format!("mesh {m}: the case has {n} meshes")));
+        }
+        let mut wall = self.sources.meshes.walls[m].clone();
+        (wall.motion, wall.window) = (motion, crate::mesh::motion::MotionWindow::ALWAYS);
+        crate::simulation::check_mesh_motion(&wall)?;
+        let t = self.time();
+        let meshes = &mut self.sources.meshes;
+        let here = meshes.pose_at(m, t);
+        if meshes.anchors.len() < n {
+            meshes.anchors.resize(n, Anchor::START);
+        }
+        meshes.anchors[m] = Anchor { tau: t - meshes.t0, pose: here };
+        let wall = &mut meshes.walls[m];
+        (wall.motion, wall.window) = (motion, crate::mesh::motion::MotionWindow::ALWAYS);
+        self.scripted_motion = true;
+        // The forces held are those of the wall's velocity before.
+        self.forces_current = false;
+        Ok(())
+    }
+
+    /// Whether a mesh's motion was set between steps ([`set_mesh_motion`](Self::set_mesh_motion)).
+    pub fn has_scripted_motion(&self) -> bool {
+        self.scripted_motion
     }
 
     /// Restores each mesh's motion state of a checkpoint (anchor time since the start, s;
