@@ -170,6 +170,8 @@ class Simulation:
     def checkpoint(self, path: _Path) -> None:
         """Writes a checkpoint, whole or not at all (refused once a mesh's motion was set
         from Python, which it does not record yet)."""
+    def write_vtk(self, path: _Path, contacts: Optional[_Path] = None) -> None:
+        """Writes the particles (id order) as a VTK .vtp file, and the contacts to `contacts`."""
     def diagnostics(self) -> Dict[str, float]:
         """kinetic_translational, kinetic_rotational, potential, elastic (J), max_overlap_ratio."""
 

@@ -699,6 +699,29 @@ impl PySim {
         })
     }
 
+    /// Writes the particles, in id order, as a VTK PolyData file (`.vtp`, as `grainflow run`
+    /// writes its frames: points with `id`, `phase`, `radius`, `velocity`,
+    /// `angular_velocity`, `force`, `contacts`), and with `contacts` the contacts as lines to
+    /// that second file. Each file is written whole or not at all.
+    #[pyo3(signature = (path, contacts=None))]
+    fn write_vtk(&self, path: PathBuf, contacts: Option<PathBuf>) -> PyResult<()> {
+        self.usable()?;
+        guarded(|| {
+            let (p, c) = self.sim.in_id_order();
+            let write = |path: &Path, text: String| {
+                grainflow_run::output::write_atomic_with(path, |w| {
+                    std::io::Write::write_all(w, text.as_bytes())
+                })
+                .map_err(|e| engine_error(format!("{}: {e}", path.display())))
+            };
+            write(&path, grainflow_run::vtk::particles_vtp(&p, &c))?;
+            if let Some(cpath) = contacts {
+                write(&cpath, grainflow_run::vtk::contacts_vtp(&p, &c))?;
+            }
+            Ok(())
+        })
+    }
+
     /// Kinetic energies (J) and the largest overlap over radius, as a dict.
     fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = self.sim.diagnostics();

@@ -305,3 +305,40 @@ def test_read_timeseries_refuses_a_ragged_file(tmp_path):
     f.write_text("step,time\n0,0\n1\n")
     with pytest.raises(grainflow.EngineError, match="row 3"):
         grainflow.read_timeseries(f)
+
+
+def vtk_arrays(path):
+    """The point count and the named data arrays of a .vtp file written in binary (base64, each
+    array after its UInt64 byte count), decoded."""
+    import base64
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    assert root.get("header_type") == "UInt64" and root.get("byte_order") == "LittleEndian"
+    piece = root.find("PolyData/Piece")
+    kinds = {"Float64": np.float64, "Int64": np.int64, "Int32": np.int32}
+    arrays = {}
+    for a in piece.iter("DataArray"):
+        raw = base64.b64decode(a.text.strip())
+        size = int(np.frombuffer(raw[:8], dtype="<u8")[0])
+        values = np.frombuffer(raw[8 : 8 + size], dtype=kinds[a.get("type")])
+        k = int(a.get("NumberOfComponents", "1"))
+        arrays[a.get("Name") or "Points"] = values.reshape(-1, k) if k > 1 else values
+    return int(piece.get("NumberOfPoints")), arrays
+
+
+def test_write_vtk_holds_the_particles_in_id_order(settling_bed, tmp_path):
+    sim = grainflow.Simulation.from_case(settling_bed, overrides={"time.t_stop": 0.02})
+    sim.run()
+    sim.write_vtk(tmp_path / "p.vtp", contacts=tmp_path / "c.vtp")
+    n, a = vtk_arrays(tmp_path / "p.vtp")
+    order = np.argsort(sim.particles.ids)
+    assert n == 486
+    np.testing.assert_array_equal(a["id"], np.sort(sim.particles.ids))
+    np.testing.assert_array_equal(bits(a["radius"]), bits(np.asarray(sim.particles.radius)[order]))
+    np.testing.assert_array_equal(bits(a["velocity"]), bits(np.asarray(sim.particles.velocity)[order]))
+    # Each contact is counted at both its particles (once for a wall).
+    c = sim.contacts()
+    assert int(np.sum(a["contacts"])) == len(c["id"]) + int(np.sum(c["other_id"] >= 0))
+    m, _ = vtk_arrays(tmp_path / "c.vtp")
+    assert m == 2 * len(c["id"])
