@@ -22,7 +22,7 @@ if [ -z "${PYTHON:-}" ]; then
     target/py-venv/bin/pip install --quiet maturin numpy pytest
   fi
   # maturin takes $CARGO for the cargo program: the build lock's wrapper is not one.
-  env -u CARGO PATH="$ROOT/target/py-venv/bin:$PATH" target/py-venv/bin/pip install --quiet --no-build-isolation ./python
+  env -u CARGO PATH="$ROOT/target/py-venv/bin:$PATH" target/py-venv/bin/pip install --quiet --no-build-isolation --force-reinstall --no-deps ./python
   PYTHON=$ROOT/target/py-venv/bin/python
 fi
 [ -f bench/cases/data/box_hm_settled.data ] || { echo "needs bench/cases/data/box_hm_settled.data (bench/compare-peers.sh writes it)" >&2; exit 2; }
