@@ -14,7 +14,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use grainflow::timestep::{TimeStepRule, fixed_step_count, step_count};
+use grainflow::timestep::TimeStepRule;
 use grainflow::{Particles, Simulation, Vec3};
 use numpy::ndarray::{ArrayView1, ArrayView2};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
@@ -95,7 +95,13 @@ struct PySim {
 }
 
 impl PySim {
-    fn from_loaded(case: grainflow_case::Case, threads: Option<usize>) -> PyResult<Self> {
+    /// The simulation of `case`, from its start or (`restart`: a checkpoint, and whether it
+    /// may be of another case) continued as `grainflow run --restart` continues it.
+    fn from_loaded(
+        case: grainflow_case::Case,
+        threads: Option<usize>,
+        restart: Option<(&Path, bool)>,
+    ) -> PyResult<Self> {
         for w in &case.warnings {
             Python::attach(|py| {
                 let warnings = py.import("warnings")?;
@@ -104,7 +110,13 @@ impl PySim {
         }
         let (rule, t_start, t_stop) = (case.config.time_step, case.config.t_start, case.config.t_stop);
         let (hash, mesh_names, torque_about) = (case.hash.clone(), case.mesh_names, case.mesh_torque_about);
-        let mut sim = Simulation::new(case.config, case.particles).map_err(engine_error)?;
+        let mut sim = match restart {
+            None => Simulation::new(case.config, case.particles).map_err(engine_error)?,
+            Some((path, any_case)) => {
+                grainflow_run::run::restore_case(case.config, case.particles, path, any_case, &hash)
+                    .map_err(engine_error)?
+            }
+        };
         if let Some(t) = threads {
             sim.set_threads(t).map_err(engine_error)?;
         }
@@ -193,10 +205,7 @@ impl PySim {
             )));
         }
         let (span, dt) = (t - self.t_start, self.sim.dt());
-        Ok(match self.rule {
-            TimeStepRule::Mfix { .. } => step_count(span, dt),
-            TimeStepRule::Fixed(_) => fixed_step_count(span, dt),
-        })
+        Ok(self.rule.steps(span, dt))
     }
 
     /// The slots of `ids`, each an id of a particle of the simulation.
@@ -358,7 +367,7 @@ impl PySim {
     ) -> PyResult<Self> {
         guarded(|| {
             let case = load_case(&path, &dict_items(overrides)?, motion.as_deref())?;
-            Self::from_loaded(case, threads)
+            Self::from_loaded(case, threads, None)
         })
     }
 
@@ -366,7 +375,7 @@ impl PySim {
     #[staticmethod]
     #[pyo3(signature = (text, base_dir=PathBuf::from("."), threads=None))]
     fn from_case_text(text: &str, base_dir: PathBuf, threads: Option<usize>) -> PyResult<Self> {
-        guarded(|| Self::from_loaded(parse_case(text, &base_dir)?, threads))
+        guarded(|| Self::from_loaded(parse_case(text, &base_dir)?, threads, None))
     }
 
     /// A case given as a dict of its tables (the case file's structure, in Python values).
@@ -375,7 +384,7 @@ impl PySim {
     fn from_dict(d: &Bound<'_, PyDict>, base_dir: PathBuf, threads: Option<usize>) -> PyResult<Self> {
         guarded(|| {
             let text = toml::to_string(&to_toml(d.as_any(), "")?).map_err(case_error)?;
-            Self::from_loaded(parse_case(&text, &base_dir)?, threads)
+            Self::from_loaded(parse_case(&text, &base_dir)?, threads, None)
         })
     }
 
@@ -391,31 +400,7 @@ impl PySim {
         accept_changed_case: bool,
     ) -> PyResult<Self> {
         guarded(|| {
-            let case = load_case(&case, &[], None)?;
-            let (rule, t_start, t_stop) = (case.config.time_step, case.config.t_start, case.config.t_stop);
-            let (hash, mesh_names, torque_about) =
-                (case.hash.clone(), case.mesh_names, case.mesh_torque_about);
-            let file =
-                std::fs::File::open(&path).map_err(|e| engine_error(format!("{}: {e}", path.display())))?;
-            let len = file.metadata().map_err(|e| engine_error(format!("{}: {e}", path.display())))?.len();
-            let expected = (!accept_changed_case).then_some(hash.as_str());
-            let reader = std::io::BufReader::with_capacity(1 << 20, file);
-            let mut sim = Simulation::restore_from(case.config, reader, len, expected)
-                .map_err(|e| engine_error(format!("{}: {e}", path.display())))?;
-            if let Some(t) = threads {
-                sim.set_threads(t).map_err(engine_error)?;
-            }
-            Ok(PySim {
-                sim,
-                rule,
-                t_start,
-                t_stop,
-                hash,
-                mesh_names,
-                torque_about,
-                views: None,
-                broken: false,
-            })
+            Self::from_loaded(load_case(&case, &[], None)?, threads, Some((&path, accept_changed_case)))
         })
     }
 

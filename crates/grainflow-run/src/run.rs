@@ -226,17 +226,7 @@ pub fn run_case(
             Simulation::new_over_ranks(case.config, mine, comm.clone(), rebalance)?
         }
         (Some(path), _) => {
-            let case_particles = options.accept_changed_case.then(|| particle_keys(&case.particles));
-            let flow = !(case.config.insertions.is_empty() && case.config.outlets.is_empty());
-            // The checkpoint holds the particles: the case's initial ones go before it is read
-            // (on a large bed they would hold a second copy of the state meanwhile).
-            drop(case.particles);
-            let sim = restore(case.config, path, options.accept_changed_case, &hash)?;
-            if let Some(keys) = case_particles {
-                same_particles(&keys, &particle_keys(sim.particles()), flow)
-                    .map_err(|message| RunError::Restart { path: path.clone(), message })?;
-            }
-            sim
+            restore_case(case.config, case.particles, path, options.accept_changed_case, &hash)?
         }
     };
     // A restart spreads the checkpoint's whole state over the ranks.
@@ -290,6 +280,29 @@ pub fn run_case(
     let summary = result?;
     written?;
     Ok(summary)
+}
+
+/// The run of a case (`config`, its initial `particles`, its `hash`) continued from the
+/// checkpoint at `path`: one written for this case, or with `accept_changed_case` for any case
+/// whose particles the checkpoint still holds (less removed ones, more inserted ones).
+pub fn restore_case(
+    config: grainflow::SimulationConfig,
+    particles: grainflow::Particles,
+    path: &Path,
+    accept_changed_case: bool,
+    hash: &str,
+) -> Result<Simulation, RunError> {
+    let case_particles = accept_changed_case.then(|| particle_keys(&particles));
+    let flow = !(config.insertions.is_empty() && config.outlets.is_empty());
+    // The checkpoint holds the particles: the case's initial ones go before it is read (on a
+    // large bed they would hold a second copy of the state meanwhile).
+    drop(particles);
+    let sim = restore(config, path, accept_changed_case, hash)?;
+    if let Some(keys) = case_particles {
+        same_particles(&keys, &particle_keys(sim.particles()), flow)
+            .map_err(|message| RunError::Restart { path: path.to_path_buf(), message })?;
+    }
+    Ok(sim)
 }
 
 /// Reads the checkpoint at `path` for `config`: for the case `hash`, or any case.

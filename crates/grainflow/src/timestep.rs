@@ -53,6 +53,17 @@ fn absolute_eta(law: &ContactLaw, c: &crate::contact::ContactCoeffs) -> f64 {
     }
 }
 
+impl TimeStepRule {
+    /// The steps of a run of length `span` at `dt` under this rule: MFIX's count
+    /// ([`step_count`]) under MFIX's rule, [`fixed_step_count`] for an explicit step.
+    pub fn steps(&self, span: f64, dt: f64) -> u64 {
+        match self {
+            TimeStepRule::Mfix { .. } => step_count(span, dt),
+            TimeStepRule::Fixed(_) => fixed_step_count(span, dt),
+        }
+    }
+}
+
 /// Number of steps MFIX takes for a run of length `span`: ceil of the single-precision quotient.
 pub fn step_count(span: f64, dt: f64) -> u64 {
     let q = (span as f32) / (dt as f32);
@@ -337,10 +348,7 @@ pub fn choose(
         }
     };
     check_step_count(span, dt)?;
-    let steps = match rule {
-        TimeStepRule::Mfix { .. } => step_count(span, dt),
-        TimeStepRule::Fixed(_) => fixed_step_count(span, dt),
-    };
+    let steps = rule.steps(span, dt);
     if steps == 0 {
         // Below single precision (MFIX's step count): span and dt both tiny.
         return Err(EngineError::BadReference(format!(

@@ -370,8 +370,7 @@ impl FlowStage {
     pub(super) fn count_by_hand(&mut self, m: impl Iterator<Item = f64>, added: bool) {
         let t = self.tally(m);
         let to = if added { &mut self.added } else { &mut self.taken };
-        to.count += t.count;
-        to.units += t.units;
+        *to = sum(&[*to, t]);
     }
 
     /// Makes the next inserted particle's id at least `id` + 1.

@@ -1003,8 +1003,7 @@ impl Simulation {
             meshes.anchors.resize(n, Anchor::START);
         }
         meshes.anchors[m] = Anchor { tau: t - meshes.t0, pose: here };
-        let wall = &mut meshes.walls[m];
-        (wall.motion, wall.window) = (motion, crate::mesh::motion::MotionWindow::ALWAYS);
+        meshes.walls[m] = wall;
         self.scripted_motion = true;
         // The forces held are those of the wall's velocity before.
         self.forces_current = false;
