@@ -168,8 +168,8 @@ class Simulation:
     def meshes(self) -> Dict[str, Mesh]:
         """The meshes by name."""
     def checkpoint(self, path: _Path) -> None:
-        """Writes a checkpoint, whole or not at all (refused once a mesh's motion was set
-        from Python, which it does not record yet)."""
+        """Writes a checkpoint, whole or not at all. Motions set on meshes from Python are in
+        it: a restart goes on with them."""
     def write_vtk(self, path: _Path, contacts: Optional[_Path] = None) -> None:
         """Writes the particles (id order) as a VTK .vtp file, and the contacts to `contacts`."""
     def diagnostics(self) -> Dict[str, float]:

@@ -670,14 +670,10 @@ impl PySim {
     }
 
     /// Writes a checkpoint to `path` (written whole or not at all), which
-    /// `Simulation.restart` and `grainflow run --restart` continue from.
+    /// `Simulation.restart` and `grainflow run --restart` continue from. The motions set on
+    /// meshes from Python are in it: a restart goes on with them, not with the case's.
     fn checkpoint(&self, path: PathBuf) -> PyResult<()> {
         self.usable()?;
-        if self.sim.has_scripted_motion() {
-            return Err(engine_error(
-                "a mesh's motion was set from Python, which a checkpoint does not record yet: it would restart with the case's motion",
-            ));
-        }
         guarded(|| {
             grainflow_run::output::write_atomic_with(&path, |w| self.sim.write_checkpoint(&self.hash, w))
                 .map_err(|e| engine_error(format!("{}: {e}", path.display())))

@@ -27,6 +27,13 @@ def ball_case(integrator="velocity_verlet", t_stop=0.5, dt=1.0e-4, height=0.5, e
     }
 
 
+def bits(a):
+    """The bit patterns of an array of float64, for comparisons to the bit."""
+    import numpy as np
+
+    return np.ascontiguousarray(a).view(np.uint64).copy()
+
+
 @pytest.fixture
 def settling_bed():
     """The settling-bed example (486 glass beads, linear spring-dashpot), shortened."""

@@ -8,11 +8,7 @@ import numpy as np
 import pytest
 
 import grainflow
-from conftest import DECKS, ball_case, run_cli
-
-
-def bits(a):
-    return np.ascontiguousarray(a).view(np.uint64).copy()
+from conftest import DECKS, ball_case, bits, run_cli
 
 
 # --- stepping ---------------------------------------------------------------------------

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import grainflow
-from conftest import EXAMPLES
+from conftest import EXAMPLES, bits
 
 G = 9.80665  # the settling bed's gravity, m/s²
 
@@ -122,8 +122,25 @@ def test_a_drum_set_turning_from_python_turns_at_that_rate():
     sim.step(200)
     # From where it was, 3 rad/s for 200 steps (the quaternion's angle to 1e-12 rad).
     assert angle_of(mesh.rotation) - before == pytest.approx(3.0 * 200 * sim.dt, abs=1e-12)
-    with pytest.raises(grainflow.EngineError, match="does not record"):
-        sim.checkpoint("never-written.gfc")
+
+
+def test_a_restart_goes_on_with_the_motion_python_set(tmp_path):
+    case = EXAMPLES / "rotating-drum" / "case.toml"
+    ran = []
+    for restart in (False, True):
+        sim = drum()
+        sim.step(100)
+        sim.meshes["drum"].set_omega(-4.0)
+        sim.step(100)
+        if restart:
+            sim.checkpoint(tmp_path / "c.gfc")
+            # The case file says the drum turns at its own rate: the checkpoint's motion wins.
+            sim = grainflow.Simulation.restart(tmp_path / "c.gfc", case, accept_changed_case=True)
+            assert sim.step_count == 200
+        sim.step(300)
+        ran.append((bits(sim.particles.position), sim.meshes["drum"].rotation))
+    np.testing.assert_array_equal(ran[0][0], ran[1][0])
+    assert ran[0][1] == ran[1][1]
 
 
 def test_a_mesh_set_moving_translates_and_refuses_bad_motions():

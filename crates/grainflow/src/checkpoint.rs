@@ -26,10 +26,11 @@ use thiserror::Error;
 /// state — its anchor and its pose — after them; 7: the insertions' and outlets' state; 8: the
 /// caller's note ([`Simulation::checkpoint_note`]), last; 9: the cylinder-wall contacts'
 /// histories, before the note; 10: each contact source's section, in the sources' order,
-/// after the motion anchors). A checkpoint of format 2 or 3
+/// after the motion anchors; 11: the mesh motions set between steps, before the note). A
+/// checkpoint of format 2 or 3
 /// continues with the quanta of its first evaluation taken afresh: not bit for bit as the run
 /// that wrote it would have gone on.
-pub const FORMAT_VERSION: u32 = 10;
+pub const FORMAT_VERSION: u32 = 11;
 /// The oldest format this build still reads (2: without the run id, pairs by slots).
 pub const OLDEST_FORMAT_READ: u32 = 2;
 const MAGIC: &[u8; 8] = b"GRAINFLW";
@@ -281,6 +282,8 @@ struct Payload {
     sources: SourceState,
     /// The insertions' and outlets' state (None before format 7).
     flow: Option<Vec<u64>>,
+    /// The mesh motions set between steps (empty before format 11).
+    scripted: Vec<f64>,
     /// The caller's note (empty before format 8).
     note: Vec<u8>,
 }
@@ -432,6 +435,10 @@ impl Payload {
             wall_history: std::mem::take(&mut sources.wall_history),
             reference,
         };
+        let scripted = if version >= 11 { d.f64s("scripted mesh motions")? } else { Vec::new() };
+        if scripted.len() % crate::forces::source::SCRIPTED_F64S != 0 {
+            return Err(CheckpointError::Truncated("scripted mesh motions"));
+        }
         let note = if version >= 8 { d.bytes("note")? } else { Vec::new() };
         let mut neighbors = neighbors;
         if version >= 3 {
@@ -450,6 +457,7 @@ impl Payload {
             anchors,
             sources,
             flow,
+            scripted,
             note,
         })
     }
@@ -495,6 +503,7 @@ impl Simulation {
             + (8 + 24 * self.motion_anchors().len())
             + self.sources.saved_bytes(self)
             + (8 + 8 * self.flow_words().len())
+            + (8 + 8 * self.scripted_motion_numbers().len())
             + (8 + self.checkpoint_note().len())
     }
 
@@ -537,6 +546,7 @@ impl Simulation {
         e.vec3s(&self.motion_anchors())?;
         self.sources.save(self, &mut e)?;
         e.bytes(&self.flow_words().iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>())?;
+        e.f64s(&self.scripted_motion_numbers())?;
         e.bytes(self.checkpoint_note())?;
         // The header announced the payload's length before it was written.
         if e.written != payload {
@@ -639,6 +649,7 @@ impl Simulation {
             sums,
             sources,
             flow,
+            scripted,
             note,
             ..
         } = payload;
@@ -650,6 +661,7 @@ impl Simulation {
             .map_err(CheckpointError::Mismatch)?;
         sim.set_mesh_histories(sources.mesh_contacts).map_err(CheckpointError::Mismatch)?;
         sim.set_cylinder_histories(sources.cylinder_contacts).map_err(CheckpointError::Mismatch)?;
+        sim.set_scripted_motions(&scripted).map_err(CheckpointError::Mismatch)?;
         if let Some(motion) = sources.mesh_motion {
             sim.set_mesh_motion_state(&motion).map_err(CheckpointError::Mismatch)?;
         }

@@ -195,8 +195,6 @@ pub struct Simulation {
     free: Vec<std::ops::Range<usize>>,
     history_started: bool,
     pub(crate) forces_current: bool,
-    /// Whether a mesh's motion was set between steps (which checkpoints do not record yet).
-    pub(crate) scripted_motion: bool,
     /// The caller's name for the run this state belongs to, carried through checkpoints.
     run_id: String,
     /// The caller's record kept with the state in checkpoints (see
@@ -418,7 +416,6 @@ impl Simulation {
             free,
             history_started: false,
             forces_current: false,
-            scripted_motion: false,
             kick_pending: false,
             drifted: false,
             run_id: String::new(),

@@ -116,6 +116,9 @@ pub(crate) struct Meshes {
     pub anchors: Vec<Anchor>,
     /// The run's start time, from which the meshes' motions are timed, s.
     pub t0: f64,
+    /// Which meshes had their motion set between steps (none: every one moves as its case
+    /// says); checkpoints record those meshes' motions.
+    pub scripted: Vec<bool>,
     /// The last evaluation's loads on the particles from the meshes, for the meshes' loads.
     loads: Vec<MeshLoadPart>,
     /// Whether [`ContactSource::redistributed`] has just taken the candidates into the new
@@ -985,9 +988,8 @@ impl Simulation {
 
     /// Gives mesh `m` the motion `motion` from now on, for the rest of the run: it goes on from
     /// where it is, anchored at this time (between steps; a user's hook or script prescribing
-    /// a mesh's motion, as MFIX's user functions do). The motion is checked as a case's is. A
-    /// checkpoint does not record it: [`has_scripted_motion`](Self::has_scripted_motion) tells
-    /// a writer to refuse.
+    /// a mesh's motion, as MFIX's user functions do). The motion is checked as a case's is.
+    /// Checkpoints record it, and a restart from them goes on with it.
     pub fn set_mesh_motion(&mut self, m: usize, motion: MeshMotion) -> Result<(), EngineError> {
         let n = self.sources.meshes.walls.len();
         if m >= n {
@@ -1004,7 +1006,8 @@ impl Simulation {
         }
         meshes.anchors[m] = Anchor { tau: t - meshes.t0, pose: here };
         meshes.walls[m] = wall;
-        self.scripted_motion = true;
+        meshes.scripted.resize(n, false);
+        meshes.scripted[m] = true;
         // The forces held are those of the wall's velocity before.
         self.forces_current = false;
         Ok(())
@@ -1012,7 +1015,40 @@ impl Simulation {
 
     /// Whether a mesh's motion was set between steps ([`set_mesh_motion`](Self::set_mesh_motion)).
     pub fn has_scripted_motion(&self) -> bool {
-        self.scripted_motion
+        self.sources.meshes.scripted.iter().any(|&s| s)
+    }
+
+    /// The motions set between steps, as a checkpoint records them: [`SCRIPTED_F64S`] numbers
+    /// a mesh so set (its index, then [`motion_numbers`]).
+    pub(crate) fn scripted_motion_numbers(&self) -> Vec<f64> {
+        let meshes = &self.sources.meshes;
+        let set = meshes.scripted.iter().enumerate().filter(|(_, s)| **s);
+        set.flat_map(|(m, _)| std::iter::once(m as f64).chain(motion_numbers(&meshes.walls[m].motion)))
+            .collect()
+    }
+
+    /// Gives the meshes the motions a checkpoint recorded as set between steps (see
+    /// [`scripted_motion_numbers`](Self::scripted_motion_numbers)), before their motion state is
+    /// restored.
+    pub(crate) fn set_scripted_motions(&mut self, numbers: &[f64]) -> Result<(), String> {
+        let n = self.sources.meshes.walls.len();
+        for c in numbers.chunks_exact(SCRIPTED_F64S) {
+            let m = c[0] as usize;
+            let motion = motion_of(&c[1..]).filter(|_| c[0] >= 0.0 && c[0].fract() == 0.0 && m < n);
+            let Some(motion) = motion else {
+                return Err(format!(
+                    "the checkpoint sets the motion of mesh {} from a script, which this case's {n} meshes do not fit",
+                    c[0]
+                ));
+            };
+            let meshes = &mut self.sources.meshes;
+            let wall = &mut meshes.walls[m];
+            (wall.motion, wall.window) = (motion, crate::mesh::motion::MotionWindow::ALWAYS);
+            crate::simulation::check_mesh_motion(wall).map_err(|e| e.to_string())?;
+            meshes.scripted.resize(n, false);
+            meshes.scripted[m] = true;
+        }
+        Ok(())
     }
 
     /// Restores each mesh's motion state of a checkpoint (anchor time since the start, s;
@@ -1108,6 +1144,47 @@ pub fn periodic_mesh_message(
     format!(
         "mesh '{name}' reaches across or within {max_radius:e} m (the largest particle radius) of the periodic faces {x} = {lo:e} and {x} = {hi:e} m (it spans {x} from {from:e} to {to:e} m over the run): meshes have no periodic images, so a particle across the face would meet it on one side only; keep the mesh more than {max_radius:e} m inside the faces of the periodic axis {x}, or make the axis non-periodic (for a flat floor along a periodic axis, use a [[walls]] plane)"
     )
+}
+
+/// Numbers a mesh of the motions a checkpoint records as set between steps: the mesh's index,
+/// then the motion's [`motion_numbers`].
+pub(crate) const SCRIPTED_F64S: usize = 11;
+
+/// A mesh motion as 10 numbers: its kind (0 fixed, 1 translating, 2 rotating, 3 oscillating),
+/// then its parameters in the order of [`MeshMotion`]'s fields, zeros after them.
+fn motion_numbers(motion: &MeshMotion) -> [f64; 10] {
+    let mut v = [0.0; 10];
+    match *motion {
+        MeshMotion::Fixed => {}
+        MeshMotion::Translate { velocity } => {
+            v[0] = 1.0;
+            v[1..4].copy_from_slice(&velocity.to_array());
+        }
+        MeshMotion::Rotate { origin, axis, omega, ramp } => {
+            v[0] = 2.0;
+            v[1..4].copy_from_slice(&origin.to_array());
+            v[4..7].copy_from_slice(&axis.to_array());
+            (v[7], v[8]) = (omega, ramp);
+        }
+        MeshMotion::Oscillate { amplitude, frequency } => {
+            v[0] = 3.0;
+            v[1..4].copy_from_slice(&amplitude.to_array());
+            v[4] = frequency;
+        }
+    }
+    v
+}
+
+/// The motion of [`motion_numbers`] (None: not a kind).
+fn motion_of(v: &[f64]) -> Option<MeshMotion> {
+    let vec = |i: usize| Vec3::new(v[i], v[i + 1], v[i + 2]);
+    Some(match v[0] {
+        0.0 => MeshMotion::Fixed,
+        1.0 => MeshMotion::Translate { velocity: vec(1) },
+        2.0 => MeshMotion::Rotate { origin: vec(1), axis: vec(4), omega: v[7], ramp: v[8] },
+        3.0 => MeshMotion::Oscillate { amplitude: vec(1), frequency: v[4] },
+        _ => return None,
+    })
 }
 
 /// The mesh-wall contacts ((particle id, mesh), owning triangle, normal, history), then each

@@ -27,8 +27,8 @@ mod planes;
 
 pub(crate) use cylinders::{Cylinders, check_cylinder};
 pub use cylinders::{periodic_cylinder_message, periodic_cylinder_reach};
-pub(crate) use meshes::Meshes;
 pub use meshes::{MeshLoad, periodic_mesh_message, periodic_mesh_reach};
+pub(crate) use meshes::{Meshes, SCRIPTED_F64S};
 pub(crate) use pairs::Pairs;
 pub(crate) use planes::Planes;
 
