@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import grainflow
-from conftest import EXAMPLES, bits
+from conftest import EXAMPLES, bits, run_cli
 
 G = 9.80665  # the settling bed's gravity, m/s²
 
@@ -141,6 +141,28 @@ def test_a_restart_goes_on_with_the_motion_python_set(tmp_path):
         ran.append((bits(sim.particles.position), sim.meshes["drum"].rotation))
     np.testing.assert_array_equal(ran[0][0], ran[1][0])
     assert ran[0][1] == ran[1][1]
+
+
+def test_the_program_restarts_a_python_checkpoint_with_its_motion(tmp_path):
+    case = EXAMPLES / "rotating-drum" / "case.toml"
+    sim = drum()
+    sim.step(100)
+    sim.meshes["drum"].set_omega(-4.0)
+    sim.step(100)
+    sim.checkpoint(tmp_path / "c.gfc")
+    sim.run()
+    # The same case (the override as the program's --set): the program takes the checkpoint
+    # as its own and ends where the script's run ended, to the bit.
+    out = tmp_path / "out"
+    done = run_cli("run", case, "--set", "time.t_stop=0.05", "--restart", tmp_path / "c.gfc", "--out", out, "-q")
+    assert done.returncode == 0, done.stderr
+    last = sorted((out / "snapshots").iterdir())[-1]
+    table = np.genfromtxt(last, delimiter=",", names=True)
+    order = np.argsort(sim.particles.ids)
+    x = np.asarray(sim.particles.position)[order]
+    np.testing.assert_array_equal(table["id"], np.sort(sim.particles.ids))
+    for k, name in enumerate("xyz"):
+        np.testing.assert_array_equal(bits(table[name]), bits(x[:, k]))
 
 
 def test_a_mesh_set_moving_translates_and_refuses_bad_motions():
