@@ -23,7 +23,10 @@
 //!   within max(0, (s − d)/2), less any room the obstacles deny. Two offset spheres at
 //!   neighbouring sites are then at least (s + d₁)/2 + (s + d₂)/2 − s ≥ (d₁ + d₂)/2 apart when
 //!   both diameters are at most s, and sites farther than neighbours (s√2 and more) never meet
-//!   for s ≥ d_max/√2.
+//!   for s ≥ d_max/√2. The lattice is fixed to the axes: in a region a few diameters wide, or
+//!   at an angle to them, its sites may leave room it cannot use, so the spheres it did not
+//!   place are tried again at random centres as in the dilute case (each size until
+//!   [`RETRY_PATIENCE`] in a row found no room).
 //!
 //! The spacing is chosen from the count: the largest s (a few spacings searched) for which
 //! enough sites fit, so that the spheres spread through the whole region rather than packing
@@ -76,8 +79,11 @@ pub const RSA_MAX_FRACTION: f64 = 0.25;
 pub const RSA_TRIALS: usize = 200;
 
 /// The most random centres tried again per sphere that neither random sequential addition
-/// nor the lattice placed (for a dilute request only).
+/// nor the lattice placed.
 pub const RSA_RETRY_TRIALS: usize = 20 * RSA_TRIALS;
+/// Spheres in a row that a retry after the lattice finds no room for, after which it tries
+/// only smaller ones.
+pub const RETRY_PATIENCE: usize = 16;
 
 /// Spare lattice sites asked for unequal spheres, as a fraction of their number: a site
 /// whose neighbours are large takes no sphere.
@@ -155,24 +161,53 @@ pub fn place<R: Rng + ?Sized>(
         let failed = rsa(&mut scene, &order, &radii, RSA_TRIALS, &mut out, rng);
         if !failed.is_empty() {
             lattice(&scene, &failed, &radii, Spacing::Densest, &mut out, rng);
-            // The lattice's sites are fixed: where the spheres RSA placed block them all
-            // (centres crowded in a region a few diameters wide), more random trials may
-            // still find room. At most as many again as the first pass could take.
-            let left: Vec<usize> = failed.iter().copied().filter(|&i| out[i].is_none()).collect();
-            if !left.is_empty() {
-                for &i in &failed {
-                    if let Some(x) = out[i] {
-                        scene.placed.insert(x, radii[i]);
-                    }
-                }
-                let trials = (RSA_TRIALS * order.len() / left.len()).min(RSA_RETRY_TRIALS);
-                rsa(&mut scene, &left, &radii, trials, &mut out, rng);
-            }
+            retry(&mut scene, &failed, order.len(), &radii, &mut out, rng);
         }
     } else {
         lattice(&scene, &order, &radii, Spacing::FromCount, &mut out, rng);
+        retry(&mut scene, &order, order.len(), &radii, &mut out, rng);
     }
     out
+}
+
+/// After the lattice placed what it could of `tried` (of `n` spheres asked for): its sites
+/// are fixed, and where they are blocked (centres crowded in a region a few diameters wide,
+/// a lattice at an angle to the region's faces) random trials may still find room. Each
+/// sphere left (largest first) gets up to [`RSA_RETRY_TRIALS`], at most as many in all as a
+/// first RSA pass over the `n` could take; once [`RETRY_PATIENCE`] in a row found no room,
+/// the full region takes no more of that size or larger, and only smaller ones are tried.
+fn retry<R: Rng + ?Sized>(
+    scene: &mut Scene,
+    tried: &[usize],
+    n: usize,
+    radii: &[f64],
+    out: &mut [Option<Vec3>],
+    rng: &mut R,
+) {
+    let left: Vec<usize> = tried.iter().copied().filter(|&i| out[i].is_none()).collect();
+    if left.is_empty() {
+        return;
+    }
+    for &i in tried {
+        if let Some(x) = out[i] {
+            scene.placed.insert(x, radii[i]);
+        }
+    }
+    let trials = (RSA_TRIALS * n / left.len()).min(RSA_RETRY_TRIALS);
+    let (mut misses, mut blocked) = (0, f64::INFINITY);
+    for &i in &left {
+        if radii[i] >= blocked {
+            continue;
+        }
+        if rsa(scene, &[i], radii, trials, out, rng).is_empty() {
+            misses = 0;
+        } else {
+            misses += 1;
+            if misses == RETRY_PATIENCE {
+                (misses, blocked) = (0, radii[i]);
+            }
+        }
+    }
 }
 
 /// Random sequential addition of the spheres `order` (indices into `radii`), `trials` random
