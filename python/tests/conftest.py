@@ -34,6 +34,20 @@ def bits(a):
     return np.ascontiguousarray(a).view(np.uint64).copy()
 
 
+def assert_last_snapshot_is(out, sim):
+    """The last CSV snapshot of the run folder `out` holds the particles of `sim`, positions
+    to the bit."""
+    import numpy as np
+
+    last = sorted((out / "snapshots").iterdir())[-1]
+    table = np.genfromtxt(last, delimiter=",", names=True)
+    order = np.argsort(sim.particles.ids)
+    x = np.asarray(sim.particles.position)[order]
+    np.testing.assert_array_equal(table["id"], np.sort(sim.particles.ids))
+    for k, name in enumerate("xyz"):
+        np.testing.assert_array_equal(bits(table[name]), bits(x[:, k]))
+
+
 @pytest.fixture
 def settling_bed():
     """The settling-bed example (486 glass beads, linear spring-dashpot), shortened."""

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import grainflow
-from conftest import DECKS, ball_case, bits, run_cli
+from conftest import DECKS, assert_last_snapshot_is, ball_case, bits, run_cli
 
 
 # --- stepping ---------------------------------------------------------------------------
@@ -111,13 +111,7 @@ def test_a_run_equals_grainflow_run_to_the_bit(settling_bed, tmp_path):
     assert done.returncode == 0, done.stderr
     sim = grainflow.Simulation.from_case(settling_bed, overrides={"time.t_stop": 0.02})
     sim.run()
-    last = sorted((out / "snapshots").iterdir())[-1]
-    table = np.genfromtxt(last, delimiter=",", names=True)
-    order = np.argsort(sim.particles.ids)
-    x = np.asarray(sim.particles.position)[order]
-    np.testing.assert_array_equal(table["id"], np.sort(sim.particles.ids))
-    for k, name in enumerate("xyz"):
-        np.testing.assert_array_equal(bits(table[name]), bits(x[:, k]))
+    assert_last_snapshot_is(out, sim)
     series = grainflow.read_timeseries(out / "timeseries.csv")
     assert series["step"][-1] == sim.step_count
     assert series["kinetic_translational"][-1] == sim.diagnostics()["kinetic_translational"]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import grainflow
-from conftest import EXAMPLES, bits, run_cli
+from conftest import EXAMPLES, assert_last_snapshot_is, bits, run_cli
 
 G = 9.80665  # the settling bed's gravity, m/s²
 
@@ -156,13 +156,7 @@ def test_the_program_restarts_a_python_checkpoint_with_its_motion(tmp_path):
     out = tmp_path / "out"
     done = run_cli("run", case, "--set", "time.t_stop=0.05", "--restart", tmp_path / "c.gfc", "--out", out, "-q")
     assert done.returncode == 0, done.stderr
-    last = sorted((out / "snapshots").iterdir())[-1]
-    table = np.genfromtxt(last, delimiter=",", names=True)
-    order = np.argsort(sim.particles.ids)
-    x = np.asarray(sim.particles.position)[order]
-    np.testing.assert_array_equal(table["id"], np.sort(sim.particles.ids))
-    for k, name in enumerate("xyz"):
-        np.testing.assert_array_equal(bits(table[name]), bits(x[:, k]))
+    assert_last_snapshot_is(out, sim)
 
 
 def test_a_mesh_set_moving_translates_and_refuses_bad_motions():

@@ -195,6 +195,18 @@ impl Meshes {
         self.anchors.get(m).copied().unwrap_or(Anchor::START)
     }
 
+    /// Gives mesh `m` (< the count) the motion `motion` set by a script, for the rest of the
+    /// run (its window: always), if it passes the case's checks; marks it as set.
+    fn script(&mut self, m: usize, motion: MeshMotion) -> Result<(), EngineError> {
+        let mut wall = self.walls[m].clone();
+        (wall.motion, wall.window) = (motion, crate::mesh::motion::MotionWindow::ALWAYS);
+        crate::simulation::check_mesh_motion(&wall)?;
+        self.walls[m] = wall;
+        self.scripted.resize(self.walls.len(), false);
+        self.scripted[m] = true;
+        Ok(())
+    }
+
     /// True if the candidates are those of `n` particles.
     fn ready(&self, n: usize) -> bool {
         self.built && self.built_n == n && self.span.len() == n
@@ -995,19 +1007,14 @@ impl Simulation {
         if m >= n {
             return Err(EngineError::BadReference(format!("mesh {m}: the case has {n} meshes")));
         }
-        let mut wall = self.sources.meshes.walls[m].clone();
-        (wall.motion, wall.window) = (motion, crate::mesh::motion::MotionWindow::ALWAYS);
-        crate::simulation::check_mesh_motion(&wall)?;
         let t = self.time();
         let meshes = &mut self.sources.meshes;
         let here = meshes.pose_at(m, t);
+        meshes.script(m, motion)?;
         if meshes.anchors.len() < n {
             meshes.anchors.resize(n, Anchor::START);
         }
         meshes.anchors[m] = Anchor { tau: t - meshes.t0, pose: here };
-        meshes.walls[m] = wall;
-        meshes.scripted.resize(n, false);
-        meshes.scripted[m] = true;
         // The forces held are those of the wall's velocity before.
         self.forces_current = false;
         Ok(())
@@ -1041,12 +1048,7 @@ impl Simulation {
                     c[0]
                 ));
             };
-            let meshes = &mut self.sources.meshes;
-            let wall = &mut meshes.walls[m];
-            (wall.motion, wall.window) = (motion, crate::mesh::motion::MotionWindow::ALWAYS);
-            crate::simulation::check_mesh_motion(wall).map_err(|e| e.to_string())?;
-            meshes.scripted.resize(n, false);
-            meshes.scripted[m] = true;
+            self.sources.meshes.script(m, motion).map_err(|e| e.to_string())?;
         }
         Ok(())
     }
