@@ -48,7 +48,7 @@ fn linear_stiffness(law: &ContactLaw, c: &crate::contact::ContactCoeffs) -> f64 
 fn absolute_eta(law: &ContactLaw, c: &crate::contact::ContactCoeffs) -> f64 {
     match law.damping {
         NormalDamping::MassVelocity => c.eta_n * c.m_eff,
-        NormalDamping::Tsuji => c.eta_n * c.m_eff.sqrt(),
+        NormalDamping::Tsuji | NormalDamping::Liggghts => c.eta_n * c.m_eff.sqrt(),
         NormalDamping::Mfix | NormalDamping::ExactRestitution => c.eta_n,
     }
 }

@@ -60,6 +60,7 @@ pub(super) fn contact(
             ("mfix", LeverArm::RadicalPlane),
             ("radius", LeverArm::Radius),
             ("lammps_granular", LeverArm::LammpsGranular),
+            ("liggghts", LeverArm::Liggghts),
         ],
     )?;
     let damping = choose(
@@ -72,6 +73,7 @@ pub(super) fn contact(
             ("exact_restitution", NormalDamping::ExactRestitution),
             ("mass_velocity", NormalDamping::MassVelocity),
             ("tsuji", NormalDamping::Tsuji),
+            ("liggghts", NormalDamping::Liggghts),
         ],
     )?;
     let clip_attraction = contact.clip_attraction.unwrap_or(false);
@@ -80,7 +82,7 @@ pub(super) fn contact(
         "coulomb",
         contact.coulomb.as_deref(),
         CoulombCap::Mfix,
-        &[("mfix", CoulombCap::Mfix), ("lammps", CoulombCap::Lammps)],
+        &[("mfix", CoulombCap::Mfix), ("lammps", CoulombCap::Lammps), ("liggghts", CoulombCap::Liggghts)],
     )?;
     let sizes = choose(
         "[contact]",
@@ -298,7 +300,12 @@ fn layer(
     let p = ContactParams {
         kn: pick(|t| t.kn),
         kt_fac: pick(|t| t.kt_fac).unwrap_or(d.kt_fac),
-        etat_fac: pick(|t| t.etat_fac).unwrap_or(d.etat_fac),
+        // LIGGGHTS's tangential damping is on unless switched off (`etat_fac = 0`).
+        etat_fac: pick(|t| t.etat_fac).unwrap_or(if law.damping == NormalDamping::Liggghts {
+            1.0
+        } else {
+            d.etat_fac
+        }),
         en: pick(|t| t.en).unwrap_or(d.en),
         et: pick(|t| t.et),
         mu: pick(|t| t.mu).unwrap_or(d.mu),

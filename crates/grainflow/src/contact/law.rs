@@ -54,7 +54,7 @@ impl ContactForce {
 /// (a branch-free law otherwise computes every variant's value — several square roots and
 /// divisions each — and picks one); the values it picks are the same either way.
 pub mod parts {
-    use crate::contact::{ContactLaw, CoulombCap, HistoryFrame, LeverArm, NormalDamping};
+    use crate::contact::{ContactLaw, CoulombCap, HistoryFrame, LeverArm};
 
     /// The history rescaled to its stored length ([`HistoryFrame::Rotate`]).
     pub const ROTATE: u8 = 1;
@@ -64,7 +64,8 @@ pub mod parts {
     pub const LAMMPS_CAP: u8 = 4;
     /// Rolling friction (some μ_r ≠ 0).
     pub const ROLLING: u8 = 8;
-    /// Damping ∝ √m_eff ([`NormalDamping::Tsuji`]).
+    /// Damping ∝ √m_eff ([`Tsuji`](crate::contact::NormalDamping::Tsuji),
+    /// [`Liggghts`](crate::contact::NormalDamping::Liggghts)).
     pub const TSUJI: u8 = 16;
     /// Lever arms to the radical plane ([`LeverArm::RadicalPlane`]).
     pub const RADICAL: u8 = 32;
@@ -72,8 +73,10 @@ pub mod parts {
     /// size ([`CoeffTable::sized`](crate::contact::CoeffTable::sized)). A property of the
     /// table, not of the law's settings, so not in [`ALL`].
     pub const SIZED: u8 = 64;
+    /// LIGGGHTS's Coulomb cap ([`CoulombCap::Liggghts`]).
+    pub const LIGGGHTS_CAP: u8 = 128;
     /// Every part the law's settings can pick: the law for any settings.
-    pub const ALL: u8 = ROTATE | MFIX_CAP | LAMMPS_CAP | ROLLING | TSUJI | RADICAL;
+    pub const ALL: u8 = ROTATE | MFIX_CAP | LAMMPS_CAP | ROLLING | TSUJI | RADICAL | LIGGGHTS_CAP;
 
     /// The parts `law` needs; `rolling` if some contact has rolling friction, `sized` if the
     /// coefficients are per unit size.
@@ -83,8 +86,9 @@ pub mod parts {
             | bit(law.history == HistoryFrame::Rotate, ROTATE)
             | bit(law.coulomb == CoulombCap::Mfix, MFIX_CAP)
             | bit(law.coulomb == CoulombCap::Lammps, LAMMPS_CAP)
+            | bit(law.coulomb == CoulombCap::Liggghts, LIGGGHTS_CAP)
             | bit(rolling, ROLLING)
-            | bit(law.damping == NormalDamping::Tsuji, TSUJI)
+            | bit(law.damping.per_root_mass(), TSUJI)
             | bit(law.lever == LeverArm::RadicalPlane, RADICAL)
     }
 }
@@ -136,6 +140,7 @@ pub fn contact_force_for<N: NormalSubModel, T: TangentialSubModel, const PARTS: 
     debug_assert!(PARTS & parts::ROTATE != 0 || frame != HistoryFrame::Rotate);
     debug_assert!(PARTS & parts::MFIX_CAP != 0 || cap != CoulombCap::Mfix);
     debug_assert!(PARTS & parts::LAMMPS_CAP != 0 || cap != CoulombCap::Lammps);
+    debug_assert!(PARTS & parts::LIGGGHTS_CAP != 0 || cap != CoulombCap::Liggghts);
     let n = g.normal;
     let delta = g.overlap;
     let v_n = v_r.dot(n);
@@ -162,15 +167,12 @@ pub fn contact_force_for<N: NormalSubModel, T: TangentialSubModel, const PARTS: 
     let h = pick(frame == HistoryFrame::Mfix, h, pick(frame == HistoryFrame::Project, projected, rotated));
 
     let limit = c.mu * critical;
-    // A constant where only one cap is compiled, so that the other is never formed.
-    let lammps = if PARTS & parts::MFIX_CAP == 0 {
-        true
-    } else if PARTS & parts::LAMMPS_CAP == 0 {
-        false
-    } else {
-        cap == CoulombCap::Lammps
-    };
-    let (f_t, stored) = T::force(h, n, v_t, k, damp_t, limit, lammps, frame, dt);
+    // Constants where only one cap is compiled, so that the others are never formed.
+    let only = |bit: u8| PARTS & (parts::MFIX_CAP | parts::LAMMPS_CAP | parts::LIGGGHTS_CAP) == bit;
+    let chosen = |bit: u8, this: CoulombCap| PARTS & bit != 0 && (only(bit) || cap == this);
+    let lammps = chosen(parts::LAMMPS_CAP, CoulombCap::Lammps);
+    let liggghts = chosen(parts::LIGGGHTS_CAP, CoulombCap::Liggghts);
+    let (f_t, stored) = T::force(h, n, v_t, k, damp_t, limit, lammps, liggghts, frame, dt);
     // A cohesive contact is known by its history where it has no contact flag (module doc of
     // `submodel`).
     *history = if N::REACHES { mark_formed(stored) } else { stored };

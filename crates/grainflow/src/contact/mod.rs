@@ -29,7 +29,7 @@ pub mod tangential;
 
 pub use coefficients::CoeffTable;
 pub use normal::NormalModel;
-pub use params::{ContactCoeffs, ContactParams, damping_coefficient, tsuji_alpha};
+pub use params::{ContactCoeffs, ContactParams, damping_coefficient, liggghts_beta, tsuji_alpha};
 pub use tangential::TangentialModel;
 
 /// What happens to the stored tangential history when the contact frame turns.
@@ -56,6 +56,9 @@ pub enum LeverArm {
     /// LAMMPS `pair granular` (2021): the contact-point velocity uses R; the torque R − δ/2
     /// between particles and R at walls (`fix wall/gran`).
     LammpsGranular,
+    /// LIGGGHTS: R − δ/2 for both the contact-point velocity and the torque, between
+    /// particles and at walls (`surface_model_default`).
+    Liggghts,
 }
 
 /// How the normal damping coefficient follows from the restitution coefficient.
@@ -75,12 +78,25 @@ pub enum NormalDamping {
     /// α(e) (Tsuji et al. 1992), m_eff of the two particles as for `MassVelocity`, and
     /// η_t = `etat_fac`·η_n.
     Tsuji,
+    /// LIGGGHTS's damping from restitution, β = ln e/√(ln²e + π²), with m_eff of the two
+    /// particles as for `MassVelocity`: `model hertz` γ_n = −2√(5/6)·β·√(S_n m_eff),
+    /// γ_t = −2√(5/6)·β·√(S_t m_eff) with S_n = 2E*√(R*δ), S_t = 8G*√(R*δ) (so
+    /// η_n = √5|β|·√(K_n m_eff)·δ^¼ and η_t = √(10/3)|β|·√(K_t m_eff)·δ^¼, times `etat_fac`);
+    /// `model hooke` γ_n = √(4 m_eff k_n ln²e/(ln²e + π²)) = −2β√(k_n m_eff) and
+    /// γ_t = `etat_fac`·γ_n.
+    Liggghts,
 }
 
 impl NormalDamping {
     /// True when the damping depends on the masses of the particles in contact.
     pub fn per_particle_mass(&self) -> bool {
-        matches!(self, NormalDamping::MassVelocity | NormalDamping::Tsuji)
+        matches!(self, NormalDamping::MassVelocity | NormalDamping::Tsuji | NormalDamping::Liggghts)
+    }
+
+    /// True when the damping is formed per √m_eff at set-up and scaled by the contact's
+    /// √m_eff in the force loop (`Tsuji`, `Liggghts`).
+    pub fn per_root_mass(&self) -> bool {
+        matches!(self, NormalDamping::Tsuji | NormalDamping::Liggghts)
     }
 }
 
@@ -92,6 +108,10 @@ pub enum CoulombCap {
     /// LAMMPS: the whole trial force (spring and dashpot) is scaled down to μ|F_n|, and the
     /// spring is set so that spring plus dashpot give that force.
     Lammps,
+    /// LIGGGHTS (`tangential history`): the spring force alone is compared with μ|F_n|; beyond
+    /// it the spring force is scaled down to μ|F_n| with no dashpot and the spring set to give
+    /// it; within it the dashpot is added.
+    Liggghts,
 }
 
 /// A complete contact law: normal model, tangential model and history treatment.

@@ -78,8 +78,10 @@ pub(crate) fn pair_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8
         pair_geometry_without_levers(p.d, p.ra, p.rb)
     };
     let radical = law.lever == LeverArm::RadicalPlane;
-    g.lever_i = if radical { g.lever_i } else { p.ra };
-    g.lever_j = if radical { g.lever_j } else { p.rb };
+    // LIGGGHTS's lever R − δ/2 serves the contact-point velocity and the torque alike.
+    let shorten = if law.lever == LeverArm::Liggghts { 0.5 * g.overlap } else { 0.0 };
+    g.lever_i = if radical { g.lever_i } else { p.ra - shorten };
+    g.lever_j = if radical { g.lever_j } else { p.rb - shorten };
     let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, p.wb);
     // Coefficients per unit size formed for the pair's own R* and mass (not formed otherwise).
     let sized_input;
@@ -148,7 +150,8 @@ pub(crate) fn wall_law<N: NormalSubModel, T: TangentialSubModel, const PARTS: u8
     dt: f64,
     p: &PairInput,
 ) -> (PairLoad, Vec3, LoadBound) {
-    let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb, lever_j: 0.0 };
+    let shorten = if law.lever == LeverArm::Liggghts { 0.5 * p.ra } else { 0.0 };
+    let g = ContactGeometry { normal: p.d, overlap: p.ra, lever_i: p.rb - shorten, lever_j: 0.0 };
     // v − 0 = v: the same bits as the pair form with the wall at rest.
     let v_r = relative_velocity_of_centres(&g, p.dv, p.wa, Vec3::ZERO);
     let (f, h) = law_force::<N, T, PARTS>(law, dt, p, &g, v_r);
@@ -230,7 +233,7 @@ fn pick(c: bool, a: f64, b: f64) -> f64 {
 }
 
 /// The coefficients with damping that depends on the contact's masses applied: ×m_eff
-/// (`MassVelocity`), ×√m_eff (`Tsuji`); unchanged otherwise.
+/// (`MassVelocity`), ×√m_eff (`Tsuji`, `Liggghts`); unchanged otherwise.
 #[inline(always)]
 pub(crate) fn scaled_damping(c: &ContactCoeffs, damping: NormalDamping, m_eff: f64) -> ContactCoeffs {
     scaled_damping_for::<{ parts::ALL }>(c, damping, m_eff)
@@ -243,12 +246,12 @@ fn scaled_damping_for<const PARTS: u8>(
     damping: NormalDamping,
     m_eff: f64,
 ) -> ContactCoeffs {
-    debug_assert!(PARTS & parts::TSUJI != 0 || damping != NormalDamping::Tsuji);
+    debug_assert!(PARTS & parts::TSUJI != 0 || !damping.per_root_mass());
     // Both scales are formed and one picked (×1 is exact): no branch in a contact loop.
     let root = if PARTS & parts::TSUJI != 0 { m_eff.sqrt() } else { 1.0 };
     let s = if damping == NormalDamping::MassVelocity {
         m_eff
-    } else if damping == NormalDamping::Tsuji {
+    } else if damping.per_root_mass() {
         root
     } else {
         1.0

@@ -101,6 +101,15 @@ pub fn damping_coefficient(k: f64, m: f64, e: f64) -> f64 {
     2.0 * (k * m).sqrt() * l.abs() / (std::f64::consts::PI.powi(2) + l * l).sqrt()
 }
 
+/// LIGGGHTS's damping ratio from restitution, −β = |ln e|/√(ln²e + π²) (1 at e = 0).
+pub fn liggghts_beta(e: f64) -> f64 {
+    if e <= 0.0 {
+        return 1.0;
+    }
+    let l = e.ln();
+    l.abs() / (l * l + std::f64::consts::PI * std::f64::consts::PI).sqrt()
+}
+
 /// LAMMPS's fit of Tsuji's damping ratio to the restitution coefficient:
 /// α = 1.2728 − 4.2783e + 11.087e² − 22.348e³ + 27.467e⁴ − 18.022e⁵ + 4.8218e⁶.
 pub fn tsuji_alpha(e: f64) -> f64 {

@@ -493,6 +493,9 @@ impl Lanes {
 /// history, its Coulomb cap, Tsuji damping): the Hertz–Mindlin yardstick case.
 const LAMMPS_MINDLIN: u8 = parts::LAMMPS_CAP | parts::ROTATE | parts::TSUJI;
 
+/// LIGGGHTS's `hertz tangential history` (its Coulomb cap, damping per √m_eff).
+const LIGGGHTS_HERTZ: u8 = parts::LIGGGHTS_CAP | parts::TSUJI;
+
 /// MFIX's law: its Coulomb cap and lever arms to the radical plane.
 const MFIX: u8 = parts::MFIX_CAP | parts::RADICAL;
 
@@ -505,7 +508,7 @@ const ALL_SIZED: u8 = parts::ALL | parts::SIZED;
 ///
 /// The loop has no branches, so it compiles to vector instructions. It is compiled for the
 /// settings most runs use — LAMMPS's `gran/hooke/history` and `granular … mindlin … tsuji`,
-/// MFIX's law — with only the parts of the law they pick ([`parts`]), and once for any
+/// LIGGGHTS's `hooke/stiffness` and `hertz` with `tangential history`, MFIX's law — with only the parts of the law they pick ([`parts`]), and once for any
 /// settings, with and without sizes of their own; the values are the same.
 #[inline(always)]
 fn contact_loads<N: NormalSubModel, T: TangentialSubModel, const WALL: bool>(
@@ -521,6 +524,8 @@ fn contact_loads<N: NormalSubModel, T: TangentialSubModel, const WALL: bool>(
         parts::LAMMPS_CAP => loads_widest::<N, T, WALL, { parts::LAMMPS_CAP }>(law, dt, q, input, output),
         LAMMPS_MINDLIN => loads_widest::<N, T, WALL, LAMMPS_MINDLIN>(law, dt, q, input, output),
         MFIX => loads_widest::<N, T, WALL, MFIX>(law, dt, q, input, output),
+        parts::LIGGGHTS_CAP => loads_widest::<N, T, WALL, { parts::LIGGGHTS_CAP }>(law, dt, q, input, output),
+        LIGGGHTS_HERTZ => loads_widest::<N, T, WALL, LIGGGHTS_HERTZ>(law, dt, q, input, output),
         p if p & parts::SIZED != 0 => loads_widest::<N, T, WALL, ALL_SIZED>(law, dt, q, input, output),
         _ => loads_widest::<N, T, WALL, { parts::ALL }>(law, dt, q, input, output),
     }
@@ -797,15 +802,16 @@ mod tests {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
         let mut cases = 0;
         for history in [HistoryFrame::Mfix, HistoryFrame::Project, HistoryFrame::Rotate] {
-            for lever in [LeverArm::RadicalPlane, LeverArm::Radius, LeverArm::LammpsGranular] {
+            for lever in [LeverArm::RadicalPlane, LeverArm::Radius, LeverArm::LammpsGranular, LeverArm::Liggghts] {
                 for damping in [
                     NormalDamping::Mfix,
                     NormalDamping::ExactRestitution,
                     NormalDamping::MassVelocity,
                     NormalDamping::Tsuji,
+                    NormalDamping::Liggghts,
                 ] {
                     for (clip_attraction, coulomb) in
-                        [(false, CoulombCap::Mfix), (true, CoulombCap::Lammps), (true, CoulombCap::Mfix)]
+                        [(false, CoulombCap::Mfix), (true, CoulombCap::Lammps), (true, CoulombCap::Mfix), (false, CoulombCap::Liggghts)]
                     {
                         let law = ContactLaw {
                             normal,
@@ -852,7 +858,16 @@ mod tests {
                             // Every loop compiled for parts that include the law's, on every
                             // instruction set.
                             let needed = parts::needed(&law, rolling, sized);
-                            for p in [parts::LAMMPS_CAP, LAMMPS_MINDLIN, MFIX, parts::ALL, ALL_SIZED] {
+                            let sets = [
+                                parts::LAMMPS_CAP,
+                                LAMMPS_MINDLIN,
+                                MFIX,
+                                parts::LIGGGHTS_CAP,
+                                LIGGGHTS_HERTZ,
+                                parts::ALL,
+                                ALL_SIZED,
+                            ];
+                            for p in sets {
                                 // Sizing is not a part a loop may have unneeded: it changes the
                                 // coefficients.
                                 if needed & !p != 0 || (p ^ needed) & parts::SIZED != 0 {
@@ -864,6 +879,10 @@ mod tests {
                                     }
                                     LAMMPS_MINDLIN => every_copy::<N, T, LAMMPS_MINDLIN>(&law, dt, &input),
                                     MFIX => every_copy::<N, T, MFIX>(&law, dt, &input),
+                                    parts::LIGGGHTS_CAP => {
+                                        every_copy::<N, T, { parts::LIGGGHTS_CAP }>(&law, dt, &input)
+                                    }
+                                    LIGGGHTS_HERTZ => every_copy::<N, T, LIGGGHTS_HERTZ>(&law, dt, &input),
                                     ALL_SIZED => every_copy::<N, T, ALL_SIZED>(&law, dt, &input),
                                     _ => every_copy::<N, T, { parts::ALL }>(&law, dt, &input),
                                 };
@@ -877,7 +896,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!(cases, 3 * 3 * 4 * 3 * 8);
+        assert_eq!(cases, 3 * 4 * 5 * 4 * 8);
     }
 
     /// Every pair of the registries' models (`normal_models!`, `tangential_models!`).

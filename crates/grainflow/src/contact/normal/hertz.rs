@@ -4,7 +4,7 @@ use super::{
     NormalParts, NormalSubModel, SizeScales, StabilityRule, common_checks, elastic_given, mass_velocity,
     normal_damping, set_up_mass_scale,
 };
-use crate::contact::params::{ContactCoeffs, ContactParams, ElasticPair, damping_coefficient};
+use crate::contact::params::{ContactCoeffs, ContactParams, ElasticPair, damping_coefficient, liggghts_beta};
 use crate::contact::{ContactLaw, NormalDamping, NormalModel, limits};
 use crate::error::EngineError;
 
@@ -47,7 +47,7 @@ impl NormalSubModel for Hertz {
                 limits::ET.check(what, "et", et)?;
                 et
             }
-            NormalDamping::MassVelocity | NormalDamping::Tsuji => 1.0,
+            NormalDamping::MassVelocity | NormalDamping::Tsuji | NormalDamping::Liggghts => 1.0,
         };
         let sr = h.r_star.sqrt();
         let kn = p.hertz_kn.unwrap_or(4.0 / 3.0 * h.e_star() * sr);
@@ -69,6 +69,10 @@ impl NormalSubModel for Hertz {
                     damping_coefficient(kt, 2.0 / 7.0 * m_eff, et)
                 }
                 NormalDamping::Tsuji => p.etat_fac * normal_damping::<Self>(law, kn, m_eff, p.en),
+                // −2√(5/6)·β·√(S_t), S_t = K_t·√δ (the √δ goes with δ^¼).
+                NormalDamping::Liggghts => {
+                    p.etat_fac * 2.0 * (5.0f64 / 6.0).sqrt() * liggghts_beta(p.en) * kt.sqrt()
+                }
                 NormalDamping::MassVelocity => mass_velocity(what, p)?.1,
             },
             mu: p.mu,

@@ -30,7 +30,7 @@ pub use jkr::Jkr;
 pub use lsd::LinearSpringDashpot;
 
 use super::geometry::pair_touching;
-use super::params::{ContactCoeffs, ContactParams, ElasticPair, damping_coefficient, tsuji_alpha};
+use super::params::{ContactCoeffs, ContactParams, ElasticPair, damping_coefficient, liggghts_beta, tsuji_alpha};
 use super::{ContactLaw, NormalDamping, limits};
 use crate::error::EngineError;
 
@@ -221,7 +221,7 @@ pub(super) fn common_checks(what: &str, p: &ContactParams) -> Result<(), EngineE
 }
 
 /// η_n for stiffness `k`, effective mass `m` and restitution `e`, by the law's damping rule
-/// (for `Tsuji`, per √mass: α√k; `MassVelocity` is set from γ_n by the caller).
+/// (for `Tsuji` and `Liggghts`, per √mass: α√k; `MassVelocity` is set from γ_n by the caller).
 pub(super) fn normal_damping<N: NormalSubModel>(law: &ContactLaw, k: f64, m: f64, e: f64) -> f64 {
     match law.damping {
         NormalDamping::Mfix => damping_coefficient(k, m, e),
@@ -230,6 +230,12 @@ pub(super) fn normal_damping<N: NormalSubModel>(law: &ContactLaw, k: f64, m: f64
             super::damping::exact_damping_ratio(p, q, e, law.clip_attraction) * (k * m).sqrt()
         }
         NormalDamping::Tsuji => tsuji_alpha(e) * k.sqrt(),
+        // `model hertz`: −2√(5/6)·β·√(S_n) with S_n = (3/2)·K_n·√δ (the √δ goes with δ^¼);
+        // `model hooke`: −2β·√k_n.
+        NormalDamping::Liggghts if N::MODEL == NormalModel::Hertz => {
+            2.0 * (5.0f64 / 6.0).sqrt() * liggghts_beta(e) * (1.5 * k).sqrt()
+        }
+        NormalDamping::Liggghts => 2.0 * liggghts_beta(e) * k.sqrt(),
         NormalDamping::MassVelocity => 0.0,
     }
 }

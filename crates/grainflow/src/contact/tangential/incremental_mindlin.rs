@@ -25,18 +25,21 @@ impl TangentialSubModel for IncrementalMindlin {
         damp_t: f64,
         limit: f64,
         lammps: bool,
+        liggghts: bool,
         _frame: HistoryFrame,
         dt: f64,
     ) -> (Vec3, Vec3) {
         let f_el = h - k * dt * v_t;
         let trial = f_el - damp_t * v_t;
         let len = f_el.length();
-        // Beyond the limit: LAMMPS scales the trial force down, MFIX the spring.
+        // Beyond the limit: LAMMPS scales the trial force down, MFIX and LIGGGHTS the spring
+        // (LIGGGHTS also tests the spring alone against the limit).
         let lammps_capped = (limit / trial.length()) * trial;
         let mfix_capped = (limit / len) * f_el;
         let capped = pick(lammps, lammps_capped, mfix_capped);
         let capped_stored = pick(lammps, lammps_capped + damp_t * v_t, mfix_capped);
-        let sliding = trial.length_squared() > limit * limit;
+        let tested = pick(liggghts, f_el, trial);
+        let sliding = tested.length_squared() > limit * limit;
         // |f_el| = 0 exactly when |f_el|² = 0: no square root where only LAMMPS's cap is used.
         let stuck = f_el.length_squared() == 0.0;
         (

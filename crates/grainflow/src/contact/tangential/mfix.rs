@@ -24,19 +24,29 @@ impl TangentialSubModel for MfixTotal {
         damp_t: f64,
         limit: f64,
         lammps: bool,
+        liggghts: bool,
         frame: HistoryFrame,
         dt: f64,
     ) -> (Vec3, Vec3) {
         let s = h + dt * v_t;
         let s = pick(frame == HistoryFrame::Project, s - s.dot(n) * n, s);
-        let trial = -k * s - damp_t * v_t;
+        let spring = -k * s;
+        let trial = spring - damp_t * v_t;
         let len = s.length();
         let dir = s / len;
         let lammps_capped = (limit / trial.length()) * trial;
-        let capped = pick(lammps, lammps_capped, -limit * dir);
-        let capped_stored = pick(lammps, -(lammps_capped + damp_t * v_t) / k, (limit / k) * dir);
+        // LIGGGHTS compares the spring alone, k·|s|, with the limit and drops the dashpot when
+        // it slides.
+        let liggghts_capped = (limit / (k * len)) * spring;
+        let capped = pick(liggghts, liggghts_capped, pick(lammps, lammps_capped, -limit * dir));
+        let capped_stored = pick(
+            liggghts,
+            -liggghts_capped / k,
+            pick(lammps, -(lammps_capped + damp_t * v_t) / k, (limit / k) * dir),
+        );
         let capped_stored = pick(k > 0.0, capped_stored, Vec3::ZERO);
-        let sliding = trial.length_squared() > limit * limit;
+        let tested = pick(liggghts, spring, trial);
+        let sliding = tested.length_squared() > limit * limit;
         let stuck = s.length_squared() == 0.0;
         (
             pick(sliding, pick(stuck, Vec3::ZERO, capped), trial),

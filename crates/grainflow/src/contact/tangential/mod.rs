@@ -32,7 +32,7 @@ pub trait TangentialSubModel: Copy + Default + Send + Sync + 'static {
     /// The tangential force and the history to store, from the stored history `h` already in
     /// the tangent plane as `frame` asks, the normal `n`, the tangential velocity `v_t`, the
     /// stiffness `k` and damping `damp_t` in use, the Coulomb limit `limit`, `lammps` for
-    /// LAMMPS's cap (else MFIX's) and the step `dt`. Branch-free.
+    /// LAMMPS's cap, `liggghts` for LIGGGHTS's (else MFIX's) and the step `dt`. Branch-free.
     #[allow(clippy::too_many_arguments)]
     fn force(
         h: Vec3,
@@ -42,6 +42,7 @@ pub trait TangentialSubModel: Copy + Default + Send + Sync + 'static {
         damp_t: f64,
         limit: f64,
         lammps: bool,
+        liggghts: bool,
         frame: HistoryFrame,
         dt: f64,
     ) -> (Vec3, Vec3);
