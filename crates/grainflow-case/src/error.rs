@@ -73,7 +73,7 @@ pub enum CaseError {
 
 fn blockers_text(list: &[CaseError]) -> String {
     let mut s = format!(
-        "{} thing{} in this deck grainflow cannot run:",
+        "{} thing{} in this input grainflow cannot run:",
         list.len(),
         if list.len() == 1 { "" } else { "s" }
     );

@@ -10,6 +10,7 @@ pub mod error;
 
 pub mod input;
 pub mod lammps;
+pub mod liggghts;
 pub mod mfix;
 pub mod particles;
 pub mod plan;

@@ -9,10 +9,12 @@ use std::process::ExitCode;
 
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
-    /// The MFIX deck (mfix.dat or *.mfx); particle_input.dat is read beside it. The case
-    /// names that file relative to itself: save the TOML beside the deck.
+    /// The MFIX deck (mfix.dat or *.mfx; particle_input.dat is read beside it) or LIGGGHTS
+    /// script (in.* or *.liggghts). The case names its particle file relative to itself:
+    /// save the TOML beside the deck or script.
     deck: PathBuf,
-    /// KEYWORD=VALUE overrides applied after the deck, as on MFIX's command line.
+    /// KEYWORD=VALUE overrides applied after the deck, as on MFIX's command line; for a
+    /// script, its variables (NAME=VALUE or -var NAME VALUE).
     #[arg(value_name = "KEY=VALUE")]
     overrides: Vec<String>,
     /// A TOML file of [[motion]] tables replacing user-defined functions that prescribe
@@ -22,6 +24,9 @@ pub struct ConvertArgs {
 }
 
 pub fn main(args: ConvertArgs) -> ExitCode {
+    if grainflow_case::liggghts::is_script(&args.deck) {
+        return script(&args);
+    }
     let deck = match grainflow_case::mfix::load(&args.deck, &args.overrides, args.motion.as_deref()) {
         Ok(d) => d,
         Err(e) => {
@@ -45,4 +50,36 @@ pub fn main(args: ConvertArgs) -> ExitCode {
         return ExitCode::FAILURE;
     }
     ExitCode::SUCCESS
+}
+
+/// `grainflow convert in.script [-var NAME VALUE ...]`.
+fn script(args: &ConvertArgs) -> ExitCode {
+    let loaded = crate::run::script_variables(&args.overrides).and_then(|vars| {
+        grainflow_case::liggghts::load_relayed(&args.deck, &vars, &grainflow_case::input::direct)
+            .map_err(|e| e.to_string())
+    });
+    let s = match loaded {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    for w in &s.case.warnings {
+        eprintln!("warning: {w}");
+    }
+    match grainflow_case::liggghts::to_toml(&s.raw, &args.deck.display().to_string(), &s.notes) {
+        Ok(t) => {
+            let mut out = std::io::stdout().lock();
+            if let Err(e) = out.write_all(t.as_bytes()).and_then(|_| out.flush()) {
+                eprintln!("error: cannot write the case to standard output: {e}");
+                return ExitCode::FAILURE;
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

@@ -49,8 +49,35 @@ enum Command {
 /// Exit code for input the program cannot use.
 pub const EXIT_BAD_INPUT: u8 = 2;
 
+/// The arguments with LIGGGHTS's `-var NAME VALUE` (also `--var`) turned into the `NAME=VALUE`
+/// override a script takes, so that a LIGGGHTS command line runs unchanged.
+fn arguments() -> Vec<std::ffi::OsString> {
+    let mut out = Vec::new();
+    let mut args = std::env::args_os();
+    while let Some(a) = args.next() {
+        if a == "-var" || a == "--var" {
+            match (args.next(), args.next()) {
+                (Some(name), Some(value)) => {
+                    let mut v = name;
+                    v.push("=");
+                    v.push(value);
+                    out.push(v);
+                }
+                (name, _) => {
+                    // Left for the parser to report.
+                    out.push(a);
+                    out.extend(name);
+                }
+            }
+        } else {
+            out.push(a);
+        }
+    }
+    out
+}
+
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let cli = match Cli::try_parse_from(arguments()) {
         Ok(cli) => cli,
         Err(e) => {
             let _ = e.print();

@@ -214,11 +214,13 @@ fn human_duration(secs: f64) -> String {
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// The case file: TOML (docs/case-file.md), or an MFIX deck, `*.dat` or `*.mfx`, read with
-    /// particle_input.dat beside it (docs/mfix-decks.md).
+    /// The case file: TOML (docs/case-file.md), an MFIX deck, `*.dat` or `*.mfx`, read with
+    /// particle_input.dat beside it (docs/mfix-decks.md), or a LIGGGHTS script, `in.*` or
+    /// `*.liggghts` (docs/liggghts-scripts.md; its variables as -var NAME VALUE).
     case: PathBuf,
-    /// MFIX decks only: KEYWORD=VALUE overrides applied after the deck, as on MFIX's command
-    /// line (e.g. TSTOP=0.5 KN=2.0e4).
+    /// MFIX decks: KEYWORD=VALUE overrides applied after the deck, as on MFIX's command line
+    /// (e.g. TSTOP=0.5 KN=2.0e4). LIGGGHTS scripts: their variables, NAME=VALUE or
+    /// -var NAME VALUE.
     #[arg(value_name = "KEY=VALUE")]
     overrides: Vec<String>,
     /// MFIX decks only: a TOML file of [[motion]] tables (docs/case-file.md) that replaces
@@ -314,7 +316,18 @@ pub fn load_and_warn(
     Ok(case)
 }
 
-/// Reads a case file, or translates an MFIX deck. The error is the message to print.
+/// The `-var NAME VALUE` pairs of a LIGGGHTS script (given as `NAME=VALUE`).
+pub fn script_variables(overrides: &[String]) -> Result<Vec<(String, String)>, String> {
+    overrides
+        .iter()
+        .map(|o| match o.split_once('=') {
+            Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
+            _ => Err(format!("`{o}`: a LIGGGHTS script takes its variables as -var NAME VALUE")),
+        })
+        .collect()
+}
+
+/// Reads a case file, or translates an MFIX deck or a LIGGGHTS script. The error is the message to print.
 /// The files the case names come through `relay` (over ranks, read by rank 0 alone); a case
 /// file's initial particles are read as `bed` says (a deck's are read on every rank).
 fn load_case(
@@ -327,6 +340,24 @@ fn load_case(
 ) -> Result<grainflow_case::Case, String> {
     let sets =
         set.iter().map(|s| grainflow_case::SetOverride::parse(s)).collect::<Result<Vec<_>, String>>()?;
+    if grainflow_case::liggghts::is_script(case) {
+        if let Some(s) = set.first() {
+            return Err(format!(
+                "--set {s}: --set applies to TOML case files; {} is a LIGGGHTS script: give its variables as -var NAME VALUE",
+                case.display()
+            ));
+        }
+        if motion.is_some() {
+            return Err(format!(
+                "--motion applies to MFIX decks only; {} is a LIGGGHTS script",
+                case.display()
+            ));
+        }
+        let vars = script_variables(overrides)?;
+        return grainflow_case::liggghts::load_relayed(case, &vars, relay)
+            .map(|d| d.case)
+            .map_err(|e| e.to_string());
+    }
     if grainflow_case::mfix::is_deck(case) {
         if let Some(s) = set.first() {
             return Err(format!(

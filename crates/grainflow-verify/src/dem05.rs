@@ -367,7 +367,9 @@ impl ModelRun {
             }
             LeverArm::Radius => 1.0,
             // Torque lever R − δ/2 at walls and pairs alike.
-            LeverArm::LammpsGranular => 1.0 - 0.5 * mean_overlap_fraction(self.spec.model) * dmax / RADIUS,
+            LeverArm::LammpsGranular | LeverArm::Liggghts => {
+                1.0 - 0.5 * mean_overlap_fraction(self.spec.model) * dmax / RADIUS
+            }
         };
         gross_sliding_omega(theta_deg) * factor
     }
@@ -428,7 +430,7 @@ pub fn evaluate(options: Options) -> Result<Report, VerifyError> {
         match (r.spec.dt, r.spec.lever) {
             (None, _) => mfix.push(r),
             (Some(_), LeverArm::RadicalPlane) => converged.push(r),
-            (Some(_), LeverArm::Radius | LeverArm::LammpsGranular) => lever_r.push(r),
+            (Some(_), LeverArm::Radius | LeverArm::LammpsGranular | LeverArm::Liggghts) => lever_r.push(r),
         }
     }
     let checks = checks(&mfix, &converged, &lever_r);
@@ -801,6 +803,7 @@ pub fn summary_markdown(report: &Report) -> String {
             LeverArm::RadicalPlane => "MFIX (radical plane)",
             LeverArm::Radius => "R (wall impactors + θ = 0.01°)",
             LeverArm::LammpsGranular => "LAMMPS granular (R, torque R − δ/2)",
+            LeverArm::Liggghts => "LIGGGHTS (R − δ/2)",
         };
         let _ = writeln!(
             s,

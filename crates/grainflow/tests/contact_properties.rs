@@ -454,7 +454,8 @@ fn check_pair_simulation(
             (a_i, d - a_i)
         }
         LeverArm::Radius => (s.ri, s.rj),
-        LeverArm::LammpsGranular => {
+        // Both take the torque about R − δ/2.
+        LeverArm::LammpsGranular | LeverArm::Liggghts => {
             let half = 0.5 * (s.ri + s.rj - d);
             (s.ri - half, s.rj - half)
         }
@@ -553,6 +554,7 @@ proptest! {
         let lever = match law.lever {
             LeverArm::RadicalPlane => d,
             LeverArm::Radius | LeverArm::LammpsGranular => s.ri,
+            LeverArm::Liggghts => s.ri - 0.5 * (s.ri - d),
         };
         let cpt = x - lever * wall_n;
         let balance = t + (x - cpt).cross(f);

@@ -49,7 +49,12 @@ pub(super) fn contact(
         "history",
         contact.history.as_deref(),
         HistoryFrame::Mfix,
-        &[("mfix", HistoryFrame::Mfix), ("project", HistoryFrame::Project), ("rotate", HistoryFrame::Rotate)],
+        &[
+            ("mfix", HistoryFrame::Mfix),
+            ("project", HistoryFrame::Project),
+            ("rotate", HistoryFrame::Rotate),
+            ("liggghts", HistoryFrame::Liggghts),
+        ],
     )?;
     let lever = choose(
         "[contact]",

@@ -164,7 +164,7 @@ pub fn contact_force_for<N: NormalSubModel, T: TangentialSubModel, const PARTS: 
     } else {
         projected // never picked
     };
-    let h = pick(frame == HistoryFrame::Mfix, h, pick(frame == HistoryFrame::Project, projected, rotated));
+    let h = pick(frame == HistoryFrame::Mfix, h, pick(frame.projected(), projected, rotated));
 
     let limit = c.mu * critical;
     // Constants where only one cap is compiled, so that the others are never formed.

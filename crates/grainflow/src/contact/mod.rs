@@ -41,6 +41,25 @@ pub enum HistoryFrame {
     Project,
     /// Rotate into the current tangent plane: project, then restore the stored magnitude.
     Rotate,
+    /// LIGGGHTS: projected as `Project`, and kept when the pair separates (LIGGGHTS resets it
+    /// only within a `contact_distance_factor` > 1), so that a pair that touches again
+    /// resumes its old displacement. grainflow keeps it until the next neighbour-list rebuild;
+    /// LIGGGHTS keeps it across rebuilds too.
+    Liggghts,
+}
+
+impl HistoryFrame {
+    /// True when a pair's history is kept while it is apart ([`HistoryFrame::Liggghts`]).
+    #[inline(always)]
+    pub fn kept_apart(self) -> bool {
+        self == HistoryFrame::Liggghts
+    }
+
+    /// True when the history is projected onto the tangent plane without rescaling.
+    #[inline(always)]
+    pub fn projected(self) -> bool {
+        matches!(self, HistoryFrame::Project | HistoryFrame::Liggghts)
+    }
 }
 
 /// Where the tangential force acts, i.e. the lever arm of its torque and of the spin's

@@ -177,7 +177,7 @@ impl InputLanes {
                 // stays small, and these positions are in cache.
                 let d = s.position[b] - s.position[a];
                 let d = if PERIODIC { s.images.nearest_on_periodic_axes(d) } else { d };
-                let h = kept_or_zero(hist[f.k() - k0], !f.fresh());
+                let h = kept_or_zero(hist[f.k() - k0], !f.fresh() || x.law.history.kept_apart());
                 self.set_pair_for::<PER_MASS, HELD>(i, &s, a, b, d, h);
             }
         }
@@ -424,7 +424,8 @@ impl Lanes {
             let fresh = !*flag;
             *flag = touching;
             loads[i] = None;
-            self.input.set_pair(n, &s, a, b, d, kept_or_zero(hist[k - k0], !fresh));
+            let keep = !fresh || x.law.history.kept_apart();
+            self.input.set_pair(n, &s, a, b, d, kept_or_zero(hist[k - k0], keep));
             kept[n] = i;
             n += touching as usize;
         }
@@ -801,8 +802,12 @@ mod tests {
         let (normal, tangential) = (N::MODEL, T::MODEL);
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
         let mut cases = 0;
-        for history in [HistoryFrame::Mfix, HistoryFrame::Project, HistoryFrame::Rotate] {
-            for lever in [LeverArm::RadicalPlane, LeverArm::Radius, LeverArm::LammpsGranular, LeverArm::Liggghts] {
+        for history in
+            [HistoryFrame::Mfix, HistoryFrame::Project, HistoryFrame::Rotate, HistoryFrame::Liggghts]
+        {
+            for lever in
+                [LeverArm::RadicalPlane, LeverArm::Radius, LeverArm::LammpsGranular, LeverArm::Liggghts]
+            {
                 for damping in [
                     NormalDamping::Mfix,
                     NormalDamping::ExactRestitution,
@@ -810,9 +815,12 @@ mod tests {
                     NormalDamping::Tsuji,
                     NormalDamping::Liggghts,
                 ] {
-                    for (clip_attraction, coulomb) in
-                        [(false, CoulombCap::Mfix), (true, CoulombCap::Lammps), (true, CoulombCap::Mfix), (false, CoulombCap::Liggghts)]
-                    {
+                    for (clip_attraction, coulomb) in [
+                        (false, CoulombCap::Mfix),
+                        (true, CoulombCap::Lammps),
+                        (true, CoulombCap::Mfix),
+                        (false, CoulombCap::Liggghts),
+                    ] {
                         let law = ContactLaw {
                             normal,
                             tangential,
@@ -896,7 +904,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!(cases, 3 * 4 * 5 * 4 * 8);
+        assert_eq!(cases, 4 * 4 * 5 * 4 * 8);
     }
 
     /// Every pair of the registries' models (`normal_models!`, `tangential_models!`).

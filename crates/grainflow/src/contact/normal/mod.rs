@@ -30,7 +30,9 @@ pub use jkr::Jkr;
 pub use lsd::LinearSpringDashpot;
 
 use super::geometry::pair_touching;
-use super::params::{ContactCoeffs, ContactParams, ElasticPair, damping_coefficient, liggghts_beta, tsuji_alpha};
+use super::params::{
+    ContactCoeffs, ContactParams, ElasticPair, damping_coefficient, liggghts_beta, tsuji_alpha,
+};
 use super::{ContactLaw, NormalDamping, limits};
 use crate::error::EngineError;
 

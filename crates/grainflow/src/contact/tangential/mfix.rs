@@ -29,7 +29,7 @@ impl TangentialSubModel for MfixTotal {
         dt: f64,
     ) -> (Vec3, Vec3) {
         let s = h + dt * v_t;
-        let s = pick(frame == HistoryFrame::Project, s - s.dot(n) * n, s);
+        let s = pick(frame.projected(), s - s.dot(n) * n, s);
         let spring = -k * s;
         let trial = spring - damp_t * v_t;
         let len = s.length();
