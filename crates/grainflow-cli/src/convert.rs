@@ -1,5 +1,6 @@
 //! `grainflow convert DECK [KEY=VALUE ...] [--motion FILE] > case.toml`: writes the grainflow
-//! case equivalent to an MFIX deck, so that a case can move over for good.
+//! case equivalent to an MFIX deck or a LIGGGHTS script (`-var NAME VALUE`), so that a case
+//! can move over for good.
 
 use crate::EXIT_BAD_INPUT;
 use clap::Args;
@@ -24,20 +25,29 @@ pub struct ConvertArgs {
 }
 
 pub fn main(args: ConvertArgs) -> ExitCode {
-    if grainflow_case::liggghts::is_script(&args.deck) {
-        return script(&args);
-    }
-    let deck = match grainflow_case::mfix::load(&args.deck, &args.overrides, args.motion.as_deref()) {
-        Ok(d) => d,
+    let origin = args.deck.display().to_string();
+    let translated = if grainflow_case::liggghts::is_script(&args.deck) {
+        crate::run::script_variables(&args.overrides).and_then(|vars| {
+            grainflow_case::liggghts::load_relayed(&args.deck, &vars, &grainflow_case::input::direct)
+                .map(|s| (s.case.warnings, grainflow_case::liggghts::to_toml(&s.raw, &origin, &s.notes)))
+                .map_err(|e| e.to_string())
+        })
+    } else {
+        grainflow_case::mfix::load(&args.deck, &args.overrides, args.motion.as_deref())
+            .map(|d| (d.case.warnings, grainflow_case::mfix::to_toml(&d.raw, &origin, &d.notes)))
+            .map_err(|e| e.to_string())
+    };
+    let (warnings, toml) = match translated {
+        Ok(t) => t,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    for w in &deck.case.warnings {
+    for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let toml = match grainflow_case::mfix::to_toml(&deck.raw, &args.deck.display().to_string(), &deck.notes) {
+    let toml = match toml {
         Ok(t) => t,
         Err(e) => {
             eprintln!("error: {e}");
@@ -50,36 +60,4 @@ pub fn main(args: ConvertArgs) -> ExitCode {
         return ExitCode::FAILURE;
     }
     ExitCode::SUCCESS
-}
-
-/// `grainflow convert in.script [-var NAME VALUE ...]`.
-fn script(args: &ConvertArgs) -> ExitCode {
-    let loaded = crate::run::script_variables(&args.overrides).and_then(|vars| {
-        grainflow_case::liggghts::load_relayed(&args.deck, &vars, &grainflow_case::input::direct)
-            .map_err(|e| e.to_string())
-    });
-    let s = match loaded {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
-    };
-    for w in &s.case.warnings {
-        eprintln!("warning: {w}");
-    }
-    match grainflow_case::liggghts::to_toml(&s.raw, &args.deck.display().to_string(), &s.notes) {
-        Ok(t) => {
-            let mut out = std::io::stdout().lock();
-            if let Err(e) = out.write_all(t.as_bytes()).and_then(|_| out.flush()) {
-                eprintln!("error: cannot write the case to standard output: {e}");
-                return ExitCode::FAILURE;
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
 }

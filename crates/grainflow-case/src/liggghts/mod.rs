@@ -779,11 +779,8 @@ impl Translator {
 
 /// The TOML of a translated script, with its notes as comments.
 pub fn to_toml(raw: &RawCase, origin: &str, notes: &[String]) -> Result<String, CaseError> {
-    let toml = crate::mfix::to_toml(raw, origin, notes)?;
-    Ok(toml
-        .replacen("from the MFIX deck", "from the LIGGGHTS script", 1)
-        .replacen("docs/mfix-decks.md", "docs/liggghts-scripts.md", 1)
-        .replacen("beside the deck", "beside the script", 1))
+    let what = format!("the LIGGGHTS script {origin}");
+    crate::mfix::translated_toml(raw, &what, "docs/liggghts-scripts.md", "script", notes)
 }
 
 #[cfg(test)]

@@ -214,14 +214,28 @@ fn explain(e: CaseError, origin: &str) -> CaseError {
 /// Serialises a translated case as a TOML case file, with a header naming the deck and the
 /// translation's notes as comments.
 pub fn to_toml(raw: &RawCase, origin: &str, notes: &[String]) -> Result<String, CaseError> {
+    translated_toml(raw, &format!("the MFIX deck {origin}"), "docs/mfix-decks.md", "deck", notes)
+}
+
+/// The TOML of a case translated from `what` (e.g. "the MFIX deck mfix.dat"), whose
+/// translation `doc` describes, with its notes as comments; `kind` names the input ("deck").
+pub(crate) fn translated_toml(
+    raw: &RawCase,
+    what: &str,
+    doc: &str,
+    kind: &str,
+    notes: &[String],
+) -> Result<String, CaseError> {
     let body =
-        toml::to_string(raw).map_err(|e| CaseError::Syntax(format!("{origin}: cannot write TOML: {e}")))?;
+        toml::to_string(raw).map_err(|e| CaseError::Syntax(format!("{what}: cannot write TOML: {e}")))?;
     let mut s = format!(
-        "# grainflow case translated from the MFIX deck {origin} by grainflow {}.\n# Keys, units and defaults: docs/case-file.md; the translation: docs/mfix-decks.md.\n",
+        "# grainflow case translated from {what} by grainflow {}.\n# Keys, units and defaults: docs/case-file.md; the translation: {doc}.\n",
         env!("CARGO_PKG_VERSION")
     );
     if raw.particles.as_ref().is_some_and(|p| p.file.is_some()) {
-        s.push_str("# The particle file is named relative to this file: keep it beside the deck.\n");
+        s.push_str(&format!(
+            "# The particle file is named relative to this file: keep it beside the {kind}.\n"
+        ));
     }
     for n in notes {
         for (k, line) in n.lines().enumerate() {
