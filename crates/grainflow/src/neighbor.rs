@@ -34,8 +34,9 @@ pub struct NeighborStats {
 /// Pairs are stored as a half list in compressed rows: the partners of slot `a` are the slots
 /// `b > a` in `partners[offsets[a]..offsets[a + 1]]`, ascending. Pair `k` (its place in that
 /// order) carries its tangential history in `pair_history[k]`, seen from the lower slot `a`,
-/// valid while `in_contact[k]` is set (zero otherwise). This is the order the force loop walks
-/// memory in and sums forces in.
+/// valid while `in_contact[k]` is set (zero otherwise), or, for a law that keeps the history of
+/// a pair that came apart (LIGGGHTS's), while it is not zero. This is the order the force loop
+/// walks memory in and sums forces in.
 #[derive(Debug, Clone, Default)]
 pub struct NeighborList {
     skin: f64,
@@ -44,6 +45,9 @@ pub struct NeighborList {
     pair_history: Vec<Vec3>,
     /// Whether each pair touched at the last force evaluation.
     in_contact: Vec<bool>,
+    /// Whether a pair that came apart keeps its history (until it touches again) rather than
+    /// losing it: through rebuilds, checkpoints and moves between ranks too.
+    keep_apart: bool,
     /// Candidate particle–wall pairs (slot, wall index), ordered by slots.
     wall_pairs: Vec<[u32; 2]>,
     wall_history: Vec<Vec3>,
@@ -122,6 +126,19 @@ impl NeighborList {
     /// An empty list with the given skin (m) for a domain with periodic axes.
     pub fn with_periodic(skin: f64, periodic: Periodic) -> Self {
         NeighborList { skin, periodic, ..Default::default() }
+    }
+
+    /// Keeps the history of a pair that came apart, as a law whose history outlives the
+    /// contact needs ([`HistoryFrame::kept_apart`](crate::contact::HistoryFrame::kept_apart)).
+    pub fn keep_histories_apart(&mut self, keep: bool) {
+        self.keep_apart = keep;
+    }
+
+    /// Whether pair `k` carries its history: it touched at the last force evaluation, or its
+    /// law keeps the history of a pair apart and it has one.
+    #[inline]
+    fn carries(&self, k: usize) -> bool {
+        self.in_contact[k] || (self.keep_apart && nonzero(self.pair_history[k]))
     }
 
     /// Leaves out the pairs of particles that are both marked (e.g. particles held fixed:
@@ -284,14 +301,14 @@ impl NeighborList {
     }
 
     /// Tangential history of each pair, seen from the lower slot, in list order (zero for the
-    /// pairs not in contact at the last force evaluation).
+    /// pairs not in contact at the last force evaluation, unless the law keeps it apart).
     pub fn pair_history(&self) -> Vec<Vec3> {
         self.pair_histories().collect()
     }
 
     /// [`pair_history`](Self::pair_history) without a copy.
     pub fn pair_histories(&self) -> impl ExactSizeIterator<Item = Vec3> + '_ {
-        self.pair_history.iter().zip(&self.in_contact).map(|(&h, &c)| if c { h } else { Vec3::ZERO })
+        (0..self.pair_history.len()).map(|k| if self.carries(k) { self.pair_history[k] } else { Vec3::ZERO })
     }
 
     /// The pairs whose history is not zero, as (slots a < b, the history seen from a), in
@@ -303,11 +320,13 @@ impl NeighborList {
             stats: self.stats,
             periodic: self.periodic,
             ghosts_from: self.ghosts_from,
+            keep_apart: self.keep_apart,
             ..Default::default()
         }
     }
 
-    /// Calls `f` with each pair in contact with a non-zero history of which `wanted` holds for
+    /// Calls `f` with each pair that carries a non-zero history (in contact, or apart under a
+    /// law that keeps it) of which `wanted` holds for
     /// either slot, by slots, in list order (the slots are tested before the history is read).
     pub(crate) fn for_pairs_with_history(
         &self,
@@ -318,19 +337,19 @@ impl NeighborList {
             let (start, end, a_wanted) = (self.offsets[a], self.offsets[a + 1], wanted(a));
             for k in start..end {
                 let b = self.partners[k];
-                if (a_wanted || wanted(b as usize)) && self.in_contact[k] && nonzero(self.pair_history[k]) {
+                if (a_wanted || wanted(b as usize)) && self.carries(k) && nonzero(self.pair_history[k]) {
                     f([a as u32, b], self.pair_history[k]);
                 }
             }
         }
     }
 
-    /// The pairs in contact with a non-zero history, by slots, in list order.
+    /// The pairs that carry a non-zero history, by slots, in list order.
     pub(crate) fn each_pair_with_history(&self) -> impl Iterator<Item = ([u32; 2], Vec3)> + '_ {
         self.offsets.windows(2).enumerate().flat_map(move |(a, w)| {
             (w[0]..w[1]).filter_map(move |k| {
                 let h = self.pair_history[k];
-                (self.in_contact[k] && nonzero(h)).then(|| ([a as u32, self.partners[k]], h))
+                (self.carries(k) && nonzero(h)).then(|| ([a as u32, self.partners[k]], h))
             })
         })
     }
@@ -669,43 +688,56 @@ impl NeighborList {
         } else {
             self.fresh.sort_unstable();
         }
-        self.renew_pairs(n, parallel);
+        self.renew_pairs(p, parallel);
     }
 
     /// Replaces the pairs by the sorted `fresh` keys: each takes the history of the same pair
     /// in the old list if that was in contact (both are in (a, b) order, so one merge pass
-    /// finds it), zero if new.
+    /// finds it), zero if new. Under a law that keeps histories apart, a pair takes its
+    /// history if it carries one and its spheres overlap at `p`'s positions, as LIGGGHTS's
+    /// rebuild does.
     ///
     /// Done in place, so that a rebuild needs no second copy of the histories: the histories
     /// of persisting contacts are first packed to the front of the buffer (in order), then
     /// spread backwards to their new places (a packed entry never lies behind its new place).
     /// With `parallel`, the persisting pairs are found on the current rayon pool.
-    fn renew_pairs(&mut self, n: usize, parallel: bool) {
+    fn renew_pairs(&mut self, p: &Particles, parallel: bool) {
+        let n = p.len();
+        let overlap = Overlap { position: &p.position, radius: &p.radius, periodic: self.periodic };
         assert!(
             self.fresh.len() <= MAX_PAIRS,
             "{} particle pairs within the neighbour cut-off: at most {MAX_PAIRS} are supported",
             self.fresh.len()
         );
         let mut persists = vec![0u64; self.fresh.len().div_ceil(64)];
+        // Of those, the pairs that touched (a pair apart may carry its history).
+        let mut touched = vec![0u64; self.fresh.len().div_ceil(64)];
         let mut kept = 0usize;
         // The persisting pairs, found a run of rows at a time (a pair's old entry lies in its
         // row) as (fresh index, old index) in list order, then their histories packed in that
         // order: on the current rayon pool all runs at once, else one after the other (so that
         // only one run's list is held).
-        let mut pack = |found: Vec<(u32, u32)>, hist: &mut Vec<Vec3>| {
+        let mut pack = |found: Vec<(u32, u32)>, hist: &mut Vec<Vec3>, in_contact: &[bool]| {
             for (f, k) in found {
                 hist[kept] = hist[k as usize];
                 kept += 1;
                 persists[f as usize / 64] |= 1 << (f % 64);
+                touched[f as usize / 64] |= (in_contact[k as usize] as u64) << (f % 64);
             }
+        };
+        let found: Vec<Vec<(u32, u32)>> = if parallel && n > 0 {
+            crate::threads::in_runs(n, |rows| self.persisting_in(rows, &self.pair_history, &overlap))
+        } else {
+            Vec::new()
         };
         let mut history = std::mem::take(&mut self.pair_history);
         if parallel && n > 0 {
-            let found = crate::threads::in_runs(n, |rows| self.persisting(rows));
-            found.into_iter().for_each(|f| pack(f, &mut history));
+            found.into_iter().for_each(|f| pack(f, &mut history, &self.in_contact));
         } else {
             for a in (0..n).step_by(SERIAL_MERGE_ROWS) {
-                pack(self.persisting(a..(a + SERIAL_MERGE_ROWS).min(n)), &mut history);
+                let rows = a..(a + SERIAL_MERGE_ROWS).min(n);
+                let f = self.persisting_in(rows, &history, &overlap);
+                pack(f, &mut history, &self.in_contact);
             }
         }
         self.pair_history = history;
@@ -725,7 +757,7 @@ impl NeighborList {
             } else {
                 Vec3::ZERO
             };
-            self.in_contact[f] = persisting;
+            self.in_contact[f] = touched[f / 64] >> (f % 64) & 1 == 1;
         }
         row_offsets(self.fresh.iter().copied(), n, &mut self.offsets);
         self.partners.clear();
@@ -738,9 +770,11 @@ impl NeighborList {
         self.fresh.clear();
     }
 
-    /// The fresh pairs of rows `rows` that were in contact in the old list, as (index in
-    /// `fresh`, index in the old list), in list order.
-    fn persisting(&self, rows: Range<usize>) -> Vec<(u32, u32)> {
+    /// The fresh pairs of rows `rows` whose history in the old list (`history`: the list's
+    /// own, or the same taken out of it while they are packed) goes on, as (index in `fresh`,
+    /// index in the old list), in list order: those in contact; under a law that keeps
+    /// histories apart, those that carry one and overlap now.
+    fn persisting_in(&self, rows: Range<usize>, history: &[Vec3], overlap: &Overlap) -> Vec<(u32, u32)> {
         let fresh = &self.fresh;
         let n_old = self.offsets.len().saturating_sub(1);
         let f0 = fresh.partition_point(|&key| key < pair_key(rows.start as u32, 0));
@@ -760,7 +794,13 @@ impl NeighborList {
                     continue;
                 }
                 if old_key == key {
-                    if self.in_contact[k] {
+                    let goes_on = if self.keep_apart {
+                        (self.in_contact[k] || nonzero(history[k]))
+                            && overlap.of(a_old, self.partners[k] as usize)
+                    } else {
+                        self.in_contact[k]
+                    };
+                    if goes_on {
                         out.push((f as u32, k as u32));
                     }
                     k += 1;
@@ -871,6 +911,23 @@ impl PairSearch<'_> {
             n += within as usize;
         }
         out.used += n;
+    }
+}
+
+/// The touch test of a rebuild (for a law that keeps histories apart).
+struct Overlap<'a> {
+    position: &'a [Vec3],
+    radius: &'a [f64],
+    periodic: Periodic,
+}
+
+impl Overlap<'_> {
+    /// Whether the spheres of slots a and b overlap (their centres nearer than the sum of
+    /// their radii, by nearest image).
+    fn of(&self, a: usize, b: usize) -> bool {
+        let d = self.periodic.nearest(self.position[b] - self.position[a]);
+        let r = self.radius[a] + self.radius[b];
+        d.length_squared() < r * r
     }
 }
 

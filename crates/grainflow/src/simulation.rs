@@ -386,6 +386,7 @@ impl Simulation {
         let mut neighbors = NeighborList::with_periodic(skin, periodic);
         let held = motion::held(&motion, particles.len());
         neighbors.exclude_pairs_among(held.clone());
+        neighbors.keep_histories_apart(config.law.history.kept_apart());
         let held = if held.iter().any(|&h| h) { held } else { Vec::new() };
         let n_particles = particles.len();
         let mut sim = Simulation {

@@ -316,6 +316,84 @@ fn rebuild_keeps_history_of_persisting_pairs() {
     assert!(kept > 50 && fresh > 50, "both kinds must occur ({kept} kept, {fresh} new)");
 }
 
+/// Under a law that keeps histories apart (LIGGGHTS's), a rebuild carries a pair's history
+/// when the pair carries one and its spheres overlap at the new positions, and drops it
+/// otherwise, as LIGGGHTS's own rebuild does; the default list carries every history it held,
+/// overlapping or not. On threads (`update` over two blocks) the list is the same, and a
+/// checkpoint's state restores it.
+#[test]
+fn rebuild_keeps_apart_histories_only_of_overlapping_pairs() {
+    let mut rng = Rng::new(9);
+    let (r, skin, side) = (0.01, 0.004, 10);
+    // A cubic lattice at the contact distance, jittered: about half the neighbours overlap.
+    let mut x = Vec::new();
+    for i in 0..side * side * side {
+        let l = Vec3::new((i % side) as f64, (i / side % side) as f64, (i / side / side) as f64);
+        x.push(
+            2.0 * r * l
+                + Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) * 0.1 * r,
+        );
+    }
+    let n = x.len();
+    let radii = vec![r; n];
+    let p = particles_from(&x, &radii);
+    let marker = |a: u32, b: u32| Vec3::new(a as f64, b as f64, 0.5);
+    let marked = |keep: bool| {
+        let mut nl = NeighborList::new(skin);
+        nl.keep_histories_apart(keep);
+        nl.build(&p, &[]);
+        let pairs = listed_pairs(&nl, &p);
+        for (k, &(a, b)) in pairs.iter().enumerate() {
+            nl.set_pair_history(k, marker(a, b));
+        }
+        (nl, pairs.into_iter().collect::<HashSet<_>>())
+    };
+    // Every particle moved by up to a skin per axis (more than half a skin: a rebuild is due).
+    let init: Vec<ParticleInit> = (0..n)
+        .map(|k| {
+            let d = skin * Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            particle(p.id[k], 0, r, 2500.0, x[k] + d, Vec3::ZERO)
+        })
+        .collect();
+    let moved = Particles::from_init(&init);
+    let slot_of: HashMap<u32, usize> = (0..n).map(|k| (moved.id[k], k)).collect();
+    let overlaps = |a: u32, b: u32| {
+        let d = moved.position[slot_of[&b]] - moved.position[slot_of[&a]];
+        d.length_squared() < (2.0 * r) * (2.0 * r)
+    };
+    let (mut carried, mut dropped) = (0, 0);
+    for keep in [false, true] {
+        let (mut serial, before) = marked(keep);
+        serial.build(&moved, &[]);
+        let (mut threaded, _) = marked(keep);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        pool.install(|| threaded.update(&moved, &[], &[0..n / 2, n / 2..n]));
+        assert_eq!(threaded.stats().builds, 2, "the threaded list was rebuilt");
+        let after = listed_pairs(&serial, &moved);
+        assert_eq!(after, listed_pairs(&threaded, &moved), "keep {keep}: the same pairs on threads");
+        assert_eq!(
+            serial.pair_history(),
+            threaded.pair_history(),
+            "keep {keep}: the same histories on threads"
+        );
+        let history = serial.pair_history();
+        for (k, &(a, b)) in after.iter().enumerate() {
+            let goes_on = before.contains(&(a, b)) && (!keep || overlaps(a, b));
+            let expected = if goes_on { marker(a, b) } else { Vec3::ZERO };
+            assert_eq!(history[k], expected, "keep {keep}: pair ({a}, {b})");
+            if keep && before.contains(&(a, b)) {
+                if goes_on { carried += 1 } else { dropped += 1 }
+            }
+        }
+        let mut restored = NeighborList::new(skin);
+        restored.keep_histories_apart(keep);
+        restored.set_state(serial.state(), n, 0).unwrap();
+        assert_eq!(restored.pair_history(), history, "keep {keep}: a checkpoint keeps the histories");
+    }
+    eprintln!("{carried} histories carried, {dropped} dropped");
+    assert!(carried > 100 && dropped > 100, "both kinds must occur ({carried} carried, {dropped} dropped)");
+}
+
 /// The build is O(N): at the same number density and size distribution, the distance tests
 /// per particle hardly change between N = 1 000 and N = 16 000 (a quadratic search would
 /// grow 16×; the only N-dependence left is the surface fraction of the box, where particles

@@ -126,6 +126,18 @@ fn walled_hertz_bed_is_bit_identical_on_any_thread_count() {
     check_thread_counts("walled bed", &|| walled_bed(false), 300, &|| walled_bed(true));
 }
 
+/// The walled bed under LIGGGHTS's law, whose pairs keep their histories apart: through the
+/// rebuilds, which cut the threads' blocks anew.
+#[test]
+fn walled_liggghts_bed_is_bit_identical_on_any_thread_count() {
+    let bed = |nudged| {
+        let (mut cfg, init) = walled_bed_case(nudged);
+        cfg.law = liggghts_hertz();
+        simulation(cfg, &init)
+    };
+    check_thread_counts("walled LIGGGHTS bed", &|| bed(false), 300, &|| bed(true));
+}
+
 #[test]
 fn periodic_chute_on_a_held_base_is_bit_identical_on_any_thread_count() {
     check_thread_counts("periodic chute", &|| periodic_chute(false), 300, &|| periodic_chute(true));

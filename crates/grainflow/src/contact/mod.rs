@@ -43,8 +43,8 @@ pub enum HistoryFrame {
     Rotate,
     /// LIGGGHTS: projected as `Project`, and kept when the pair separates (LIGGGHTS resets it
     /// only within a `contact_distance_factor` > 1), so that a pair that touches again
-    /// resumes its old displacement. grainflow keeps it until the next neighbour-list rebuild;
-    /// LIGGGHTS keeps it across rebuilds too.
+    /// resumes its old displacement; kept while the pair stays in the neighbour list, through
+    /// its rebuilds (wall contacts lose theirs apart, as in LIGGGHTS).
     Liggghts,
 }
 

@@ -265,6 +265,19 @@ pub fn walled_bed(nudged: bool) -> Simulation {
     simulation(cfg, &init)
 }
 
+/// LIGGGHTS's `pair_style gran model hertz tangential history` as its scripts set it: β-based
+/// damping, the spring alone tested against Coulomb, R − δ/2 lever arms, and histories kept
+/// while a pair is apart.
+pub fn liggghts_hertz() -> ContactLaw {
+    ContactLaw {
+        damping: NormalDamping::Liggghts,
+        coulomb: CoulombCap::Liggghts,
+        lever: LeverArm::Liggghts,
+        history: HistoryFrame::Liggghts,
+        ..lammps_mindlin().0
+    }
+}
+
 /// The configuration and particles of [`walled_bed`].
 pub fn walled_bed_case(nudged: bool) -> (SimulationConfig, Vec<ParticleInit>) {
     let (lo, hi) = (Vec3::ZERO, Vec3::new(0.03, 0.03, 0.06));
