@@ -4,7 +4,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 secs="${SECONDS_PER_TARGET:-600}"
-for t in case_file mfix_particles csv_particles lammps_data mfix_deck mfix_expr checkpoint; do
+for t in case_file mfix_particles csv_particles lammps_data mfix_deck mfix_expr liggghts_script checkpoint; do
   log="fuzz/last-run-$t.log"
   RUSTC_BOOTSTRAP=1 cargo fuzz run -O "$t" "fuzz/corpus/$t" -- -max_total_time="$secs" -rss_limit_mb=4096 -timeout=10 >"$log" 2>&1
   rc=$?

@@ -1,6 +1,6 @@
-//! `grainflow check CASE [--set KEY=VALUE]…`: validates a case (TOML or an MFIX deck) as
-//! `grainflow run` does and prints its plan (time step and steps, outputs, insertions,
-//! memory) without running it.
+//! `grainflow check CASE [--set KEY=VALUE]…`: validates a case (TOML, an MFIX deck or a
+//! LIGGGHTS script) as `grainflow run` does and prints its plan (time step and steps,
+//! outputs, insertions, memory) without running it.
 
 use crate::EXIT_BAD_INPUT;
 use clap::Args;
@@ -9,9 +9,11 @@ use std::process::ExitCode;
 
 #[derive(Debug, Args)]
 pub struct CheckArgs {
-    /// The case file: TOML (docs/case-file.md), or an MFIX deck, `*.dat` or `*.mfx`.
+    /// The case file: TOML (docs/case-file.md), an MFIX deck, `*.dat` or `*.mfx`, or a
+    /// LIGGGHTS script, `in.*` or `*.liggghts`.
     case: PathBuf,
-    /// MFIX decks only: KEYWORD=VALUE overrides applied after the deck (as `grainflow run`).
+    /// MFIX decks: KEYWORD=VALUE overrides applied after the deck; LIGGGHTS scripts: their
+    /// variables, NAME=VALUE or -var NAME VALUE (as `grainflow run`).
     #[arg(value_name = "KEY=VALUE")]
     overrides: Vec<String>,
     /// MFIX decks only: a TOML file of [[motion]] tables (as `grainflow run`).

@@ -28,15 +28,15 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Run a case file (TOML, or an MFIX deck: mfix.dat, *.mfx) and write its time series and
-    /// particle snapshots.
+    /// Run a case file (TOML, an MFIX deck: mfix.dat, *.mfx, or a LIGGGHTS script: in.*,
+    /// *.liggghts) and write its time series and particle snapshots.
     Run(run::RunArgs),
-    /// Validate a case file or MFIX deck as `run` does and print its plan (time step and
+    /// Validate a case file, MFIX deck or LIGGGHTS script as `run` does and print its plan (time step and
     /// steps, outputs, insertions, memory estimate) without running it; exit 0 if it would
     /// run, 2 if it is refused.
     Check(check::CheckArgs),
-    /// Translate an MFIX deck (mfix.dat, *.mfx) into the equivalent grainflow case file
-    /// (TOML, written to standard output).
+    /// Translate an MFIX deck (mfix.dat, *.mfx) or a LIGGGHTS script (in.*, *.liggghts) into
+    /// the equivalent grainflow case file (TOML, written to standard output).
     Convert(convert::ConvertArgs),
     /// Run verification cases (all, or those named), compare with analytical solutions,
     /// reference codes and experiments; write CSV, figures, summaries and report.html; exit

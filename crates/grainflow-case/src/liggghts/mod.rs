@@ -52,7 +52,12 @@ pub fn is_script(path: &Path) -> bool {
 }
 
 /// Reads, translates and validates a script; `vars` are `-var NAME VALUE` pairs. Included and
-/// data files are read beside the script, through `relay`.
+/// data files are read beside the script.
+pub fn load(path: &Path, vars: &[(String, String)]) -> Result<ScriptCase, CaseError> {
+    load_relayed(path, vars, &input::direct)
+}
+
+/// [`load`] with the included and data files passed through `relay` (see [`input::Relay`]).
 pub fn load_relayed(
     path: &Path,
     vars: &[(String, String)],
@@ -92,7 +97,15 @@ pub fn translate(
     for (k, v) in vars {
         source.push_str(&format!("\n# -var {k} {v}"));
     }
-    let mut case = crate::case::from_raw_opened(raw.clone(), &source, open)?;
+    // The case layer's messages name a table and key of the translation: the script is named
+    // before them.
+    let mut case = crate::case::from_raw_opened(raw.clone(), &source, open).map_err(|e| {
+        if e.to_string().contains(origin) {
+            e
+        } else {
+            CaseError::Syntax(format!("{origin}, as translated: {e}"))
+        }
+    })?;
     let mut warnings = t.notes.clone();
     warnings.append(&mut case.warnings);
     case.warnings = warnings;
@@ -140,8 +153,9 @@ struct Translator {
     skin: Option<f64>,
     dt: Option<f64>,
     gravity: Option<[f64; 3]>,
-    /// `fix property/global` values by property name.
-    props: BTreeMap<String, Vec<f64>>,
+    /// `fix property/global` values by property name: one (`scalar`), one a type
+    /// (`peratomtype`) or one a pair of types, row by row (`peratomtypepair`), with the command.
+    props: BTreeMap<String, (Vec<f64>, Command)>,
     pair: Option<Pair>,
     walls: Vec<PlaneWall>,
     groups: BTreeMap<String, Group>,
@@ -156,6 +170,19 @@ struct Translator {
 /// A message about command `c`.
 fn at(c: &Command, message: String) -> CaseError {
     CaseError::ParticleFile { path: c.file.clone(), line: c.line, message }
+}
+
+/// Where a value of the property `name` must lie, if `v` lies outside (None for properties
+/// grainflow does not read, and for values in range).
+fn out_of_range(name: &str, v: f64) -> Option<&'static str> {
+    let (ok, range) = match name {
+        "youngsModulus" | "kn" | "kt" => (v > 0.0, "positive"),
+        "poissonsRatio" => (v > -1.0 && v <= 0.5, "in (−1, 0.5]"),
+        "coefficientRestitution" => (v > 0.0 && v <= 1.0, "in (0, 1]"),
+        "coefficientFriction" | "gamman" | "gammat" => (v >= 0.0, "≥ 0"),
+        _ => (true, ""),
+    };
+    (!ok).then_some(range)
 }
 
 fn number(c: &Command, k: usize) -> Result<f64, CaseError> {
@@ -189,7 +216,7 @@ impl Translator {
         let w: Vec<&str> = c.words.iter().map(String::as_str).collect();
         match w[0] {
             "units" if w.get(1) == Some(&"si") => {}
-            "units" => self.block(c, "grainflow reads scripts in `units si` only"),
+            "units" => self.block(c, format!("`units {}`: grainflow reads scripts in `units si` only", w[1..].join(" "))),
             "atom_style" if matches!(w.get(1), Some(&"granular") | Some(&"sphere")) => {}
             "atom_style" => self.block(c, "grainflow's particles are spheres: `atom_style granular` or `sphere`"),
             "boundary" if w.len() == 4 => {
@@ -243,10 +270,13 @@ impl Translator {
 
     fn neigh_modify(&mut self, c: &Command) {
         let w = &c.words;
-        let mut k = 1;
+        let (mut k, mut tuned) = (1, false);
         while k < w.len() {
             match w[k].as_str() {
-                "delay" | "every" | "check" | "one" | "page" => k += 2,
+                "delay" | "every" | "check" | "one" | "page" => {
+                    tuned = true;
+                    k += 2;
+                }
                 "exclude" if w.get(k + 1).map(String::as_str) == Some("group") && k + 3 < w.len() => {
                     // Checked at the end: only between held particles, whose forces move nothing.
                     self.exclusions.push((w[k + 2].clone(), w[k + 3].clone(), c.clone()));
@@ -258,7 +288,11 @@ impl Translator {
                 }
             }
         }
-        self.note(c, "tunes LIGGGHTS's neighbour lists (grainflow rebuilds its own when a particle has moved half the skin)");
+        if tuned {
+            self.note(c, "tunes LIGGGHTS's neighbour lists (grainflow rebuilds its own when a particle has moved half the skin)");
+        } else {
+            self.note(c, "leaves out pairs of held particles, as grainflow always does (they move nothing)");
+        }
     }
 
     fn read_data(
@@ -418,7 +452,9 @@ impl Translator {
                 let kind = w.get(5).copied().unwrap_or("");
                 let values: Vec<f64> = (6..w.len()).map(|k| number(c, k)).collect::<Result<_, _>>()?;
                 let values = match kind {
-                    "peratomtype" | "scalar" => values,
+                    "scalar" if values.len() == 1 => values,
+                    "scalar" => return Err(at(c, format!("`property/global {} scalar` takes one value, not {}", w[4], values.len()))),
+                    "peratomtype" => values,
                     "peratomtypepair" if !values.is_empty() => {
                         let n = values[0] as usize;
                         if values.len() != 1 + n * n {
@@ -428,7 +464,10 @@ impl Translator {
                     }
                     _ => return Err(at(c, format!("`property/global {} {kind}`: grainflow reads scalar, peratomtype and peratomtypepair values", w[4]))),
                 };
-                self.props.insert(w[4].to_string(), values);
+                if let Some((v, range)) = values.iter().find_map(|&v| out_of_range(w[4], v).map(|r| (v, r))) {
+                    return Err(at(c, format!("`property/global {}`: the value {v} must be {range}", w[4])));
+                }
+                self.props.insert(w[4].to_string(), (values, c.clone()));
             }
             "gravity" if w.len() == 9 && w[5] == "vector" => {
                 let g = number(c, 4)?;
@@ -489,12 +528,12 @@ impl Translator {
     /// One value of property `name` for the type pair (a, b) (1-based), given per type or
     /// per type pair.
     fn prop(&self, name: &str, a: usize, b: usize) -> Option<f64> {
-        let v = self.props.get(name)?;
+        let (v, c) = self.props.get(name)?;
         let n = self.data.as_ref().map_or(1, |d| d.first_of_type.len()).max(a).max(b);
-        match v.len() {
-            1 => Some(v[0]),
-            l if l == n => Some(v[a - 1]),
-            l if l == n * n => Some(v[(a - 1) * n + (b - 1)]),
+        match (c.words.get(5).map(String::as_str), v.len()) {
+            (Some("scalar"), 1) => Some(v[0]),
+            (Some("peratomtype"), l) if l == n => Some(v[a - 1]),
+            (Some("peratomtypepair"), l) if l == n * n => Some(v[(a - 1) * n + (b - 1)]),
             _ => None,
         }
     }
@@ -505,19 +544,26 @@ impl Translator {
         for &a in types {
             for &b in others {
                 let Some(v) = self.prop(name, a, b) else {
-                    return if self.props.contains_key(name) {
-                        Err(CaseError::Syntax(format!(
-                            "fix property/global {name}: its values do not match the {} atom types",
-                            types.len()
-                        )))
-                    } else {
-                        Ok(None)
+                    return match self.props.get(name) {
+                        Some((v, c)) => Err(at(
+                            c,
+                            format!(
+                                "`property/global {name}`: {} values do not fit the {} atom types of the data file (peratomtype: one a type; peratomtypepair N: N×N)",
+                                v.len(),
+                                types.len()
+                            ),
+                        )),
+                        None => Ok(None),
                     };
                 };
                 if seen.is_some_and(|s| s != v) {
-                    return Err(CaseError::Syntax(format!(
-                        "fix property/global {name}: values that differ between atom types are not yet translated"
-                    )));
+                    let c = &self.props[name].1;
+                    return Err(at(
+                        c,
+                        format!(
+                            "`property/global {name}`: values that differ between atom types are not yet translated"
+                        ),
+                    ));
                 }
                 seen = Some(v);
             }
@@ -526,13 +572,32 @@ impl Translator {
     }
 
     fn finish(&mut self, origin: &str) -> Result<RawCase, CaseError> {
-        let whole = |e: CaseError| CaseError::Syntax(format!("{origin}: {e}"));
+        // Errors that name a line name the script already.
+        let whole = |e: CaseError| match e {
+            CaseError::ParticleFile { .. } => e,
+            e => CaseError::Syntax(format!("{origin}: {e}")),
+        };
         let Some(data) = self.data.clone() else {
             self.blockers.push(CaseError::Syntax(format!("{origin}: no `read_data`: grainflow needs the particles of a data file (insertion commands are not yet translated)")));
             return Err(CaseError::Blockers(std::mem::take(&mut self.blockers)));
         };
         let types: Vec<usize> = (1..=data.first_of_type.len()).collect();
-        let contact = self.contact(origin, &types).map_err(whole);
+        let n = types.len();
+        for (name, (v, c)) in &self.props {
+            let (kind, want) = match c.words.get(5).map(String::as_str) {
+                Some("peratomtype") => ("peratomtype", n),
+                Some("peratomtypepair") => ("peratomtypepair", n * n),
+                _ => ("scalar", 1),
+            };
+            if v.len() != want {
+                let e = format!(
+                    "`property/global {name} {kind}`: {} values for the {n} atom types of the data file, which need {want}",
+                    v.len()
+                );
+                self.blockers.push(at(c, e));
+            }
+        }
+        let contact = self.contact(&types).map_err(whole);
         let contact = match contact {
             Ok(c) => Some(c),
             Err(e) => {
@@ -579,9 +644,14 @@ impl Translator {
             }
         }
         let centre: Vec<f64> = (0..3).map(|k| 0.5 * (data.lo[k] + data.hi[k])).collect();
-        let dt = self.dt.unwrap_or(1e-5);
+        // LIGGGHTS's defaults in SI units (its `units si`): 1e-8 s and a skin of 1 mm.
+        let dt = self.dt.unwrap_or(1e-8);
         if self.dt.is_none() {
-            self.notes.push(format!("{origin}: no `timestep`: LIGGGHTS's default in SI units, 1e-5 s"));
+            self.notes.push(format!("{origin}: no `timestep`: LIGGGHTS's default in SI units, 1e-8 s"));
+        }
+        if self.steps == 0 {
+            self.blockers
+                .push(CaseError::Syntax(format!("{origin}: no `run` with steps: there is nothing to run")));
         }
         let mut phases = Vec::new();
         for &t in &types {
@@ -654,7 +724,7 @@ impl Translator {
                 integrator: Some("velocity_verlet".into()),
                 force_dt: None,
             }),
-            neighbor: RawNeighbor { skin: self.skin },
+            neighbor: RawNeighbor { skin: Some(self.skin.unwrap_or(0.001)) },
             output: RawOutput { interval: Some(interval), snapshots: Some(false), ..Default::default() },
             parallel: Default::default(),
             particles: Some(RawParticles {
@@ -726,9 +796,8 @@ impl Translator {
     }
 
     /// `[contact]` from `pair_style gran` and the properties.
-    fn contact(&mut self, origin: &str, types: &[usize]) -> Result<RawContact, CaseError> {
-        let pair =
-            self.pair.clone().ok_or_else(|| CaseError::Syntax(format!("{origin}: no `pair_style gran`")))?;
+    fn contact(&mut self, types: &[usize]) -> Result<RawContact, CaseError> {
+        let pair = self.pair.clone().ok_or_else(|| CaseError::Syntax("no `pair_style gran`".into()))?;
         let walls: Vec<usize> = self.walls.iter().map(|w| w.wall_type).collect();
         let need = |this: &mut Self, name: &str, with: &[usize]| -> Result<f64, CaseError> {
             this.uniform(name, types, with)?.ok_or_else(|| {

@@ -133,8 +133,15 @@ pub fn commands(
             "variable" => vars.define(&words).map_err(|e| bad(first, e))?,
             "include" => {
                 let name = words.get(1).ok_or_else(|| bad(first, "`include` needs a file".into()))?;
-                let inner = read(name)?;
-                out.extend(commands(&inner, name, vars, read, depth + 1)?);
+                if depth >= 16 {
+                    return Err(bad(first, format!("`include {name}` nests more than 16 files deep")));
+                }
+                let inner = read(name).map_err(|e| bad(first, format!("`include {name}`: {e}")))?;
+                // An error in an included file is told with the script's own line too.
+                let inner = commands(&inner, name, vars, read, depth + 1);
+                out.extend(inner.map_err(|e| {
+                    if depth == 0 { bad(first, format!("`include {name}`: {e}")) } else { e }
+                })?);
             }
             _ => out.push(Command { file: file.to_string(), line: first, words }),
         }
