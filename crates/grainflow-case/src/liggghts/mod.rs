@@ -30,6 +30,8 @@ use crate::error::CaseError;
 use crate::input;
 use crate::raw::*;
 use script::{Command, Variables};
+
+mod meshes;
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
@@ -165,6 +167,7 @@ struct Translator {
     thermo: Option<u64>,
     lost_ignored: bool,
     exclusions: Vec<(String, String, Command)>,
+    meshes: Vec<meshes::MeshFix>,
 }
 
 /// A message about command `c`.
@@ -250,6 +253,9 @@ impl Translator {
             "pair_coeff" if w.get(1) == Some(&"*") && w.get(2) == Some(&"*") && w.len() == 3 => {}
             "pair_coeff" => self.block(c, "granular pair coefficients come from `fix property/global`: write `pair_coeff * *`"),
             "fix" => self.fix(c)?,
+            "unfix" if w.len() == 2 && self.unfix_motion(w[1]) => {}
+            "unfix" => self.block(c, "only a `move/mesh` can be unfixed so far (a fix that ends between runs is not yet translated)"),
+            "print" | "echo" | "log" => self.note(c, "is screen or log output (ignored)"),
             "run" => {
                 let n = number(c, 1)?;
                 if n < 0.0 || n.fract() != 0.0 {
@@ -478,6 +484,13 @@ impl Translator {
                 }
                 self.gravity = Some(v.map(|x| g * x / len));
             }
+            "mesh/surface" | "mesh/surface/stress" => {
+                if style == "mesh/surface/stress" {
+                    self.note(c, "writes mesh stresses, which are not yet translated (the mesh is)");
+                }
+                self.mesh_surface(c)?;
+            }
+            "move/mesh" => self.move_mesh(c)?,
             "nve/sphere" if w.len() == 4 => self.integrated = Some(group.to_string()),
             "freeze" if w.len() == 4 => self.frozen.push(group.to_string()),
             "wall/gran" => self.wall(c, group)?,
@@ -489,13 +502,24 @@ impl Translator {
     fn wall(&mut self, c: &Command, group: &str) -> Result<(), CaseError> {
         let w = &c.words;
         let p = w.iter().position(|x| x == "primitive");
-        let Some(p) = p else {
-            self.block(c, "mesh walls (`fix wall/gran … mesh`) are not yet translated: primitive planes are");
-            return Ok(());
-        };
         if group != "all" {
             self.block(c, "a wall acting on a group only is not translated: walls act on every particle");
         }
+        let Some(p) = p else {
+            let Some(m) = w.iter().position(|x| x == "mesh") else {
+                self.block(
+                    c,
+                    "write `… primitive type T xplane|yplane|zplane C` or `… mesh n_meshes N meshes ID …`",
+                );
+                return Ok(());
+            };
+            let law = w[4..m].to_vec();
+            let Some(law) = self.contact_words(c, &law) else { return Ok(()) };
+            if self.pair.as_ref().is_some_and(|pair| *pair != law) {
+                self.block(c, "the wall's contact model differs from `pair_style`'s: grainflow has one law for pairs and walls");
+            }
+            return self.mesh_walls(c, m);
+        };
         let law = w[4..p].to_vec();
         let Some(law) = self.contact_words(c, &law) else { return Ok(()) };
         if self.pair.as_ref().is_some_and(|pair| *pair != law) {
@@ -665,8 +689,16 @@ impl Translator {
                 poisson_ratio: own("poissonsRatio"),
             });
         }
+        let meshes = self.raw_meshes(dt);
+        for m in self.meshes.iter().filter(|m| !m.wall) {
+            self.notes.push(format!(
+                "{origin}: mesh `{}` is not a wall (no `wall/gran … meshes {}`): left out",
+                m.id, m.id
+            ));
+        }
         let wall_types: Vec<usize> = {
             let mut v: Vec<usize> = self.walls.iter().map(|w| w.wall_type).collect();
+            v.extend(self.meshes.iter().filter(|m| m.wall).map(|m| m.wall_type));
             v.sort_unstable();
             v.dedup();
             v
@@ -713,7 +745,7 @@ impl Translator {
             phases,
             wall_materials,
             walls,
-            meshes: Vec::new(),
+            meshes,
             cylinders: Vec::new(),
             contact: Some(contact),
             time: Some(RawTime {
@@ -798,7 +830,12 @@ impl Translator {
     /// `[contact]` from `pair_style gran` and the properties.
     fn contact(&mut self, types: &[usize]) -> Result<RawContact, CaseError> {
         let pair = self.pair.clone().ok_or_else(|| CaseError::Syntax("no `pair_style gran`".into()))?;
-        let walls: Vec<usize> = self.walls.iter().map(|w| w.wall_type).collect();
+        let walls: Vec<usize> = self
+            .walls
+            .iter()
+            .map(|w| w.wall_type)
+            .chain(self.meshes.iter().filter(|m| m.wall).map(|m| m.wall_type))
+            .collect();
         let need = |this: &mut Self, name: &str, with: &[usize]| -> Result<f64, CaseError> {
             this.uniform(name, types, with)?.ok_or_else(|| {
                 CaseError::Syntax(format!(
@@ -864,6 +901,7 @@ mod tests {
         let read = |name: &str| -> Result<String, CaseError> {
             match name {
                 "bed.data" => Ok(DATA.into()),
+                "plate.stl" => Ok(PLATE.into()),
                 _ => Err(CaseError::Syntax(format!("no file {name}"))),
             }
         };
@@ -902,12 +940,56 @@ mod tests {
         assert!(s.notes.iter().any(|n| n.contains("line 4") && n.contains("newton off")));
     }
 
+    /// A 40 mm square in the file's xy plane, in millimetres.
+    const PLATE: &str = "solid plate\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 40 0 0\nvertex 40 40 0\nendloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 40 40 0\nvertex 0 40 0\nendloop\nendfacet\nendsolid plate\n";
+
+    /// A mesh placed as LIGGGHTS places it (in the order written: scale, rotate, move), made
+    /// a wall, set turning after the first run and stopped by `unfix` after the second.
+    #[test]
+    fn a_mesh_wall_its_placement_and_its_timed_motion() {
+        let script = HERTZ.replace(
+            "thermo 100\nrun ${nrun}\nrun 500\n",
+            "fix plate all mesh/surface file plate.stl type 1 scale 0.001 rotate axis 0 0 1 angle 90 move 0.04 0 0.01\n\
+             fix pw all wall/gran model hertz tangential history mesh n_meshes 1 meshes plate\n\
+             run 1000\nfix spin all move/mesh mesh plate rotate origin 0.02 0.02 0.01 axis 0 0 1 period 2\n\
+             run 500\nunfix spin\nrun 100\n",
+        );
+        let s = translated(&script, &[]).expect("translates");
+        let m = &s.raw.meshes[0];
+        assert_eq!(
+            (m.file.as_deref(), m.material.as_deref(), m.scale),
+            (Some("plate.stl"), Some("type1"), Some(0.001))
+        );
+        // LIGGGHTS turns degrees into radians with π = 3.14159265.
+        assert_eq!(m.rotate, Some([0.0, 0.0, 90.0 * meshes::LIGGGHTS_PI / std::f64::consts::PI]));
+        assert_eq!(m.translate, Some([0.04, 0.0, 0.01]));
+        let motion = m.motion.as_ref().expect("a motion");
+        assert_eq!((motion.kind.as_deref(), motion.omega), (Some("rotate"), Some(std::f64::consts::PI)));
+        assert_eq!((motion.origin, motion.axis), (Some([0.02, 0.02, 0.01]), Some([0.0, 0.0, 1.0])));
+        assert_eq!((motion.start, motion.stop), (Some(1000.0 * 2e-5), Some(1500.0 * 2e-5)));
+        assert_eq!(s.case.config.meshes.len(), 1);
+        // A placement out of grainflow's order, and a mesh no wall names, are told.
+        let bad = script.replace(
+            "scale 0.001 rotate axis 0 0 1 angle 90 move 0.04 0 0.01",
+            "move 0.04 0 0.01 scale 0.001",
+        );
+        let e = translated(&bad, &[]).unwrap_err().to_string();
+        assert!(e.contains("`scale` after") && e.contains("line 23"), "{e}");
+        assert!(!e.contains("no `fix plate"), "{e}");
+        let apart = script.replace(
+            "meshes plate\n",
+            "meshes plate\nfix face all mesh/surface file plate.stl type 1 scale 0.001\n",
+        );
+        let s = translated(&apart, &[]).expect("translates");
+        assert!(s.notes.iter().any(|n| n.contains("mesh `face` is not a wall")), "{:?}", s.notes);
+    }
+
     #[test]
     fn every_blocker_is_listed_with_its_line() {
-        let bad = HERTZ
-            .replace("units si", "units lj")
-            .replace("thermo 100", "fix m all mesh/surface file a.stl type 1\ncreate_atoms 1 single 0 0 0")
-            + "fix ins all insert/pack seed 1\n";
+        let bad = HERTZ.replace("units si", "units lj").replace(
+            "thermo 100",
+            "fix m all mesh/surface file a.stl type 1 wear finnie\ncreate_atoms 1 single 0 0 0",
+        ) + "fix ins all insert/pack seed 1\n";
         let e = translated(&bad, &[]).unwrap_err().to_string();
         for want in ["line 5", "units si", "mesh/surface", "create_atoms", "insert/pack"] {
             assert!(e.contains(want), "`{want}` missing from:\n{e}");

@@ -51,7 +51,9 @@ impl Variables {
         match self.values.get(name) {
             None => Ok(None),
             Some(Value::Text(t)) => Ok(Some(t.clone())),
-            Some(Value::Formula(f)) => evaluate(f, self, depth + 1).map(|x| Some(format_number(x))),
+            Some(Value::Formula(f)) => evaluate(f, self, depth + 1)
+                .map(|x| Some(format_number(x)))
+                .map_err(|e| format!("`variable {name} equal {f}`: {e}")),
         }
     }
 
@@ -72,9 +74,9 @@ impl Variables {
                 self.values.entry(name).or_insert_with(|| Value::Text(args[0].clone()));
             }
             "equal" if !args.is_empty() => {
-                let f = args.join(" ");
-                evaluate(&f, self, 0).map_err(|e| format!("variable {name} equal {f}: {e}"))?;
-                self.values.insert(name, Value::Formula(f));
+                // Evaluated where it is used, as LIGGGHTS does: a formula of the particles'
+                // state (`xcm(all,x)`) that only thermo output reads is never evaluated.
+                self.values.insert(name, Value::Formula(args.join(" ")));
             }
             "delete" => {
                 self.values.remove(&name);
@@ -131,6 +133,14 @@ pub fn commands(
         }
         match words[0].as_str() {
             "variable" => vars.define(&words).map_err(|e| bad(first, e))?,
+            "if" => {
+                // `if "COND" then "CMD" … [elif "COND" "CMD" …]… [else "CMD" …]`: the
+                // commands of the first true branch, read as lines of this one.
+                let chosen = if_branch(&words, vars).map_err(|e| bad(first, e))?;
+                let inner = commands(&chosen.join("\n"), file, vars, read, depth + 1)
+                    .map_err(|e| bad(first, format!("in `if`: {e}")))?;
+                out.extend(inner.into_iter().map(|c| Command { line: first, ..c }));
+            }
             "include" => {
                 let name = words.get(1).ok_or_else(|| bad(first, "`include` needs a file".into()))?;
                 if depth >= 16 {
@@ -239,14 +249,48 @@ fn closing(s: &str) -> Option<usize> {
     None
 }
 
+/// The commands of the branch of an `if` whose condition holds (none if none does).
+fn if_branch(words: &[String], vars: &Variables) -> Result<Vec<String>, String> {
+    let holds = |c: &str| evaluate(c, vars, 0).map(|x| x != 0.0).map_err(|e| format!("`if \"{c}\"`: {e}"));
+    if words.len() < 3 || words[2] != "then" {
+        return Err("write `if \"CONDITION\" then \"COMMAND\" …`".into());
+    }
+    let mut k = 3;
+    let mut taken = holds(&words[1])?;
+    let mut chosen = Vec::new();
+    loop {
+        let start = k;
+        while k < words.len() && words[k] != "elif" && words[k] != "else" {
+            k += 1;
+        }
+        if taken {
+            chosen.extend(words[start..k].iter().cloned());
+            return Ok(chosen);
+        }
+        match words.get(k).map(String::as_str) {
+            None => return Ok(chosen),
+            Some("else") => {
+                taken = true;
+                k += 1;
+            }
+            _ => {
+                let c = words.get(k + 1).ok_or("`elif` needs a condition")?;
+                taken = holds(c)?;
+                k += 2;
+            }
+        }
+    }
+}
+
 /// Evaluates an `equal`-style formula: numbers, `+ - * / ^`, parentheses, `PI`, `sqrt()`,
-/// `exp()`, `ln()`, `sin()`, `cos()`, `abs()`, and other variables as `v_name`.
+/// `exp()`, `ln()`, `sin()`, `cos()`, `abs()`, other variables as `v_name`, and the
+/// comparisons `< <= > >= == !=` and `&& ||` (1 if true, 0 if not).
 pub fn evaluate(f: &str, vars: &Variables, depth: usize) -> Result<f64, String> {
     if depth > 32 {
         return Err("variables refer to each other in a loop".into());
     }
     let mut p = Parser { s: f.as_bytes(), i: 0, vars, depth };
-    let x = p.sum()?;
+    let x = p.logic()?;
     p.blank();
     if p.i != p.s.len() {
         return Err(format!("cannot read `{}` in `{f}`", &f[p.i..]));
@@ -272,6 +316,43 @@ impl Parser<'_> {
         let hit = self.s.get(self.i) == Some(&c);
         self.i += hit as usize;
         hit
+    }
+    fn eat_str(&mut self, t: &str) -> bool {
+        self.blank();
+        let hit = self.s[self.i..].starts_with(t.as_bytes());
+        self.i += if hit { t.len() } else { 0 };
+        hit
+    }
+    fn logic(&mut self) -> Result<f64, String> {
+        let mut x = self.compare()?;
+        loop {
+            if self.eat_str("&&") {
+                let y = self.compare()?;
+                x = f64::from(x != 0.0 && y != 0.0);
+            } else if self.eat_str("||") {
+                let y = self.compare()?;
+                x = f64::from(x != 0.0 || y != 0.0);
+            } else {
+                return Ok(x);
+            }
+        }
+    }
+    fn compare(&mut self) -> Result<f64, String> {
+        let x = self.sum()?;
+        for (op, test) in [
+            ("<=", f64::le as fn(&f64, &f64) -> bool),
+            (">=", f64::ge),
+            ("==", f64::eq),
+            ("!=", f64::ne),
+            ("<", f64::lt),
+            (">", f64::gt),
+        ] {
+            if self.eat_str(op) {
+                let y = self.sum()?;
+                return Ok(f64::from(test(&x, &y)));
+            }
+        }
+        Ok(x)
     }
     fn sum(&mut self) -> Result<f64, String> {
         let mut x = self.product()?;
@@ -313,7 +394,7 @@ impl Parser<'_> {
     fn atom(&mut self) -> Result<f64, String> {
         self.blank();
         if self.eat(b'(') {
-            let x = self.sum()?;
+            let x = self.logic()?;
             return if self.eat(b')') { Ok(x) } else { Err("a `(` is not closed".into()) };
         }
         let start = self.i;
@@ -356,7 +437,7 @@ impl Parser<'_> {
         if !self.eat(b'(') {
             return Err(format!("`{name}` needs its argument in parentheses"));
         }
-        let x = self.sum()?;
+        let x = self.logic()?;
         if !self.eat(b')') {
             return Err(format!("`{name}(` is not closed"));
         }
@@ -406,6 +487,29 @@ mod tests {
         assert!((evaluate("cos(PI)", &v, 0).unwrap() + 1.0).abs() < 1e-15);
         assert!(evaluate("1+", &v, 0).is_err());
         assert!(evaluate("v_none", &v, 0).is_err());
+        // Comparisons and logic give 1 or 0, below arithmetic in precedence.
+        assert_eq!(evaluate("1+1 > 1.5", &v, 0).unwrap(), 1.0);
+        assert_eq!(evaluate("2 <= 1 || 3 == 3", &v, 0).unwrap(), 1.0);
+        assert_eq!(evaluate("0 > 0 && 1", &v, 0).unwrap(), 0.0);
+        assert_eq!(evaluate("(2 != 2) + 5", &v, 0).unwrap(), 5.0);
+    }
+
+    /// `if` runs the commands of its first true branch in place; an `equal` variable is
+    /// evaluated where it is used, so one of the particles' state that only output reads is
+    /// never evaluated.
+    #[test]
+    fn if_branches_and_lazy_formulas() {
+        let text = "variable nd index 0\nvariable xc equal xcm(all,x)\n\
+                    if \"${nd} > 0\" then \"shell mkdir post\" \"dump d all custom\"\n\
+                    if \"${nd} == 0\" then \"timestep 1e-5\" else \"timestep 2e-5\"\n\
+                    if \"${nd} > 1\" then \"run 1\" elif \"${nd} < 1\" \"run 2\" \"run 3\" else \"run 4\"\n";
+        let c = run(text, &[]).unwrap();
+        assert_eq!(c, [vec!["timestep", "1e-5"], vec!["run", "2"], vec!["run", "3"]]);
+        let c = run(text, &[("nd", "5")]).unwrap();
+        assert_eq!(c[0], ["shell", "mkdir", "post"]);
+        assert_eq!(c[3], ["run", "1"]);
+        let e = run("variable xc equal xcm(all,x)\nrun ${xc}\n", &[]).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("xcm"), "{e}");
     }
 
     #[test]
