@@ -150,8 +150,9 @@ impl Translator {
         Ok(())
     }
 
-    /// `fix ID all move/mesh mesh M linear vx vy vz` or `… rotate origin x y z axis ax ay az
-    /// period T`: from this point of the script (the steps run so far) on.
+    /// `fix ID all move/mesh mesh M linear vx vy vz`, `… rotate origin x y z axis ax ay az
+    /// period T` or `… wiggle amplitude ax ay az period T`: from this point of the script (the
+    /// steps run so far) on.
     pub(super) fn move_mesh(&mut self, c: &Command) -> Result<(), CaseError> {
         let w = &c.words;
         if w.get(4).map(String::as_str) != Some("mesh") || w.len() < 7 {
@@ -177,8 +178,22 @@ impl Translator {
                     ..Default::default()
                 }
             }
+            // LIGGGHTS moves the mesh by A·ω·cos(ωt)·dt a step, which sums to A·sin(ωt) to
+            // first order in the step: grainflow takes the closed form.
+            ("wiggle", 13) if w[7] == "amplitude" && w[11] == "period" => {
+                let period = num(12)?;
+                if period <= 0.0 {
+                    return Err(at(c, "`period`: an oscillation needs a positive period".into()));
+                }
+                RawMeshMotion {
+                    kind: Some("oscillate".into()),
+                    amplitude: Some([num(8)?, num(9)?, num(10)?]),
+                    frequency: Some(1.0 / period),
+                    ..Default::default()
+                }
+            }
             (kind, _) => {
-                self.block(c, format!("`move/mesh … {kind}` (or these arguments of it) is not yet translated: `linear VX VY VZ` and `rotate origin … axis … period T` are"));
+                self.block(c, format!("`move/mesh … {kind}` (or these arguments of it) is not yet translated: `linear VX VY VZ`, `rotate origin … axis … period T` and `wiggle amplitude AX AY AZ period T` are"));
                 return Ok(());
             }
         };

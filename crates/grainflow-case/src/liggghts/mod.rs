@@ -976,6 +976,18 @@ mod tests {
         let e = translated(&bad, &[]).unwrap_err().to_string();
         assert!(e.contains("`scale` after") && e.contains("line 23"), "{e}");
         assert!(!e.contains("no `fix plate"), "{e}");
+        // `wiggle`: LIGGGHTS's oscillation, A·sin(2πt/T) from where the fix is defined.
+        let wiggle = script.replace(
+            "rotate origin 0.02 0.02 0.01 axis 0 0 1 period 2",
+            "wiggle amplitude 0 0 0.002 period 0.5",
+        );
+        let s = translated(&wiggle, &[]).expect("translates");
+        let motion = s.raw.meshes[0].motion.as_ref().expect("a motion");
+        assert_eq!(
+            (motion.kind.as_deref(), motion.amplitude, motion.frequency),
+            (Some("oscillate"), Some([0.0, 0.0, 0.002]), Some(2.0))
+        );
+        assert_eq!(motion.start, Some(1000.0 * 2e-5));
         let apart = script.replace(
             "meshes plate\n",
             "meshes plate\nfix face all mesh/surface file plate.stl type 1 scale 0.001\n",
