@@ -31,6 +31,7 @@ use crate::input;
 use crate::raw::*;
 use script::{Command, Variables};
 
+mod insertions;
 mod meshes;
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -168,6 +169,10 @@ struct Translator {
     lost_ignored: bool,
     exclusions: Vec<(String, String, Command)>,
     meshes: Vec<meshes::MeshFix>,
+    regions: BTreeMap<String, insertions::Region>,
+    templates: BTreeMap<String, insertions::Template>,
+    mixtures: BTreeMap<String, insertions::Mixture>,
+    packs: Vec<insertions::Pack>,
 }
 
 /// A message about command `c`.
@@ -253,7 +258,9 @@ impl Translator {
             "pair_coeff" if w.get(1) == Some(&"*") && w.get(2) == Some(&"*") && w.len() == 3 => {}
             "pair_coeff" => self.block(c, "granular pair coefficients come from `fix property/global`: write `pair_coeff * *`"),
             "fix" => self.fix(c)?,
-            "unfix" if w.len() == 2 && self.unfix_motion(w[1]) => {}
+            "unfix" if w.len() == 2 && (self.unfix_motion(w[1]) || self.unfix_pack(w[1])) => {}
+            "region" => self.region(c)?,
+            "create_box" => self.create_box(c)?,
             "unfix" => self.block(c, "only a `move/mesh` can be unfixed so far (a fix that ends between runs is not yet translated)"),
             "print" | "echo" | "log" => self.note(c, "is screen or log output (ignored)"),
             "run" => {
@@ -269,7 +276,7 @@ impl Translator {
                     self.steps += n as u64;
                 }
             }
-            other => self.block(c, format!("`{other}` is not a LIGGGHTS command grainflow translates (docs/liggghts-scripts.md lists them)")),
+            other => self.block(c, format!("`{other}` is not translated (docs/liggghts-scripts.md lists the commands that are)")),
         }
         Ok(())
     }
@@ -491,6 +498,9 @@ impl Translator {
                 self.mesh_surface(c)?;
             }
             "move/mesh" => self.move_mesh(c)?,
+            "particletemplate/sphere" => self.template(c)?,
+            s if s.starts_with("particledistribution/discrete") => self.mixture(c, s)?,
+            "insert/pack" => self.insert_pack(c, group)?,
             "nve/sphere" if w.len() == 4 => self.integrated = Some(group.to_string()),
             "freeze" if w.len() == 4 => self.frozen.push(group.to_string()),
             "wall/gran" => self.wall(c, group)?,
@@ -601,8 +611,11 @@ impl Translator {
             CaseError::ParticleFile { .. } => e,
             e => CaseError::Syntax(format!("{origin}: {e}")),
         };
+        self.template_phases();
         let Some(data) = self.data.clone() else {
-            self.blockers.push(CaseError::Syntax(format!("{origin}: no `read_data`: grainflow needs the particles of a data file (insertion commands are not yet translated)")));
+            self.blockers.push(CaseError::Syntax(format!(
+                "{origin}: no `read_data` or `create_box`: there is no box"
+            )));
             return Err(CaseError::Blockers(std::mem::take(&mut self.blockers)));
         };
         let types: Vec<usize> = (1..=data.first_of_type.len()).collect();
@@ -630,6 +643,13 @@ impl Translator {
             }
         };
         let held = self.held(&types);
+        if let Some(p) = self.packs.iter().find(|p| {
+            let m = &self.mixtures[&p.mixture];
+            m.parts.iter().any(|(t, _)| held.contains(&self.templates[t].atom_type))
+        }) {
+            let e = at(&p.command, "particles inserted of a type that is frozen or not integrated are not translated (held particles are named by id)".into());
+            self.blockers.push(e);
+        }
         for (a, b, c) in std::mem::take(&mut self.exclusions) {
             let holds = |g: &str| self.types_of(g).is_some_and(|t| t.iter().all(|x| held.contains(x)));
             if !(holds(&a) && holds(&b)) {
@@ -759,14 +779,14 @@ impl Translator {
             neighbor: RawNeighbor { skin: Some(self.skin.unwrap_or(0.001)) },
             output: RawOutput { interval: Some(interval), snapshots: Some(false), ..Default::default() },
             parallel: Default::default(),
-            particles: Some(RawParticles {
+            particles: (!data.file.is_empty()).then(|| RawParticles {
                 file: Some(data.file.clone()),
                 // States written mid-flow by another code can hold overlaps of a few per cent.
                 max_initial_overlap: Some(0.5),
                 ..Default::default()
             }),
             motion,
-            insertions: Vec::new(),
+            insertions: self.raw_insertions(dt),
             outlets: Vec::new(),
         })
     }
@@ -994,6 +1014,70 @@ mod tests {
         );
         let s = translated(&apart, &[]).expect("translates");
         assert!(s.notes.iter().any(|n| n.contains("mesh `face` is not a wall")), "{:?}", s.notes);
+    }
+
+    /// Particles made by the script: a box from a region, a mixture of three templates of two
+    /// types by mass, and `insert/pack … insert_every once` into a cylinder, unfixed after its
+    /// run of one step.
+    #[test]
+    fn a_packed_insertion_from_templates_and_a_mixture() {
+        let script = "atom_style granular\nboundary f f f\nunits si\n\
+            region box block -0.052 0.052 -0.022 0.022 -0.052 0.052 units box\ncreate_box 2 box\n\
+            fix m1 all property/global youngsModulus peratomtype 5.0e6 5.0e6\n\
+            fix m2 all property/global poissonsRatio peratomtype 0.3 0.3\n\
+            fix m3 all property/global coefficientRestitution peratomtypepair 2 0.9 0.9 0.9 0.9\n\
+            fix m4 all property/global coefficientFriction peratomtypepair 2 0.5 0.5 0.5 0.5\n\
+            pair_style gran model hertz tangential history\npair_coeff * *\ntimestep 2e-5\n\
+            fix pts1 all particletemplate/sphere 15485863 atom_type 1 density constant 2500 radius constant 0.001\n\
+            fix pts2 all particletemplate/sphere 15485867 atom_type 1 density constant 2500 radius constant 0.0015\n\
+            fix pts3 all particletemplate/sphere 15485869 atom_type 2 density constant 4000 radius constant 0.001\n\
+            fix pdd all particledistribution/discrete 15485871 3 pts1 0.3 pts2 0.5 pts3 0.2\n\
+            region insreg cylinder y 0.0 0.0 0.046 -0.018 0.018 units box\n\
+            fix ins all insert/pack seed 32452843 distributiontemplate pdd insert_every once &\n\
+              overlapcheck yes all_in yes maxattempt 500 verbose no vel constant 0.0 0.0 -0.5 &\n\
+              particles_in_region 500 region insreg\n\
+            fix integ all nve/sphere\nrun 1\nunfix ins\nrun 999\n";
+        let s = translated(script, &[]).expect("translates");
+        let r = &s.raw;
+        let d = r.domain.as_ref().unwrap();
+        assert_eq!((d.min, d.max), (Some([-0.052, -0.022, -0.052]), Some([0.052, 0.022, 0.052])));
+        assert!(r.particles.is_none(), "no particles before the insertion");
+        assert_eq!((r.phases[0].diameter, r.phases[0].density), (Some(0.002), Some(2500.0)));
+        assert_eq!((r.phases[1].diameter, r.phases[1].density), (Some(0.002), Some(4000.0)));
+        let ins = &r.insertions[0];
+        assert_eq!(
+            (ins.count, ins.at, ins.velocity, ins.seed),
+            (Some(500), None, Some([0.0, 0.0, -0.5]), Some(32452843))
+        );
+        assert_eq!(ins.fractions_by.as_deref(), Some("mass"));
+        let reg = ins.region.as_ref().unwrap();
+        assert_eq!(
+            (reg.kind.as_deref(), reg.base, reg.axis),
+            (Some("cylinder"), Some([0.0, -0.018, 0.0]), Some([0.0, 1.0, 0.0]))
+        );
+        assert_eq!((reg.length, reg.radius), (Some(0.036), Some(0.046)));
+        // Type 1: 0.3 + 0.5 of the mass, in two sizes by mass; type 2: 0.2, one size.
+        let (a, b) = (&ins.phases[0], &ins.phases[1]);
+        let (total, one) = (0.3 + 0.5 + 0.2, 0.3 + 0.5);
+        assert_eq!(
+            (a.phase.as_deref(), a.fraction, a.distribution.as_deref()),
+            (Some("type1"), Some(one / total), Some("table"))
+        );
+        assert_eq!(
+            (a.diameters.clone(), a.weights.clone()),
+            (Some(vec![0.002, 0.003]), Some(vec![0.3 / one, 0.5 / one]))
+        );
+        assert_eq!(a.weights_by.as_deref(), Some("mass"));
+        assert_eq!(
+            (b.phase.as_deref(), b.fraction, b.diameter),
+            (Some("type2"), Some(0.2 / total), Some(0.002))
+        );
+        assert_eq!(r.time.as_ref().unwrap().t_stop, Some(1000.0 * 2e-5));
+        assert_eq!(s.case.config.insertions.len(), 1);
+        // Repeated filling is not translated yet, and is told.
+        let again = script.replace("insert_every once", "insert_every 1000");
+        let e = translated(&again, &[]).unwrap_err().to_string();
+        assert!(e.contains("insert_every") && e.contains("line 18"), "{e}");
     }
 
     #[test]
