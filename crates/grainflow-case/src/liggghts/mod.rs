@@ -317,7 +317,7 @@ impl Translator {
         if c.words.len() > 2 {
             self.block(c, format!("`read_data` options `{}` are not read", c.words[2..].join(" ")));
         }
-        let text = read(&file)?;
+        let text = read(&file).map_err(|e| at(c, format!("`read_data {file}`: {e}")))?;
         let (lo, hi) = crate::lammps::box_bounds(&text)
             .ok_or_else(|| at(c, format!("{file}: the header does not give xlo xhi, ylo yhi and zlo zhi")))?;
         let mut data =
@@ -462,6 +462,9 @@ impl Translator {
         let (group, style) = (w[2], w[3]);
         match style {
             "property/global" => {
+                if w.len() < 7 {
+                    return Err(at(c, "write `fix ID all property/global NAME STYLE VALUE …`".into()));
+                }
                 let kind = w.get(5).copied().unwrap_or("");
                 let values: Vec<f64> = (6..w.len()).map(|k| number(c, k)).collect::<Result<_, _>>()?;
                 let values = match kind {
@@ -511,12 +514,14 @@ impl Translator {
 
     fn wall(&mut self, c: &Command, group: &str) -> Result<(), CaseError> {
         let w = &c.words;
-        let p = w.iter().position(|x| x == "primitive");
+        // Looked for after the style, so that a fix named `primitive` or `mesh` is not taken.
+        let after_style = |word: &str| w.iter().skip(4).position(|x| x == word).map(|k| k + 4);
+        let p = after_style("primitive");
         if group != "all" {
             self.block(c, "a wall acting on a group only is not translated: walls act on every particle");
         }
         let Some(p) = p else {
-            let Some(m) = w.iter().position(|x| x == "mesh") else {
+            let Some(m) = after_style("mesh") else {
                 self.block(
                     c,
                     "write `… primitive type T xplane|yplane|zplane C` or `… mesh n_meshes N meshes ID …`",
