@@ -725,13 +725,9 @@ impl NeighborList {
                 touched[f as usize / 64] |= (in_contact[k as usize] as u64) << (f % 64);
             }
         };
-        let found: Vec<Vec<(u32, u32)>> = if parallel && n > 0 {
-            crate::threads::in_runs(n, |rows| self.persisting_in(rows, &self.pair_history, &overlap))
-        } else {
-            Vec::new()
-        };
         let mut history = std::mem::take(&mut self.pair_history);
         if parallel && n > 0 {
+            let found = crate::threads::in_runs(n, |rows| self.persisting_in(rows, &history, &overlap));
             found.into_iter().for_each(|f| pack(f, &mut history, &self.in_contact));
         } else {
             for a in (0..n).step_by(SERIAL_MERGE_ROWS) {
@@ -770,8 +766,8 @@ impl NeighborList {
         self.fresh.clear();
     }
 
-    /// The fresh pairs of rows `rows` whose history in the old list (`history`: the list's
-    /// own, or the same taken out of it while they are packed) goes on, as (index in `fresh`,
+    /// The fresh pairs of rows `rows` whose history in the old list (`history`, taken out of
+    /// it while the histories are packed) goes on, as (index in `fresh`,
     /// index in the old list), in list order: those in contact; under a law that keeps
     /// histories apart, those that carry one and overlap now.
     fn persisting_in(&self, rows: Range<usize>, history: &[Vec3], overlap: &Overlap) -> Vec<(u32, u32)> {
@@ -914,7 +910,7 @@ impl PairSearch<'_> {
     }
 }
 
-/// The touch test of a rebuild (for a law that keeps histories apart).
+/// The touch test of a rebuild (for a law that keeps histories apart): the force loop's.
 struct Overlap<'a> {
     position: &'a [Vec3],
     radius: &'a [f64],
@@ -922,12 +918,10 @@ struct Overlap<'a> {
 }
 
 impl Overlap<'_> {
-    /// Whether the spheres of slots a and b overlap (their centres nearer than the sum of
-    /// their radii, by nearest image).
+    /// Whether the spheres of slots a and b touch, by nearest image.
     fn of(&self, a: usize, b: usize) -> bool {
         let d = self.periodic.nearest(self.position[b] - self.position[a]);
-        let r = self.radius[a] + self.radius[b];
-        d.length_squared() < r * r
+        crate::contact::geometry::pair_touching(d.length_squared(), self.radius[a], self.radius[b])
     }
 }
 

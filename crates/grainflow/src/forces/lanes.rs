@@ -169,6 +169,7 @@ impl InputLanes {
         hist: &[Vec3],
     ) {
         let s = PairData::of(x);
+        let kept_apart = x.law.history.kept_apart();
         let group = &group[..group.len().min(LANES)];
         for (i, f) in group.iter().enumerate() {
             let (a, b) = (f.a as usize, x.partners[f.k()] as usize);
@@ -177,7 +178,7 @@ impl InputLanes {
                 // stays small, and these positions are in cache.
                 let d = s.position[b] - s.position[a];
                 let d = if PERIODIC { s.images.nearest_on_periodic_axes(d) } else { d };
-                let h = kept_or_zero(hist[f.k() - k0], !f.fresh() || x.law.history.kept_apart());
+                let h = kept_or_zero(hist[f.k() - k0], !f.fresh() || kept_apart);
                 self.set_pair_for::<PER_MASS, HELD>(i, &s, a, b, d, h);
             }
         }
@@ -414,6 +415,7 @@ impl Lanes {
     ) {
         let s = PairData::of(x);
         let mut kept = [0usize; LANES];
+        let kept_apart = x.law.history.kept_apart();
         let mut n = 0;
         for (i, &(a, k)) in pairs.iter().enumerate() {
             let (a, b) = (a as usize, x.partners[k] as usize);
@@ -424,7 +426,7 @@ impl Lanes {
             let fresh = !*flag;
             *flag = touching;
             loads[i] = None;
-            let keep = !fresh || x.law.history.kept_apart();
+            let keep = !fresh || kept_apart;
             self.input.set_pair(n, &s, a, b, d, kept_or_zero(hist[k - k0], keep));
             kept[n] = i;
             n += touching as usize;
